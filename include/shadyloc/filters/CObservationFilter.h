@@ -1,0 +1,74 @@
+/* ShadyLoc — observation filters: derive a new image channel (monochrome,
+ * illumination-invariant, linearised) from a colour camera observation.
+ *
+ * Filters are MRPT RTTI classes (namespace `shadyloc`, the name stored in
+ * files), built by class name from an .ini file, serialisable with their
+ * options. Each filter leaves its input untouched and returns a new stock
+ * MRPT observation of the same type, sensor label + output_suffix, same
+ * timestamp, calibration and poses: output rawlogs open in stock MRPT tools.
+ */
+#pragma once
+
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/config/CLoadableOptions.h>
+#include <mrpt/obs/CObservation.h>
+#include <mrpt/serialization/CSerializable.h>
+
+#include <opencv2/core/mat.hpp>
+
+#include <string>
+#include <vector>
+
+namespace shadyloc
+{
+/** Base of every observation filter (template method: the base handles the
+ * observation types, derived classes transform images). */
+class CObservationFilter : public mrpt::serialization::CSerializable
+{
+	DEFINE_VIRTUAL_SERIALIZABLE(CObservationFilter)
+
+   public:
+	/** Options every filter has. */
+	struct TCommonOptions
+	{
+		/** Appended to the source sensor label to name the derived channel. */
+		std::string output_suffix;
+		/** Comma-separated sensor labels this filter applies to; empty = every
+		 * camera observation (CObservationImage, CObservationStereoImages). */
+		std::string sensor_labels;
+	};
+	TCommonOptions common;
+
+	/** Loads this filter's options from `section` (missing keys keep their
+	 * defaults); throws naming the section and key on a bad value. */
+	void loadFromConfig(const mrpt::config::CConfigFileBase& cfg, const std::string& section);
+	/** Writes every option (with units) as "key = value" lines. */
+	std::string optionsAsIni() const;
+
+	/** True if obs is a camera observation this filter should process. */
+	bool accepts(const mrpt::obs::CObservation& obs) const;
+
+	/** The derived observation; obs must be accepted. Throws
+	 * std::invalid_argument on an image the filter cannot use (for example a
+	 * grey image given to a colour filter), naming the sensor and eye. */
+	mrpt::obs::CObservation::Ptr apply(const mrpt::obs::CObservation& obs) const;
+
+	/** Transforms the images of one frame (one or two eyes). The default
+	 * calls transformImage() per eye; filters may do eyes in parallel. */
+	virtual void transformImages(const std::vector<cv::Mat>& in, std::vector<cv::Mat>& out) const;
+
+	/** One image: in is as stored by mrpt::img::CImage (BGR for colour). */
+	virtual void transformImage(const cv::Mat& in, cv::Mat& out) const = 0;
+
+   protected:
+	virtual void loadSpecificOptions(
+		const mrpt::config::CConfigFileBase& cfg, const std::string& section) = 0;
+	virtual void specificOptionsAsIni(std::ostream& out) const = 0;
+	/** Called after options change (to rebuild tables and the like). */
+	virtual void onOptionsChanged() {}
+
+	void serializeCommon(mrpt::serialization::CArchive& out) const;
+	void deserializeCommon(mrpt::serialization::CArchive& in);
+};
+
+}  // namespace shadyloc

@@ -1,0 +1,69 @@
+/* ShadyLoc — a list of observation filters built from an .ini file, and the
+ * streaming rawlog processor that applies it. */
+#pragma once
+
+#include <shadyloc/filters/CObservationFilter.h>
+
+#include <mrpt/system/COutputLogger.h>
+
+#include <string>
+#include <vector>
+
+namespace shadyloc::filters
+{
+/** Section and key naming the pipeline in an .ini file:
+ *   [filters]
+ *   pipeline = mono invariant     ; section names, applied in this order
+ *   [mono]
+ *   class = CFilterMonochrome     ; "shadyloc::" may be omitted
+ */
+constexpr const char* kPipelineSection = "filters";
+/** Sensor label of the CObservationComment that records, at the head of an
+ * output rawlog, the exact options that made its derived channels. */
+constexpr const char* kRecordLabel = "shadyloc_filters";
+
+class FilterPipeline
+{
+   public:
+	std::vector<CObservationFilter::Ptr> filters;
+
+	/** The default: monochrome and invariant (paper's alpha, beta). */
+	static FilterPipeline Default();
+	/** Builds from an .ini file; throws naming the file, section and key. */
+	static FilterPipeline FromConfigFile(const std::string& iniPath);
+	static FilterPipeline FromConfig(const mrpt::config::CConfigFileBase& cfg, const std::string& what);
+	/** The exact options of every filter, as an .ini text FromConfig() reads. */
+	std::string asIni() const;
+};
+
+/** What a run of the processor did. */
+struct FilterRunStats
+{
+	size_t objectsIn = 0;			//!< top-level objects read
+	size_t objectsOut = 0;			//!< top-level objects written
+	size_t observationsFiltered = 0;  //!< camera observations that got channels
+	size_t derivedObservations = 0;	//!< observations added
+	double seconds = 0;
+};
+
+/** Streams a rawlog through a pipeline: every input object is written out
+ * unchanged, each accepted camera observation followed by its derived
+ * channels (in the same sensory frame, for rawlogs in that style). The output
+ * starts with a record (kRecordLabel) of the pipeline's options. Writes
+ * atomically; on any error throws naming the object and leaves no output. */
+class RawlogFilterProcessor : public mrpt::system::COutputLogger
+{
+   public:
+	RawlogFilterProcessor();
+	bool externalImages = false;	 //!< write derived images as PNG files
+	double progressPeriodSeconds = 2.0;	 //!< how often to log progress
+
+	FilterRunStats run(
+		const std::string& inPath, const std::string& outPath, const FilterPipeline& pipeline);
+};
+
+/** The pipeline record at the head of a filtered rawlog, or "" if none. Reads
+ * only the first few objects. */
+std::string readPipelineRecord(const std::string& rawlogPath);
+
+}  // namespace shadyloc::filters

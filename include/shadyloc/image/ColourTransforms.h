@@ -1,0 +1,134 @@
+/* ShadyLoc — illumination-invariant stereo localisation on MRPT.
+ *
+ * Colour transforms used to derive the two image channels the localisers run
+ * on: monochrome (the baseline) and illumination-invariant.
+ *
+ * Invariant image after McManus et al., "Shady Dealings", ICRA 2014, eq. (1)-(2),
+ * which builds on Ratnasingam & McGinnity (2012) and Maddern et al. (2014):
+ *
+ *     I = log(R2) - alpha * log(R1) - beta * log(R3)
+ *     1/l2 = alpha/l1 + beta/l3
+ *
+ * with R1, R2, R3 the linear sensor responses of peak wavelengths l1 < l2 < l3
+ * (blue, green, red). For a narrowband sensor under Planckian illumination in
+ * Wien's approximation, log(Ri) = log(I0) + log(S_i) + log(c1 l_i^-5) - c2/(T l_i):
+ * the constraint on alpha and beta cancels the colour-temperature term; with
+ * beta = 1 - alpha the intensity term log(I0) cancels too.
+ */
+#pragma once
+
+#include <opencv2/core/mat.hpp>
+
+#include <string>
+
+namespace shadyloc::image
+{
+/** Memory order of the three channels of an 8-bit colour image. OpenCV and
+ * mrpt::img::CImage load images as BGR. */
+enum class ChannelOrder
+{
+	BGR,
+	RGB
+};
+
+/** How encoded pixel values map back to linear sensor response before logs. */
+enum class Linearisation
+{
+	None,  //!< values are already linear (raw sensor output)
+	SRGB,  //!< IEC 61966-2-1 sRGB transfer curve (most JPEG/PNG files)
+	Gamma  //!< plain power law: linear = value^gamma
+};
+
+ChannelOrder parseChannelOrder(const std::string& s);  //!< "rgb" | "bgr"
+Linearisation parseLinearisation(const std::string& s);	 //!< "none" | "srgb" | "gamma"
+std::string toString(ChannelOrder o);
+std::string toString(Linearisation l);
+
+/** Everything that defines the invariant image of an 8-bit colour image,
+ * including its fixed quantisation to 8 bits: two images made with equal
+ * parameters are comparable pixel by pixel (map vs live). */
+struct InvariantParams
+{
+	double alpha = 0.4800;	//!< weight of log(R1) (blue); paper's Bumblebee2 value
+	double beta = 0.5065;  //!< weight of log(R3) (red); paper's Bumblebee2 value
+	ChannelOrder order = ChannelOrder::BGR;	 //!< channel order of the input
+	Linearisation linearisation = Linearisation::None;
+	double gamma = 2.2;	 //!< exponent, used when linearisation == Gamma
+
+	/** 8-bit mapping: out = clamp(round(scale * (I + offset)), 0, 255).
+	 * scale in grey levels per unit of natural log; offset in log units. The
+	 * default offset (see defaultOffset()) puts a neutral 18% grey surface at
+	 * 0.5*scale; with scale 255 this is Maddern et al.'s "0.5 + I" mapping. */
+	double scale = 255.0;
+	double offset = 0.5;
+
+	/** Linear response given to a zero-valued pixel so logs stay finite:
+	 * half of the smallest non-zero code value (in [0,1] units). */
+	static constexpr double kZeroCode = 0.5;
+
+	/** alpha, beta explicit; offset set to the default for them. */
+	static InvariantParams FromAlphaBeta(double alpha, double beta);
+	/** Peak wavelengths (any unit, l1 < l2 < l3); beta = 1 - alpha, so that
+	 * the image is invariant to both colour temperature and intensity. */
+	static InvariantParams FromWavelengths(double l1, double l2, double l3);
+
+	/** 0.5 - (1 - alpha - beta) * log(0.18): neutral mid-grey at mid-scale. */
+	double defaultOffset() const;
+
+	/** Throws std::invalid_argument naming the bad field. */
+	void validate() const;
+
+	std::string asString() const;  //!< one line, "alpha=... beta=..."
+};
+
+/** Linear response in (0,1] of an 8-bit code value under a linearisation.
+ * Zero maps to the linearised value of kZeroCode. */
+double linearise(int code, Linearisation lin, double gamma);
+
+/** Reference (float, per-pixel std::log) invariant: CV_32F image of I in log
+ * units, no offset or scale. Slow; the yardstick for tests. */
+cv::Mat invariantReferenceFloat(const cv::Mat& colour8, const InvariantParams& p);
+
+/** Reference path quantised with the same 8-bit mapping as the fast path. */
+cv::Mat invariantReference8(const cv::Mat& colour8, const InvariantParams& p);
+
+/** Naive fast-path competitor: per-pixel std::log on every pixel, 8-bit out.
+ * Kept for the benchmark only. */
+void invariantNaive8(const cv::Mat& colour8, cv::Mat& out8, const InvariantParams& p);
+
+/** The fast path: three 256-entry fixed-point tables per parameter set, one
+ * table look-up per channel and an integer sum per pixel. Build once, apply
+ * to every frame. Thread-safe for concurrent apply() calls. */
+class InvariantTransform
+{
+   public:
+	explicit InvariantTransform(const InvariantParams& p = {});
+
+	const InvariantParams& params() const { return m_params; }
+
+	/** colour8: CV_8UC3 in params().order; out8 becomes CV_8UC1. */
+	void apply(const cv::Mat& colour8, cv::Mat& out8) const;
+
+	/** Both eyes of a stereo pair; the right one on a second thread when
+	 * parallel is true (roughly halves the wall time on two cores). */
+	void applyPair(
+		const cv::Mat& left8, const cv::Mat& right8, cv::Mat& leftOut,
+		cv::Mat& rightOut, bool parallel = true) const;
+
+   private:
+	InvariantParams m_params;
+	// Fixed point: kFracBits fractional bits of a grey level. Table k holds
+	// scale * w_k * log(lin(v)) with w = (-alpha, 1, -beta) for (R1, R2, R3);
+	// the R2 table also holds scale * offset and the rounding half.
+	static constexpr int kFracBits = 10;
+	int32_t m_lutBlue[256], m_lutGreen[256], m_lutRed[256];
+};
+
+/** Monochrome (luma, ITU-R BT.601 weights) of an 8-bit colour image, 8-bit
+ * out; the baseline channel. A grey input is copied. */
+void toMonochrome(const cv::Mat& colour8, cv::Mat& grey8, ChannelOrder order);
+
+/** Linearised 8-bit image (each channel through linearise(), then *255). */
+void toLinear8(const cv::Mat& colour8, cv::Mat& out8, Linearisation lin, double gamma);
+
+}  // namespace shadyloc::image

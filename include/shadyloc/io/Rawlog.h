@@ -1,0 +1,106 @@
+/* ShadyLoc — streaming rawlog reading and atomic rawlog writing.
+ *
+ * MRPT's own readers stop at the first object they cannot read and report
+ * success; these never do: every failure names the file, the object index and
+ * the reason. Rawlogs reach gigabytes, so both sides hold one object at a time.
+ */
+#pragma once
+
+#include <mrpt/img/CImage.h>
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/obs/CObservation.h>
+#include <mrpt/serialization/CSerializable.h>
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace shadyloc::io
+{
+/** Error while reading or writing a rawlog; what() names file, object, reason. */
+class RawlogError : public std::runtime_error
+{
+   public:
+	using std::runtime_error::runtime_error;
+};
+
+/** `<dir>/<stem>_Images`: where MRPT keeps a rawlog's external images. */
+std::string imagesDirFor(const std::string& rawlogPath);
+
+/** Reads top-level objects of a rawlog (either style: bare observations, or
+ * CActionCollection/CSensoryFrame pairs) one at a time. */
+class RawlogReader
+{
+   public:
+	/** Opens the file; sets CImage's external-image base to imagesDirFor(path)
+	 * (MRPT 2.5.8's own detection drops the separator). Throws RawlogError. */
+	explicit RawlogReader(const std::string& path);
+
+	/** The next object, or nullptr at a clean end of file. Throws RawlogError
+	 * on an unregistered class, a truncated or corrupt object. */
+	mrpt::serialization::CSerializable::Ptr next();
+
+	/** Index (0-based) of the object last returned by next(). */
+	size_t index() const { return m_count == 0 ? 0 : m_count - 1; }
+	/** Fraction of the (compressed) file consumed, in [0,1]. */
+	double progress() const;
+	const std::string& path() const { return m_path; }
+
+	/** "<path>: object #<index>: <what>", for errors about the last object. */
+	std::string where(const std::string& what) const;
+
+   private:
+	std::string m_path;
+	mrpt::io::CFileGZInputStream m_in;
+	size_t m_count = 0;
+	uint64_t m_totalBytes = 0;
+};
+
+/** Observations carried by a top-level rawlog object: the object itself if it
+ * is an observation, the members of a sensory frame, none for actions. */
+std::vector<mrpt::obs::CObservation::Ptr> observationsIn(
+	const mrpt::serialization::CSerializable::Ptr& obj);
+
+/** Loads every image an observation stores externally, so a missing file
+ * shows up here (with its path) rather than deep inside a filter. */
+void loadExternalImages(mrpt::obs::CObservation& obs);
+
+/** Writes a rawlog to "<path>.tmp" and renames it into place on commit().
+ * Without commit() (an exception, an early return) the destructor deletes the
+ * temporary file and images: no half-written output is ever left behind. */
+class RawlogWriter
+{
+   public:
+	/** externalImages: write images given to externalise() as PNG files in
+	 * imagesDirFor(path) (staged as "<dir>.tmp" until commit()). */
+	explicit RawlogWriter(const std::string& path, bool externalImages = false);
+	~RawlogWriter();
+	RawlogWriter(const RawlogWriter&) = delete;
+	RawlogWriter& operator=(const RawlogWriter&) = delete;
+
+	void write(const mrpt::serialization::CSerializable& obj);
+	size_t written() const { return m_written; }
+
+	/** When external images are on: saves img as PNG under `name` (relative
+	 * to the images directory) and turns it into an external reference. */
+	void externalise(mrpt::img::CImage& img, const std::string& name);
+	bool externalImages() const { return m_externalImages; }
+
+	/** Flushes, closes and renames into place (replacing an old file). */
+	void commit();
+
+	const std::string& path() const { return m_path; }
+
+   private:
+	std::string m_path, m_tmpPath, m_imagesDir, m_tmpImagesDir;
+	bool m_externalImages = false;
+	bool m_committed = false;
+	size_t m_written = 0;
+	std::unique_ptr<mrpt::io::CFileGZOutputStream> m_out;
+};
+
+}  // namespace shadyloc::io

@@ -1,0 +1,207 @@
+/* ShadyLoc — filter pipeline and streaming rawlog processor. */
+#include <shadyloc/filters/FilterPipeline.h>
+#include <shadyloc/filters/Filters.h>
+#include <shadyloc/io/Rawlog.h>
+
+#include <mrpt/config/CConfigFile.h>
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/obs/CObservationComment.h>
+#include <mrpt/obs/CObservationImage.h>
+#include <mrpt/obs/CObservationStereoImages.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/rtti/CObject.h>
+#include <mrpt/system/CTicTac.h>
+#include <mrpt/system/string_utils.h>
+
+#include <filesystem>
+#include <sstream>
+
+using namespace shadyloc;
+using namespace shadyloc::filters;
+
+FilterPipeline FilterPipeline::Default()
+{
+	FilterPipeline p;
+	p.filters.push_back(CFilterMonochrome::Create());
+	p.filters.push_back(CFilterInvariant::Create());
+	return p;
+}
+
+FilterPipeline FilterPipeline::FromConfigFile(const std::string& iniPath)
+{
+	if (!std::filesystem::is_regular_file(iniPath))
+		throw std::invalid_argument("'" + iniPath + "': no such config file");
+	mrpt::config::CConfigFile cfg(iniPath);
+	return FromConfig(cfg, iniPath);
+}
+
+FilterPipeline FilterPipeline::FromConfig(
+	const mrpt::config::CConfigFileBase& cfg, const std::string& what)
+{
+	const std::string list = cfg.read_string(kPipelineSection, "pipeline", "");
+	if (list.empty())
+		throw std::invalid_argument(
+			"'" + what + "': [" + kPipelineSection + "] pipeline: missing or empty");
+	std::vector<std::string> sections;
+	mrpt::system::tokenize(list, ", \t", sections);
+	FilterPipeline p;
+	for (const auto& sect : sections)
+	{
+		std::string cls = cfg.read_string(sect, "class", "");
+		if (cls.empty())
+			throw std::invalid_argument(
+				"'" + what + "': [" + sect + "] class: missing (section listed in pipeline)");
+		if (cls.find("::") == std::string::npos) cls = "shadyloc::" + cls;
+		auto obj = mrpt::rtti::classFactory(cls);
+		auto f = std::dynamic_pointer_cast<CObservationFilter>(obj);
+		if (!f)
+			throw std::invalid_argument(
+				"'" + what + "': [" + sect + "] class = " + cls +
+				": not a registered observation filter");
+		try
+		{
+			f->loadFromConfig(cfg, sect);
+		}
+		catch (const std::exception& e)
+		{
+			throw std::invalid_argument("'" + what + "': " + e.what());
+		}
+		p.filters.push_back(f);
+	}
+	return p;
+}
+
+std::string FilterPipeline::asIni() const
+{
+	std::ostringstream s, list;
+	for (size_t i = 0; i < filters.size(); i++)
+	{
+		const std::string sect = "filter" + std::to_string(i);
+		list << (i ? " " : "") << sect;
+		s << "\n[" << sect << "]\n" << filters[i]->optionsAsIni();
+	}
+	return "[" + std::string(kPipelineSection) + "]\npipeline = " + list.str() + "\n" + s.str();
+}
+
+RawlogFilterProcessor::RawlogFilterProcessor() : mrpt::system::COutputLogger("shadyloc.filter") {}
+
+FilterRunStats RawlogFilterProcessor::run(
+	const std::string& inPath, const std::string& outPath, const FilterPipeline& pipeline)
+{
+	using namespace mrpt::obs;
+	if (std::filesystem::exists(inPath) && std::filesystem::exists(outPath) &&
+		std::filesystem::equivalent(inPath, outPath))
+		throw std::invalid_argument("input and output are the same file: '" + inPath + "'");
+
+	FilterRunStats st;
+	mrpt::system::CTicTac timer, progressTimer;
+	io::RawlogReader reader(inPath);
+	io::RawlogWriter writer(outPath, externalImages);
+
+	auto record = CObservationComment::Create();
+	record->sensorLabel = kRecordLabel;
+	record->timestamp = mrpt::Clock::now();
+	record->text = pipeline.asIni();
+	bool recordWritten = false;
+	size_t imageCounter = 0;
+
+	// Derived channels of one observation, with external images if asked.
+	auto derive = [&](const CObservation::Ptr& obs) {
+		std::vector<CObservation::Ptr> out;
+		bool any = false;
+		for (const auto& f : pipeline.filters)
+		{
+			if (!f->accepts(*obs)) continue;
+			if (!any)
+			{
+				io::loadExternalImages(*obs);
+				any = true;
+			}
+			CObservation::Ptr d;
+			try
+			{
+				d = f->apply(*obs);
+			}
+			catch (const std::exception& e)
+			{
+				throw io::RawlogError(reader.where(e.what()));
+			}
+			if (writer.externalImages())
+			{
+				const std::string stem = d->sensorLabel + "_" + std::to_string(imageCounter);
+				if (auto* s = dynamic_cast<CObservationStereoImages*>(d.get()))
+				{
+					writer.externalise(s->imageLeft, stem + "_left.png");
+					if (s->hasImageRight) writer.externalise(s->imageRight, stem + "_right.png");
+				}
+				else if (auto* im = dynamic_cast<CObservationImage*>(d.get()))
+					writer.externalise(im->image, stem + ".png");
+			}
+			out.push_back(d);
+		}
+		if (any) st.observationsFiltered++;
+		imageCounter++;
+		st.derivedObservations += out.size();
+		return out;
+	};
+
+	MRPT_LOG_INFO_STREAM("Filtering '" << inPath << "' -> '" << outPath << "' with "
+									   << pipeline.filters.size() << " filter(s)");
+	while (auto obj = reader.next())
+	{
+		st.objectsIn++;
+		if (auto sf = std::dynamic_pointer_cast<CSensoryFrame>(obj))
+		{
+			auto outSf = CSensoryFrame::Create();
+			if (!recordWritten) outSf->insert(record), recordWritten = true;
+			for (const auto& o : *sf)
+			{
+				outSf->insert(o);
+				for (const auto& d : derive(o)) outSf->insert(d);
+			}
+			writer.write(*outSf);
+		}
+		else if (auto obs = std::dynamic_pointer_cast<CObservation>(obj))
+		{
+			if (!recordWritten) writer.write(*record), recordWritten = true;
+			writer.write(*obs);
+			for (const auto& d : derive(obs)) writer.write(*d);
+		}
+		else
+			writer.write(*obj);	 // actions and anything else: untouched
+
+		if (progressTimer.Tac() > progressPeriodSeconds)
+		{
+			progressTimer.Tic();
+			MRPT_LOG_INFO_FMT(
+				"  %5.1f%%  %zu objects, %zu frames filtered, %.1f frames/s",
+				100.0 * reader.progress(), st.objectsIn, st.observationsFiltered,
+				st.observationsFiltered / std::max(1e-9, timer.Tac()));
+		}
+	}
+	if (st.objectsIn == 0)
+		throw io::RawlogError("'" + inPath + "': the rawlog holds no objects");
+	st.objectsOut = writer.written();
+	writer.commit();
+	st.seconds = timer.Tac();
+	MRPT_LOG_INFO_FMT(
+		"Done: %zu objects in, %zu out, %zu camera observations filtered, %zu channels "
+		"added, %.2f s",
+		st.objectsIn, st.objectsOut, st.observationsFiltered, st.derivedObservations, st.seconds);
+	return st;
+}
+
+std::string shadyloc::filters::readPipelineRecord(const std::string& rawlogPath)
+{
+	io::RawlogReader reader(rawlogPath);
+	for (int i = 0; i < 3; i++)
+	{
+		auto obj = reader.next();
+		if (!obj) break;
+		for (const auto& o : io::observationsIn(obj))
+			if (auto c = std::dynamic_pointer_cast<mrpt::obs::CObservationComment>(o);
+				c && c->sensorLabel == kRecordLabel)
+				return c->text;
+	}
+	return {};
+}

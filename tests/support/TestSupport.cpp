@@ -1,0 +1,113 @@
+/* ShadyLoc tests: support code. */
+#include "TestSupport.h"
+
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <array>
+#include <cstdio>
+#include <random>
+
+namespace fs = std::filesystem;
+
+namespace shadyloc::test
+{
+std::string sharedDataDir()
+{
+	const std::string d = SHADYLOC_SHARED_DATA_DIR;
+	return fs::is_directory(d) ? d : std::string();
+}
+
+std::string tempDir(const std::string& name)
+{
+	const char* base = std::getenv("SHADYLOC_TMP");
+	fs::path p = fs::path(base ? base : fs::temp_directory_path().string()) / ("shadyloc_" + name);
+	fs::remove_all(p);
+	fs::create_directories(p);
+	return p.string();
+}
+
+int runCommand(const std::string& cmd, std::string* output)
+{
+	std::string full = cmd + " 2>&1";
+	FILE* pipe = popen(full.c_str(), "r");
+	if (!pipe) return -1;
+	std::array<char, 4096> buf;
+	std::string out;
+	size_t n;
+	while ((n = fread(buf.data(), 1, buf.size(), pipe)) > 0) out.append(buf.data(), n);
+	const int status = pclose(pipe);
+	if (output) *output = out;
+	return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string appPath() { return SHADYLOC_APP; }
+std::string pluginPath() { return SHADYLOC_PLUGIN; }
+
+mrpt::obs::CObservationStereoImages::Ptr syntheticStereoFrame(int frame, int w, int h)
+{
+	std::mt19937 rng(1234);	 // same texture every frame: a static scene
+	std::uniform_int_distribution<int> u(40, 220);
+	cv::Mat left(h, w, CV_8UC3), right(h, w, CV_8UC3);
+	const int disparity = 6;
+	// Coloured 4x4 blocks (BGR), then a moving shadow band: sky light only,
+	// weaker and bluer than sun + sky.
+	for (int y = 0; y < h; y += 4)
+		for (int x = 0; x < w + disparity; x += 4)
+		{
+			const cv::Vec3b c(u(rng), u(rng), u(rng));
+			for (int dy = 0; dy < 4 && y + dy < h; dy++)
+				for (int dx = 0; dx < 4; dx++)
+				{
+					const int xl = x + dx;
+					if (xl < w) left.at<cv::Vec3b>(y + dy, xl) = c;
+					const int xr = xl - disparity;
+					if (xr >= 0 && xr < w) right.at<cv::Vec3b>(y + dy, xr) = c;
+				}
+		}
+	const int x0 = (10 * frame) % w, x1 = x0 + w / 4;
+	for (cv::Mat* m : {&left, &right})
+		for (int y = 0; y < h; y++)
+			for (int x = x0; x < std::min(x1, w); x++)
+			{
+				auto& p = m->at<cv::Vec3b>(y, x);
+				p = cv::Vec3b(
+					cv::saturate_cast<uint8_t>(p[0] * 0.55), cv::saturate_cast<uint8_t>(p[1] * 0.40),
+					cv::saturate_cast<uint8_t>(p[2] * 0.30));
+			}
+	auto obs = mrpt::obs::CObservationStereoImages::Create();
+	obs->sensorLabel = "CAMERA";
+	obs->timestamp = mrpt::Clock::fromDouble(1000.0 + 0.1 * frame);
+	obs->imageLeft = mrpt::img::CImage(left, mrpt::img::DEEP_COPY);
+	obs->imageRight = mrpt::img::CImage(right, mrpt::img::DEEP_COPY);
+	obs->hasImageRight = true;
+	obs->leftCamera.ncols = obs->rightCamera.ncols = w;
+	obs->leftCamera.nrows = obs->rightCamera.nrows = h;
+	obs->leftCamera.setIntrinsicParamsFromValues(200, 200, w / 2.0, h / 2.0);
+	obs->rightCamera = obs->leftCamera;
+	obs->rightCameraPose = mrpt::poses::CPose3DQuat(mrpt::poses::CPose3D(0.12, 0, 0, 0, 0, 0));
+	return obs;
+}
+
+void writeSyntheticRawlog(const std::string& path, int n, bool sensoryFrames)
+{
+	mrpt::io::CFileGZOutputStream f(path);
+	auto arch = mrpt::serialization::archiveFrom(f);
+	for (int i = 0; i < n; i++)
+	{
+		auto obs = syntheticStereoFrame(i);
+		if (sensoryFrames)
+		{
+			mrpt::obs::CActionCollection acts;
+			mrpt::obs::CSensoryFrame sf;
+			sf.insert(obs);
+			arch << acts << sf;
+		}
+		else
+			arch << *obs;
+	}
+}
+
+}  // namespace shadyloc::test

@@ -1,0 +1,44 @@
+/* ShadyLoc tests: paths, shared data, temporary directories, small rawlogs. */
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <mrpt/obs/CObservationStereoImages.h>
+
+#include <opencv2/core/mat.hpp>
+
+#include <filesystem>
+#include <string>
+
+namespace shadyloc::test
+{
+/** ../shared/data beside the project, or "" if absent (a fresh clone). */
+std::string sharedDataDir();
+
+/** Skips the current test with a clear message if shared data is missing. */
+#define SHADYLOC_REQUIRE_SHARED_DATA(sub)                                            \
+	do {                                                                             \
+		if (shadyloc::test::sharedDataDir().empty() ||                               \
+			!std::filesystem::exists(shadyloc::test::sharedDataDir() + "/" + (sub)))   \
+			GTEST_SKIP() << "real data '../shared/data/" << (sub)                    \
+						 << "' is absent (fresh clone?): test skipped";              \
+	} while (0)
+
+/** A fresh empty directory for this test (removed at the next call with the same name). */
+std::string tempDir(const std::string& name);
+
+/** Runs a shell command, returns its exit status; stdout+stderr into *output. */
+int runCommand(const std::string& cmd, std::string* output = nullptr);
+
+std::string appPath();	  //!< the built `shadyloc` executable
+std::string pluginPath();  //!< the built MRPT plugin module
+
+/** A synthetic colour stereo frame: textured, coloured patches, a shadow band
+ * (sky-lit: dimmer and bluer) that moves with `frame`. */
+mrpt::obs::CObservationStereoImages::Ptr syntheticStereoFrame(int frame, int w = 160, int h = 120);
+
+/** Writes n synthetic frames as a rawlog; sensoryFrames selects the
+ * action/sensory-frame style instead of bare observations. */
+void writeSyntheticRawlog(const std::string& path, int n, bool sensoryFrames);
+
+}  // namespace shadyloc::test
