@@ -3,7 +3,6 @@
 
 #include <shadyloc/core/Registration.h>
 
-#include <mrpt/core/exceptions.h>
 
 #include <cstring>
 #include <iostream>
@@ -48,7 +47,8 @@ int main(int argc, char** argv)
 	}
 	catch (const std::exception& e)
 	{
-		std::cerr << "shadyloc " << name << ": error: " << mrpt::exception_to_str(e) << "\n";
+		// what(), not MRPT's exception_to_str: a user wants the reason, not a trace.
+		std::cerr << "shadyloc " << name << ": error: " << e.what() << "\n";
 		return 1;
 	}
 }

@@ -98,10 +98,11 @@ FilterRunStats RawlogFilterProcessor::run(
 	io::RawlogReader reader(inPath);
 	io::RawlogWriter writer(outPath, externalImages);
 
+	// The record takes the first observation's timestamp, so that it does not
+	// stretch the rawlog's time span in tools that report one.
 	auto record = CObservationComment::Create();
 	record->sensorLabel = kRecordLabel;
-	record->timestamp = mrpt::Clock::now();
-	record->text = pipeline.asIni();
+	record->text = std::string(kRecordHeader) + "\n" + pipeline.asIni();
 	bool recordWritten = false;
 	size_t imageCounter = 0;
 
@@ -112,14 +113,11 @@ FilterRunStats RawlogFilterProcessor::run(
 		for (const auto& f : pipeline.filters)
 		{
 			if (!f->accepts(*obs)) continue;
-			if (!any)
-			{
-				io::loadExternalImages(*obs);
-				any = true;
-			}
 			CObservation::Ptr d;
 			try
 			{
+				if (!any) io::loadExternalImages(*obs);
+				any = true;
 				d = f->apply(*obs);
 			}
 			catch (const std::exception& e)
@@ -153,7 +151,12 @@ FilterRunStats RawlogFilterProcessor::run(
 		if (auto sf = std::dynamic_pointer_cast<CSensoryFrame>(obj))
 		{
 			auto outSf = CSensoryFrame::Create();
-			if (!recordWritten) outSf->insert(record), recordWritten = true;
+			if (!recordWritten && sf->size() > 0)
+			{
+				record->timestamp = (*sf->begin())->timestamp;
+				outSf->insert(record);
+				recordWritten = true;
+			}
 			for (const auto& o : *sf)
 			{
 				outSf->insert(o);
@@ -163,7 +166,12 @@ FilterRunStats RawlogFilterProcessor::run(
 		}
 		else if (auto obs = std::dynamic_pointer_cast<CObservation>(obj))
 		{
-			if (!recordWritten) writer.write(*record), recordWritten = true;
+			if (!recordWritten)
+			{
+				record->timestamp = obs->timestamp;
+				writer.write(*record);
+				recordWritten = true;
+			}
 			writer.write(*obs);
 			for (const auto& d : derive(obs)) writer.write(*d);
 		}
@@ -200,8 +208,8 @@ std::string shadyloc::filters::readPipelineRecord(const std::string& rawlogPath)
 		if (!obj) break;
 		for (const auto& o : io::observationsIn(obj))
 			if (auto c = std::dynamic_pointer_cast<mrpt::obs::CObservationComment>(o);
-				c && c->sensorLabel == kRecordLabel)
-				return c->text;
+				c && c->text.rfind(kRecordHeader, 0) == 0)
+				return c->text.substr(std::string(kRecordHeader).size() + 1);
 	}
 	return {};
 }

@@ -37,7 +37,7 @@ void CFilterMonochrome::loadSpecificOptions(
 }
 void CFilterMonochrome::specificOptionsAsIni(std::ostream& out) const
 {
-	out << "channel_order = " << image::toString(order) << "   ; memory order of colour input\n";
+	out << "; memory order of colour input\nchannel_order = " << image::toString(order) << "\n";
 }
 uint8_t CFilterMonochrome::serializeGetVersion() const { return 0; }
 void CFilterMonochrome::serializeTo(mrpt::serialization::CArchive& out) const
@@ -133,13 +133,14 @@ void CFilterInvariant::loadSpecificOptions(
 void CFilterInvariant::specificOptionsAsIni(std::ostream& out) const
 {
 	out.precision(10);
-	out << "alpha = " << m_params.alpha << "   ; weight of log(blue)\n"
-		<< "beta = " << m_params.beta << "   ; weight of log(red)\n"
+	out << "; weights of log(blue) and log(red)\nalpha = " << m_params.alpha << "\n"
+		<< "beta = " << m_params.beta << "\n"
 		<< "channel_order = " << image::toString(m_params.order) << "\n"
-		<< "linearisation = " << image::toString(m_params.linearisation) << "   ; none|srgb|gamma\n"
+		<< "; none|srgb|gamma\nlinearisation = " << image::toString(m_params.linearisation) << "\n"
 		<< "gamma = " << m_params.gamma << "\n"
-		<< "scale = " << m_params.scale << "   ; grey levels per unit log response\n"
-		<< "offset = " << m_params.offset << "   ; log units added before scaling\n"
+		<< "; grey levels per unit log response; log units added before scaling\n"
+		<< "scale = " << m_params.scale << "\n"
+		<< "offset = " << m_params.offset << "\n"
 		<< "parallel_eyes = " << (parallel_eyes ? "true" : "false") << "\n";
 }
 
@@ -189,7 +190,7 @@ void CFilterLinearise::loadSpecificOptions(
 }
 void CFilterLinearise::specificOptionsAsIni(std::ostream& out) const
 {
-	out << "linearisation = " << image::toString(linearisation) << "   ; none|srgb|gamma\n"
+	out << "; none|srgb|gamma\nlinearisation = " << image::toString(linearisation) << "\n"
 		<< "gamma = " << gamma << "\n";
 }
 uint8_t CFilterLinearise::serializeGetVersion() const { return 0; }

@@ -6,6 +6,7 @@
 #include <mrpt/obs/CObservationStereoImages.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
+#include <mrpt/system/string_utils.h>
 
 #include <filesystem>
 #include <system_error>
@@ -71,17 +72,19 @@ mrpt::serialization::CSerializable::Ptr RawlogReader::next()
 	catch (const std::exception& e)
 	{
 		std::string msg = e.what();
-		// MRPT exceptions carry a multi-line call trace; the first line that
-		// is not a trace frame says what went wrong.
-		const auto pos = msg.find("Stored object has class");
-		if (pos != std::string::npos)
+		// MRPT exceptions nest messages with call traces; the innermost
+		// "Message:" line says what went wrong.
+		if (const auto pos = msg.rfind("Message:"); pos != std::string::npos)
 		{
-			auto end = msg.find('\n', pos);
-			msg = msg.substr(pos, end == std::string::npos ? std::string::npos : end - pos) +
-				  " (unknown class: load the plugin that defines it, or the file is corrupt)";
+			const auto end = msg.find('\n', pos);
+			msg = mrpt::system::trim(msg.substr(pos + 8, end == std::string::npos ? end : end - pos - 8));
 		}
+		if (msg.find("Stored object has class") != std::string::npos)
+			msg += " (unknown class: load the plugin that defines it, or the file is corrupt)";
 		else if (m_in.checkEOF())
 			msg = "truncated object (file ends in the middle of it)";
+		else
+			msg = "corrupt data: " + msg;
 		throw RawlogError(where(msg));
 	}
 }

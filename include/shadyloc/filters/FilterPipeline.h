@@ -21,6 +21,9 @@ constexpr const char* kPipelineSection = "filters";
 /** Sensor label of the CObservationComment that records, at the head of an
  * output rawlog, the exact options that made its derived channels. */
 constexpr const char* kRecordLabel = "shadyloc_filters";
+/** First line of that record's text (CObservationComment does not store its
+ * sensor label, so the text identifies it). */
+constexpr const char* kRecordHeader = "# shadyloc filter pipeline record v1";
 
 class FilterPipeline
 {
@@ -62,8 +65,8 @@ class RawlogFilterProcessor : public mrpt::system::COutputLogger
 		const std::string& inPath, const std::string& outPath, const FilterPipeline& pipeline);
 };
 
-/** The pipeline record at the head of a filtered rawlog, or "" if none. Reads
- * only the first few objects. */
+/** The pipeline record (an .ini text FilterPipeline::FromConfig reads) at the
+ * head of a filtered rawlog, or "" if none. Reads only the first few objects. */
 std::string readPipelineRecord(const std::string& rawlogPath);
 
 }  // namespace shadyloc::filters
