@@ -258,6 +258,7 @@ struct BadCase
 	std::function<void(const std::string& dir, const std::string& in)> make;
 	std::string expectInMessage;
 };
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.name; }
 
 void writePlain(const std::string& path, const std::vector<const mrpt::serialization::CSerializable*>& objs)
 {
@@ -276,8 +277,6 @@ void writeBytes(const std::string& p, const std::string& b)
 	f << b;
 }
 }  // namespace
-
-void PrintTo(const BadCase& c, std::ostream* os) { *os << c.name; }
 
 class FilterBadInput : public ::testing::TestWithParam<BadCase>
 {
