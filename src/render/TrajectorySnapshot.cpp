@@ -1,0 +1,167 @@
+/* ShadyLoc — offscreen trajectory snapshots. */
+#include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/render/TrajectorySnapshot.h>
+
+#include <mrpt/img/CImage.h>
+#include <mrpt/opengl/CFBORender.h>
+#include <mrpt/opengl/CGridPlaneXY.h>
+#include <mrpt/opengl/COpenGLScene.h>
+#include <mrpt/opengl/CSetOfTriangles.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace shadyloc::render
+{
+namespace
+{
+// Maps a point to picture coordinates (x right, y up the page, z out of it).
+struct Projection
+{
+	int u = 0, v = 1, w = 2;  // indices of the world axes that become x, y, z
+	double su = 1, sv = 1, sw = 1;	// and their signs (keeping a right-handed view)
+	mrpt::math::TPoint3D operator()(const mrpt::math::TPoint3D& p) const
+	{
+		const double c[3] = {p.x, p.y, p.z};
+		return {su * c[u], sv * c[v], sw * c[w]};
+	}
+};
+
+Projection chooseProjection(const std::vector<TrajectoryLayer>& layers, char up)
+{
+	if (up == 'a')
+	{
+		double lo[3], hi[3];
+		std::fill(lo, lo + 3, std::numeric_limits<double>::max());
+		std::fill(hi, hi + 3, std::numeric_limits<double>::lowest());
+		for (const auto& l : layers)
+			for (const auto& p : l.points)
+			{
+				const double c[3] = {p.x, p.y, p.z};
+				for (int i = 0; i < 3; i++) lo[i] = std::min(lo[i], c[i]), hi[i] = std::max(hi[i], c[i]);
+			}
+		int best = 2;
+		for (int i = 0; i < 3; i++)
+			if (hi[i] - lo[i] < hi[best] - lo[best]) best = i;
+		up = "xyz"[best];
+	}
+	// Right-handed (page x right, page y up, z towards the viewer).
+	switch (up)
+	{
+		case 'x': return {1, 2, 0};
+		// Camera frames (z forward, x right, y down): forward is right on the
+		// page, the camera's right is down the page, -y towards the viewer.
+		case 'y': return {2, 0, 1, 1, -1, -1};
+		case 'z': return {0, 1, 2};
+	}
+	throw std::invalid_argument(std::string("upAxis must be x, y, z or a, got '") + up + "'");
+}
+}  // namespace
+
+void renderTrajectories(
+	const std::vector<TrajectoryLayer>& layers, const SnapshotOptions& o, const std::string& pngPath)
+{
+	size_t n = 0;
+	for (const auto& l : layers) n += l.points.size();
+	if (n < 2) throw std::runtime_error("'" + pngPath + "': nothing to draw (fewer than two points)");
+	const Projection proj = chooseProjection(layers, o.upAxis);
+
+	double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
+	for (const auto& l : layers)
+		for (const auto& p : l.points)
+		{
+			const auto q = proj(p);
+			x0 = std::min(x0, q.x), x1 = std::max(x1, q.x), y0 = std::min(y0, q.y), y1 = std::max(y1, q.y);
+		}
+	const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+	// Metres per pixel so that the extent fits with the margin.
+	const double span = std::max({(x1 - x0) / o.width, (y1 - y0) / o.height, 1e-3 / o.width});
+	const double mPerPx = span / (1.0 - 2 * o.marginFraction);
+
+	mrpt::opengl::COpenGLScene scene;
+	auto vp = scene.getViewport();
+	vp->setCustomBackgroundColor({1.0f, 1.0f, 1.0f});
+	if (o.grid)
+	{
+		// A grid step of a round number of metres, about 10 lines across.
+		const double raw = mPerPx * o.width / 10;
+		const double p10 = std::pow(10.0, std::floor(std::log10(raw)));
+		const double step = raw / p10 < 2 ? p10 : (raw / p10 < 5 ? 2 * p10 : 5 * p10);
+		const double hw = 0.5 * mPerPx * o.width, hh = 0.5 * mPerPx * o.height;
+		auto grid = mrpt::opengl::CGridPlaneXY::Create(
+			float(std::floor((cx - hw) / step) * step), float(std::ceil((cx + hw) / step) * step),
+			float(std::floor((cy - hh) / step) * step), float(std::ceil((cy + hh) / step) * step), -1.0f,
+			float(step));
+		grid->setColor(0.82, 0.82, 0.82);
+		scene.insert(grid);
+		vp->addTextMessage(
+			0.01, 0.01, mrpt::format("grid %g m", step), 1,
+			[] {
+				mrpt::opengl::TFontParams f;
+				f.color = {0.3f, 0.3f, 0.3f};
+				f.vfont_scale = 14;
+				return f;
+			}());
+	}
+
+	size_t li = 0;
+	for (const auto& l : layers)
+	{
+		if (l.points.size() < 2) continue;
+		auto tris = mrpt::opengl::CSetOfTriangles::Create();
+		const double hw = 0.5 * l.widthPx * mPerPx;
+		const float z = float(li) * 0.01f;	// later layers on top
+		for (size_t i = 0; i + 1 < l.points.size(); i++)
+		{
+			const auto a = proj(l.points[i]), b = proj(l.points[i + 1]);
+			double dx = b.x - a.x, dy = b.y - a.y;
+			const double len = std::hypot(dx, dy);
+			if (len < 1e-12) continue;
+			// Extend each segment by half a width so consecutive quads overlap
+			// at the joints instead of leaving notches.
+			dx /= len, dy /= len;
+			const double ex = dx * hw, ey = dy * hw, nx = -dy * hw, ny = dx * hw;
+			const mrpt::math::TPoint3Df p1(a.x - ex + nx, a.y - ey + ny, z), p2(a.x - ex - nx, a.y - ey - ny, z),
+				p3(b.x + ex - nx, b.y + ey - ny, z), p4(b.x + ex + nx, b.y + ey + ny, z);
+			mrpt::opengl::TTriangle t1(p1, p2, p3), t2(p1, p3, p4);
+			const auto c = i < l.segmentColours.size() ? l.segmentColours[i] : l.colour;
+			for (auto* t : {&t1, &t2})
+				for (auto& v : t->vertices) v.setColor(c);
+			tris->insertTriangle(t1);
+			tris->insertTriangle(t2);
+		}
+		tris->enableLight(false);
+		scene.insert(tris);
+		mrpt::opengl::TFontParams f;
+		f.color = mrpt::img::TColorf(l.colour);
+		f.vfont_scale = 16;
+		vp->addTextMessage(0.01, 0.97 - 0.035 * double(li + 1), "-- " + l.name, 10 + li, f);
+		li++;
+	}
+	if (!o.title.empty())
+	{
+		mrpt::opengl::TFontParams f;
+		f.color = {0.f, 0.f, 0.f};
+		f.vfont_scale = 18;
+		vp->addTextMessage(0.01, 0.97, o.title, 2, f);
+	}
+
+	mrpt::opengl::CFBORender render(o.width, o.height);
+	auto& cam = render.getCamera(scene);
+	cam.setOrthogonal(true);
+	cam.setPointingAt(float(cx), float(cy), 0.f);
+	cam.setAzimuthDegrees(-90.f);
+	cam.setElevationDegrees(90.f);
+	// In orthographic mode MRPT 2.5 shows a vertical extent of half the zoom
+	// distance (measured: a 48 m tall view at zoom 95 m).
+	cam.setZoomDistance(float(2.0 * mPerPx * o.height));
+	mrpt::img::CImage img;
+	render.render_RGB(scene, img);
+	io::writeAtomically(pngPath, [&](const std::string& tmp) {
+		if (!img.saveToFile(tmp)) throw std::runtime_error("'" + pngPath + "': cannot write PNG");
+	});
+}
+
+}  // namespace shadyloc::render

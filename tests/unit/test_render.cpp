@@ -1,0 +1,55 @@
+/* Offscreen trajectory snapshots (CFBORender through EGL/Mesa, headless). */
+#include "../support/TestSupport.h"
+
+#include <shadyloc/render/TrajectorySnapshot.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+using namespace shadyloc::render;
+
+namespace
+{
+bool isRed(const cv::Vec3b& bgr) { return bgr[2] > 180 && bgr[1] < 90 && bgr[0] < 90; }
+bool isBlue(const cv::Vec3b& bgr) { return bgr[0] > 180 && bgr[1] < 90 && bgr[2] < 90; }
+}  // namespace
+
+// Two straight paths at known places land where the projection says: the red
+// one along the page centre line, the blue one below it (the camera's right),
+// spanning the width minus the margins.
+TEST(RenderSnapshot, PathsLandWhereTheProjectionPutsThem)
+{
+	const auto dir = shadyloc::test::tempDir("render");
+	TrajectoryLayer red{"red", {}, {255, 0, 0}}, blue{"blue", {}, {0, 0, 255}};
+	for (int i = 0; i <= 100; i++)
+	{
+		red.points.push_back({0, 0, double(i)});	// camera frame: straight ahead
+		blue.points.push_back({20, 0, double(i)});	// 20 m to the right
+	}
+	SnapshotOptions o;
+	o.width = 400;
+	o.height = 300;
+	o.grid = false;
+	o.marginFraction = 0.1;
+	renderTrajectories({red, blue}, o, dir + "/snap.png");
+	const cv::Mat img = cv::imread(dir + "/snap.png");
+	ASSERT_EQ(img.cols, 400);
+	ASSERT_EQ(img.rows, 300);
+	// Extent 100 m across 80% of 400 px: 0.3125 m/px; centre between the paths.
+	// red (x=0) is 10 m = 32 px above the centre row, blue 32 px below.
+	const int cx = 200, cy = 150;
+	EXPECT_TRUE(isRed(img.at<cv::Vec3b>(cy - 32, cx))) << img.at<cv::Vec3b>(cy - 32, cx);
+	EXPECT_TRUE(isBlue(img.at<cv::Vec3b>(cy + 32, cx))) << img.at<cv::Vec3b>(cy + 32, cx);
+	EXPECT_EQ(img.at<cv::Vec3b>(cy, cx), cv::Vec3b(255, 255, 255));
+	// Paths start at the left margin (40 px) and end at the right one (360 px).
+	EXPECT_TRUE(isRed(img.at<cv::Vec3b>(cy - 32, 45)));
+	EXPECT_FALSE(isRed(img.at<cv::Vec3b>(cy - 32, 30)));
+	EXPECT_TRUE(isRed(img.at<cv::Vec3b>(cy - 32, 355)));
+	EXPECT_FALSE(isRed(img.at<cv::Vec3b>(cy - 32, 370)));
+}
+
+TEST(RenderSnapshot, NothingToDrawIsAnErrorAndWritesNothing)
+{
+	const auto dir = shadyloc::test::tempDir("render_bad");
+	EXPECT_THROW(renderTrajectories({}, {}, dir + "/x.png"), std::runtime_error);
+	EXPECT_FALSE(std::filesystem::exists(dir + "/x.png"));
+}
