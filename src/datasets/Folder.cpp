@@ -36,7 +36,12 @@ void TFolderCalib::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, co
 	auto need = [&](const std::string& sect, const std::string& key) {
 		if (!c.keyExists(sect, key))
 			throw DatasetError("[" + sect + "] " + key + ": missing");
-		return detail::parseDouble(c.read_string(sect, key, ""), "[" + sect + "] " + key);
+		// Trailing ";" / "#" / "//" comments are documentation in our .ini files.
+		std::string v = c.read_string(sect, key, "");
+		for (const char* mark : {";", "#", "//"}) v = v.substr(0, v.find(mark));
+		v.erase(0, v.find_first_not_of(" \t"));
+		v.erase(v.find_last_not_of(" \t\r") + 1);
+		return detail::parseDouble(v, "[" + sect + "] " + key);
 	};
 	auto opt = [&](const std::string& sect, const std::string& key, double def) {
 		return c.keyExists(sect, key) ? need(sect, key) : def;
