@@ -415,6 +415,15 @@ TEST(DatasetsKitti, ExportErrorsLeaveNoSequence)
 		EXPECT_NE(std::string(e.what()).find("'CAMERA'"), std::string::npos) << e.what();
 	}
 	EXPECT_FALSE(fs::exists(dir + "/out")) << "export left directories behind";
+	// The same through the app.
+	std::string text;
+	const int rc = shadyloc::test::runCommand(
+		shadyloc::test::appPath() + " export kitti -q -i '" + rawlog + "' -o '" + dir +
+			"/out' --sensor-label STEREO",
+		&text);
+	EXPECT_NE(rc, 0) << text;
+	EXPECT_NE(text.find("no stereo observations labelled 'STEREO'"), std::string::npos) << text;
+	EXPECT_FALSE(fs::exists(dir + "/out"));
 
 	// Ground truth that does not cover frame 2 (t = 1000.2 s).
 	TTrajectory gt = {{1000.0, {}}, {1000.1, {}}};
