@@ -10,6 +10,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <fstream>
+#include <functional>
 
 using namespace shadyloc::datasets;
 namespace fs = std::filesystem;

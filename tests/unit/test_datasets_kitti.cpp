@@ -10,9 +10,11 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iomanip>
 #include <random>
 #include <sstream>
 
