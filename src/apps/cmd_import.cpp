@@ -1,0 +1,162 @@
+/* shadyloc import <kitti|middlebury|folder>: datasets -> stereo rawlog. */
+#include "Command.h"
+
+#include <shadyloc/datasets/Folder.h>
+#include <shadyloc/datasets/Kitti.h>
+#include <shadyloc/datasets/Middlebury.h>
+
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+
+#include <cstring>
+#include <iostream>
+#include <memory>
+
+namespace
+{
+using namespace shadyloc::datasets;
+
+/** The options every importer takes. */
+struct CommonArgs
+{
+	TCLAP::ValueArg<std::string> out{"o", "output", "output rawlog", true, "", "out.rawlog"};
+	TCLAP::ValueArg<std::string> label{
+		"", "sensor-label", "sensor label of the stereo observations", false, "CAMERA", "label"};
+	TCLAP::SwitchArg ext{
+		"", "external-images", "store images as PNG files in <out>_Images/ (not inside the rawlog)"};
+	TCLAP::ValueArg<size_t> maxFrames{"", "max-frames", "import at most N frames (0: all)", false, 0, "N"};
+	TCLAP::ValueArg<size_t> every{
+		"", "progress-every", "report progress every N frames", false, 100, "N"};
+	TCLAP::SwitchArg quiet{"q", "quiet", "no progress output"};
+
+	void addTo(TCLAP::CmdLine& cmd)
+	{
+		for (TCLAP::Arg* a : std::initializer_list<TCLAP::Arg*>{&out, &label, &ext, &maxFrames, &every, &quiet})
+			cmd.add(a);
+	}
+	TImportOptions options()
+	{
+		TImportOptions o;
+		o.sensorLabel = label.getValue();
+		o.externalImages = ext.getValue();
+		o.maxFrames = maxFrames.getValue();
+		o.progressEvery = every.getValue();
+		return o;
+	}
+	void setup(mrpt::system::COutputLogger& log)
+	{
+		log.setMinLoggingLevel(quiet.getValue() ? mrpt::system::LVL_WARN : mrpt::system::LVL_INFO);
+	}
+};
+
+void report(const TImportResult& r)
+{
+	std::cout << "Imported " << r.frames << " stereo frame(s) into '" << r.rawlogPath << "'\n"
+			  << "  left : " << r.leftCamera.ncols << "x" << r.leftCamera.nrows
+			  << " fx=" << r.leftCamera.fx() << " fy=" << r.leftCamera.fy()
+			  << " cx=" << r.leftCamera.cx() << " cy=" << r.leftCamera.cy() << "\n"
+			  << "  right: fx=" << r.rightCamera.fx() << " fy=" << r.rightCamera.fy()
+			  << " cx=" << r.rightCamera.cx() << " cy=" << r.rightCamera.cy()
+			  << "  baseline " << r.rightCameraPose.x() << " m\n";
+	if (!r.groundTruthPath.empty()) std::cout << "  ground truth: '" << r.groundTruthPath << "'\n";
+}
+
+int runKitti(int argc, char** argv)
+{
+	TCLAP::CmdLine cmd(
+		"Imports a KITTI odometry sequence (colour cameras image_2 / image_3, calib.txt P2/P3, "
+		"times.txt, poses/NN.txt if present -> <out>_gt.tum) into a rawlog of "
+		"CObservationStereoImages.",
+		' ', "0.1");
+	TCLAP::UnlabeledValueArg<std::string> root("root", "KITTI root (holds sequences/ and poses/)", true, "", "ROOT", cmd);
+	TCLAP::ValueArg<std::string> seq("s", "sequence", "sequence number, e.g. 00", false, "00", "NN", cmd);
+	CommonArgs common;
+	common.addTo(cmd);
+	cmd.parse(argc, argv);
+	KittiImporter imp;
+	imp.options = common.options();
+	common.setup(imp);
+	report(imp.run(root.getValue(), seq.getValue(), common.out.getValue()));
+	return 0;
+}
+
+int runMiddlebury(int argc, char** argv)
+{
+	TCLAP::CmdLine cmd(
+		"Imports a Middlebury 2014 stereo scene (im0.png, im1.png, calib.txt) as a rawlog with "
+		"one stereo frame; both principal points and the baseline kept exactly.",
+		' ', "0.1");
+	TCLAP::UnlabeledValueArg<std::string> scene("scene", "scene directory", true, "", "SCENE_DIR", cmd);
+	TCLAP::ValueArg<std::string> left("", "left-image", "left image file in the scene", false, "im0.png", "name", cmd);
+	TCLAP::ValueArg<std::string> right(
+		"", "right-image", "right image file (im1E.png, im1L.png: lighting variants)", false, "im1.png", "name", cmd);
+	TCLAP::ValueArg<double> stamp("", "timestamp", "frame timestamp [s since Unix epoch]", false, 0.0, "s", cmd);
+	CommonArgs common;
+	common.addTo(cmd);
+	cmd.parse(argc, argv);
+	MiddleburyImporter imp;
+	imp.options = common.options();
+	imp.leftImage = left.getValue();
+	imp.rightImage = right.getValue();
+	imp.timestamp = stamp.getValue();
+	common.setup(imp);
+	report(imp.run(scene.getValue(), common.out.getValue()));
+	return 0;
+}
+
+int runFolder(int argc, char** argv)
+{
+	TCLAP::CmdLine cmd(
+		"Imports a folder of left images and a folder of right images (paired by sorted file "
+		"name) with a calibration .ini (see config/folder_calib_example.ini).",
+		' ', "0.1");
+	TCLAP::ValueArg<std::string> left("", "left", "left image directory", true, "", "DIR", cmd);
+	TCLAP::ValueArg<std::string> right("", "right", "right image directory", true, "", "DIR", cmd);
+	TCLAP::ValueArg<std::string> calib("", "calib", "calibration .ini", true, "", "calib.ini", cmd);
+	TCLAP::ValueArg<double> rate("", "rate", "frame rate [Hz] (timestamps start + i/rate)", false, 0, "HZ", cmd);
+	TCLAP::ValueArg<std::string> times("", "times", "timestamps file, one [s] per pair", false, "", "times.txt", cmd);
+	TCLAP::ValueArg<double> start("", "start-time", "timestamp of frame 0 with --rate [s]", false, 0, "s", cmd);
+	CommonArgs common;
+	common.addTo(cmd);
+	cmd.parse(argc, argv);
+	if (rate.isSet() == times.isSet())
+		throw std::invalid_argument("import folder: give exactly one of --rate HZ or --times FILE");
+	FolderImporter imp;
+	imp.options = common.options();
+	imp.rateHz = rate.getValue();
+	imp.timesFile = times.getValue();
+	imp.startTime = start.getValue();
+	common.setup(imp);
+	report(imp.run(left.getValue(), right.getValue(), calib.getValue(), common.out.getValue()));
+	return 0;
+}
+
+int run(int argc, char** argv)
+{
+	static const std::pair<const char*, int (*)(int, char**)> kinds[] = {
+		{"kitti", runKitti}, {"middlebury", runMiddlebury}, {"folder", runFolder}};
+	auto usage = [&](std::ostream& o) {
+		o << "usage: shadyloc import <kind> [options]   (shadyloc import <kind> --help)\nkinds:\n"
+			 "  kitti ROOT --sequence NN -o out.rawlog     KITTI odometry, colour cameras\n"
+			 "  middlebury SCENE_DIR -o out.rawlog          Middlebury 2014 scene\n"
+			 "  folder --left DIR --right DIR --calib calib.ini -o out.rawlog (--rate HZ | --times FILE)\n";
+	};
+	if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h"))
+	{
+		usage(argc < 2 ? std::cerr : std::cout);
+		return argc < 2 ? 2 : 0;
+	}
+	for (const auto& [name, fn] : kinds)
+		if (!std::strcmp(argv[1], name))
+		{
+			std::string argv0 = std::string(argv[0]) + " " + name;
+			argv[1] = argv0.data();
+			return fn(argc - 1, argv + 1);
+		}
+	std::cerr << "shadyloc import: unknown kind '" << argv[1] << "'\n";
+	usage(std::cerr);
+	return 2;
+}
+
+shadyloc::apps::RegisterCommand reg(
+	"import", {"KITTI / Middlebury / image folders -> stereo rawlog (import <kind> --help)", run});
+}  // namespace

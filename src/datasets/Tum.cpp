@@ -1,0 +1,78 @@
+/* ShadyLoc — TUM trajectory files. */
+#include <shadyloc/datasets/Tum.h>
+#include <shadyloc/io/AtomicFile.h>
+
+#include <mrpt/math/CQuaternion.h>
+
+#include <Eigen/Geometry>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+namespace shadyloc::datasets
+{
+TTrajectory readTum(const std::string& path)
+{
+	std::ifstream f(path);
+	if (!f) throw std::runtime_error("'" + path + "': cannot open TUM trajectory file");
+	TTrajectory out;
+	std::string line;
+	for (size_t n = 1; std::getline(f, line); n++)
+	{
+		const auto first = line.find_first_not_of(" \t\r");
+		if (first == std::string::npos || line[first] == '#') continue;
+		std::istringstream ss(line);
+		double v[8];
+		for (int i = 0; i < 8; i++)
+			if (!(ss >> v[i]))
+				throw std::runtime_error(
+					"'" + path + "':" + std::to_string(n) +
+					": expected 8 numbers 'timestamp tx ty tz qx qy qz qw', got '" + line + "'");
+		std::string extra;
+		if (ss >> extra)
+			throw std::runtime_error(
+				"'" + path + "':" + std::to_string(n) + ": more than 8 values: '" + line + "'");
+		// Scalar last in the file; MRPT's quaternion takes the scalar first.
+		const double norm = std::sqrt(v[4] * v[4] + v[5] * v[5] + v[6] * v[6] + v[7] * v[7]);
+		if (!(std::abs(norm - 1.0) < 1e-2))
+			throw std::runtime_error(
+				"'" + path + "':" + std::to_string(n) + ": quaternion norm " + std::to_string(norm) +
+				" is not 1 (is the order qx qy qz qw?)");
+		mrpt::math::CQuaternionDouble q(v[7] / norm, v[4] / norm, v[5] / norm, v[6] / norm);
+		out.push_back({v[0], mrpt::poses::CPose3D(q, v[1], v[2], v[3])});
+	}
+	return out;
+}
+
+std::string tumLine(const TTimedPose& p)
+{
+	// Straight from the rotation matrix (Eigen's Shepperd method), not via
+	// yaw/pitch/roll, which loses precision near pitch = +-90 deg.
+	const Eigen::Matrix3d R = p.pose.getRotationMatrix().asEigen();
+	Eigen::Quaterniond q(R);
+	q.normalize();
+	const double s = q.w() < 0 ? -1.0 : 1.0;	// q and -q: same rotation; print qw >= 0
+	char buf[256];
+	std::snprintf(
+		buf, sizeof(buf), "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f", p.t, p.pose.x(), p.pose.y(),
+		p.pose.z(), s * q.x(), s * q.y(), s * q.z(), s * q.w());
+	return buf;
+}
+
+void writeTum(const std::string& path, const TTrajectory& traj, const std::string& comment)
+{
+	io::writeAtomically(path, [&](const std::string& tmp) {
+		std::ofstream f(tmp);
+		if (!f) throw std::runtime_error("'" + path + "': cannot create TUM file");
+		if (!comment.empty()) f << "# " << comment << "\n";
+		f << "# timestamp tx ty tz qx qy qz qw\n";
+		for (const auto& p : traj) f << tumLine(p) << "\n";
+		f.close();
+		if (!f) throw std::runtime_error("'" + path + "': write failed (disk full?)");
+	});
+}
+
+}  // namespace shadyloc::datasets
