@@ -5,6 +5,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <fstream>
+
 using namespace shadyloc::render;
 
 namespace
@@ -52,4 +54,23 @@ TEST(RenderSnapshot, NothingToDrawIsAnErrorAndWritesNothing)
 	const auto dir = shadyloc::test::tempDir("render_bad");
 	EXPECT_THROW(renderTrajectories({}, {}, dir + "/x.png"), std::runtime_error);
 	EXPECT_FALSE(std::filesystem::exists(dir + "/x.png"));
+}
+
+TEST(RenderSnapshot, AppRendersTumFilesAndRejectsBadOnes)
+{
+	const auto dir = shadyloc::test::tempDir("render_app");
+	{
+		std::ofstream f(dir + "/a.tum");
+		for (int i = 0; i < 20; i++) f << i << " " << 0.1 * i * i << " 0 " << i << " 0 0 0 1\n";
+		std::ofstream g(dir + "/bad.tum");
+		g << "0 1 2\n";
+	}
+	std::string out;
+	ASSERT_EQ(shadyloc::test::runCommand(shadyloc::test::appPath() + " render-traj -t " + dir + "/a.tum:gt -o " + dir + "/a.png --width 320 --height 200", &out), 0) << out;
+	const cv::Mat img = cv::imread(dir + "/a.png");
+	EXPECT_EQ(img.cols, 320);
+	EXPECT_EQ(img.rows, 200);
+	EXPECT_NE(shadyloc::test::runCommand(shadyloc::test::appPath() + " render-traj -t " + dir + "/bad.tum -o " + dir + "/b.png", &out), 0);
+	EXPECT_NE(out.find("bad.tum"), std::string::npos) << out;
+	EXPECT_FALSE(std::filesystem::exists(dir + "/b.png"));
 }

@@ -1,0 +1,58 @@
+/* shadyloc render-traj: top-down PNG of one or more TUM trajectories, rendered
+ * offscreen through MRPT's 3D scene (no display needed). */
+#include "Command.h"
+
+#include <shadyloc/datasets/Tum.h>
+#include <shadyloc/render/TrajectorySnapshot.h>
+
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+
+#include <filesystem>
+#include <iostream>
+
+namespace
+{
+int run(int argc, char** argv)
+{
+	TCLAP::CmdLine cmd(
+		"Renders TUM trajectories top-down into a PNG, offscreen (EGL). Each -t is "
+		"FILE or FILE:NAME; colours follow a fixed palette.",
+		' ', "0.1");
+	TCLAP::MultiArg<std::string> trajs("t", "traj", "TUM trajectory (FILE or FILE:NAME)", true, "tum", cmd);
+	TCLAP::ValueArg<std::string> out("o", "output", "output PNG", true, "", "out.png", cmd);
+	TCLAP::ValueArg<std::string> title("", "title", "title text", false, "", "text", cmd);
+	TCLAP::ValueArg<std::string> up(
+		"", "up", "axis out of the picture: x, y (camera frames), z, or a (auto)", false, "a", "axis", cmd);
+	TCLAP::ValueArg<unsigned> width("", "width", "image width [px]", false, 1000, "px", cmd);
+	TCLAP::ValueArg<unsigned> height("", "height", "image height [px]", false, 800, "px", cmd);
+	cmd.parse(argc, argv);
+
+	static const mrpt::img::TColor palette[] = {
+		{0, 0, 0}, {215, 40, 40}, {30, 90, 210}, {40, 160, 60}, {230, 140, 0}, {140, 60, 170}};
+	std::vector<shadyloc::render::TrajectoryLayer> layers;
+	for (const auto& spec : trajs.getValue())
+	{
+		auto colon = spec.rfind(':');
+		std::string file = spec, name = std::filesystem::path(spec).stem().string();
+		if (colon != std::string::npos && !std::filesystem::exists(spec))
+			file = spec.substr(0, colon), name = spec.substr(colon + 1);
+		shadyloc::render::TrajectoryLayer l;
+		l.name = name;
+		l.colour = palette[layers.size() % std::size(palette)];
+		for (const auto& p : shadyloc::datasets::readTum(file)) l.points.push_back({p.pose.x(), p.pose.y(), p.pose.z()});
+		if (l.points.size() < 2)
+			throw std::runtime_error("'" + file + "': fewer than two poses to draw");
+		layers.push_back(l);
+	}
+	shadyloc::render::SnapshotOptions o;
+	o.title = title.getValue();
+	o.width = width.getValue();
+	o.height = height.getValue();
+	if (up.getValue().size() != 1) throw std::invalid_argument("--up: one of x, y, z, a");
+	o.upAxis = up.getValue()[0];
+	shadyloc::render::renderTrajectories(layers, o, out.getValue());
+	std::cout << "wrote " << out.getValue() << "\n";
+	return 0;
+}
+shadyloc::apps::RegisterCommand reg("render-traj", {"top-down PNG of TUM trajectories (offscreen)", run});
+}  // namespace
