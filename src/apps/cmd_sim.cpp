@@ -25,7 +25,8 @@ namespace
 class ContactSheet
 {
    public:
-	ContactSheet(int frames, int tiles, const shadyloc::sim::TSimCameraOptions& cam) : m_cam(cam)
+	ContactSheet(int frames, int tiles, double scale, const shadyloc::sim::TSimCameraOptions& cam)
+		: m_cam(cam), m_scale(scale)
 	{
 		for (int j = 0; j < tiles; j++)
 			m_pick.insert(tiles == 1 ? 0 : static_cast<int>(std::lround(j * (frames - 1.0) / (tiles - 1))));
@@ -34,7 +35,9 @@ class ContactSheet
 	void add(const shadyloc::sim::TSimFrame& f)
 	{
 		if (!m_pick.count(f.index)) return;
-		m_tiles.push_back(label(half(f.left), "left #" + std::to_string(f.index)));
+		char s[64];
+		std::snprintf(s, sizeof(s), "left #%d  s=%.0f m", f.index, f.route_s_m);
+		m_tiles.push_back(label(half(f.left), s));
 		if (f.index != m_mid) return;
 		cv::Mat mono, inv, grey3, inv3;
 		shadyloc::image::toMonochrome(f.left, mono, shadyloc::image::ChannelOrder::BGR);
@@ -55,7 +58,7 @@ class ContactSheet
 		const int cols = 3, w = all[0].cols, h = all[0].rows;
 		const int rows = static_cast<int>((all.size() + cols - 1) / cols);
 		cv::Mat sheet(rows * h + 22, cols * w, CV_8UC3, cv::Scalar(30, 30, 30));
-		cv::putText(sheet, title, {6, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.5, {255, 255, 255}, 1, cv::LINE_AA);
+		cv::putText(sheet, title, {6, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.42, {255, 255, 255}, 1, cv::LINE_AA);
 		for (size_t i = 0; i < all.size(); i++)
 			all[i].copyTo(sheet(cv::Rect(static_cast<int>(i % cols) * w, 22 + static_cast<int>(i / cols) * h, w, h)));
 		shadyloc::io::writeAtomically(path, [&](const std::string& tmp) {
@@ -66,10 +69,10 @@ class ContactSheet
 	}
 
    private:
-	static cv::Mat half(const cv::Mat& m)
+	cv::Mat half(const cv::Mat& m) const
 	{
 		cv::Mat out;
-		cv::resize(m, out, cv::Size(), 0.5, 0.5, cv::INTER_AREA);
+		cv::resize(m, out, cv::Size(), m_scale, m_scale, cv::INTER_AREA);
 		return out;
 	}
 	static cv::Mat label(cv::Mat m, const std::string& s)
@@ -79,6 +82,7 @@ class ContactSheet
 		return m;
 	}
 	const shadyloc::sim::TSimCameraOptions& m_cam;
+	double m_scale = 0.5;
 	std::set<int> m_pick;
 	int m_mid = 0;
 	std::vector<cv::Mat> m_tiles, m_extra;
@@ -101,6 +105,9 @@ int run(int argc, char** argv)
 		"", "contact-sheet", "also write <PREFIX><traversal>.png: a few left frames, right/mono/invariant of one",
 		false, "", "PREFIX", cmd);
 	TCLAP::ValueArg<int> tiles("", "sheet-frames", "left frames per contact sheet", false, 6, "N", cmd);
+	TCLAP::ValueArg<double> sheetScale("", "sheet-scale", "contact sheet tile size / image size", false, 0.375, "f", cmd);
+	TCLAP::ValueArg<double> startS(
+		"", "start-s", "route position of the first frame, m (default: each traversal's start_s_m)", false, 0, "m", cmd);
 	TCLAP::SwitchArg dump("", "dump-options", "print the effective options and exit", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no progress output", cmd);
 	cmd.parse(argc, argv);
@@ -124,6 +131,10 @@ int run(int argc, char** argv)
 		todo = opts.traversals;
 	if (frames.isSet() && frames.getValue() < 1) throw std::invalid_argument("--frames must be >= 1");
 	if (tiles.getValue() < 1 || tiles.getValue() > 30) throw std::invalid_argument("--sheet-frames must be in [1, 30]");
+	if (!(sheetScale.getValue() > 0.05 && sheetScale.getValue() <= 1))
+		throw std::invalid_argument("--sheet-scale must be in (0.05, 1]");
+	if (startS.isSet())
+		for (auto& t : todo) t.start_s_m = startS.getValue();
 
 	const fs::path dir(out.getValue());
 	std::error_code ec;
@@ -138,7 +149,7 @@ int run(int argc, char** argv)
 	{
 		sim.setTraversal(t);
 		const int n = frames.isSet() ? frames.getValue() : t.frames;
-		ContactSheet cs(n, tiles.getValue(), opts.camera);
+		ContactSheet cs(n, tiles.getValue(), sheetScale.getValue(), opts.camera);
 		sim.generate((dir / (t.name + ".rawlog")).string(), (dir / (t.name + ".tum")).string(), n,
 			[&](const shadyloc::sim::TSimFrame& f) {
 				if (sheet.isSet()) cs.add(f);
@@ -147,9 +158,13 @@ int run(int argc, char** argv)
 		if (sheet.isSet())
 		{
 			char title[256];
-			std::snprintf(title, sizeof(title), "%s: sun az %.0f el %.0f deg, %.0f K / sky %.0f K%s, sigma %.0f nm",
-				t.name.c_str(), t.sun_azimuth_deg, t.sun_elevation_deg, t.sun_temperature_K, t.sky_temperature_K,
-				t.overcast ? " (overcast)" : "", opts.camera.spectral.sigma_nm);
+			if (t.overcast)
+				std::snprintf(title, sizeof(title), "%s: overcast, sky %.0f K, sigma %.0f nm", t.name.c_str(),
+					t.sky_temperature_K, opts.camera.spectral.sigma_nm);
+			else
+				std::snprintf(title, sizeof(title), "%s: sun az %.0f el %.0f, %.0f K, sky %.0f K, sigma %.0f nm",
+					t.name.c_str(), t.sun_azimuth_deg, t.sun_elevation_deg, t.sun_temperature_K,
+					t.sky_temperature_K, opts.camera.spectral.sigma_nm);
 			cs.write(sheet.getValue() + t.name + ".png", title);
 		}
 	}

@@ -307,6 +307,7 @@ TSimFrame CStereoSimulator::renderFrame(int frame, TRenderAux* auxL, TRenderAux*
 	f.index = frame;
 	f.timestamp = timestamp(frame);
 	f.T_world_left = T_world_left(frame);
+	f.route_s_m = routePosition(frame);
 	cv::Mat linL, linR;
 	renderLinear(f.T_world_left, linL, linR, auxL, auxR);
 	double gain = exposureGain(linL);

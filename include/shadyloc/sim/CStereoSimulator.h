@@ -60,6 +60,7 @@ struct TSimFrame
 	mrpt::poses::CPose3D T_world_left;	//!< ground truth: left camera in the world
 	cv::Mat left, right;  //!< CV_8UC3, BGR, linear
 	double gain = 0;  //!< exposure: grey levels per unit of linear response
+	double route_s_m = 0;  //!< route arc length of the vehicle (m)
 };
 
 class CStereoSimulator : public mrpt::system::COutputLogger
