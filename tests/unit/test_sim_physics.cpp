@@ -51,7 +51,9 @@ SunShadeStats renderedSunShade(double sigma_nm)
 	o.camera.spectral.sigma_nm = sigma_nm;
 	o.scene.texture_chroma = 0;	 // one spectrum for the asphalt: isolate the illuminant
 	CStereoSimulator sim(o);
-	sim.setTraversal(o.traversal("noon"));
+	auto t = o.traversal("noon");
+	t.start_s_m = 20;  // under the avenue's trees: dappled and solid shadow on the road
+	sim.setTraversal(t);
 	const auto p = invParams(o.camera);
 	double sInv[2] = {0, 0}, sGrey[2] = {0, 0};
 	int n[2] = {0, 0};
