@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <future>
 #include <iomanip>
 
 namespace shadyloc::sim
@@ -352,10 +353,16 @@ void CStereoSimulator::generate(const std::string& rawlogPath, const std::string
 		<< "): T_world_left, pose of the LEFT camera (z forward, x right, y down) in the world (x east, y north, z up)\n"
 		<< "# timestamp tx ty tz qx qy qz qw\n";
 	const auto t0 = std::chrono::steady_clock::now();
+	// Compressing and writing frame i (~20 ms, one thread) overlaps with
+	// rendering frame i+1; at most one write is in flight (the writer is not
+	// thread-safe), and get() rethrows a write error here.
+	std::future<void> pending;
 	for (int i = 0; i < n; i++)
 	{
 		const TSimFrame f = renderFrame(i);
-		writer.write(*makeObservation(f));
+		auto obs = makeObservation(f);
+		if (pending.valid()) pending.get();
+		pending = std::async(std::launch::async, [&writer, obs] { writer.write(*obs); });
 		const mrpt::poses::CPose3DQuat q(f.T_world_left);
 		tum << std::fixed << std::setprecision(6) << f.timestamp << " " << q.x() << " " << q.y() << " " << q.z()
 			<< " " << std::setprecision(9) << q.quat().x() << " " << q.quat().y() << " " << q.quat().z() << " "
@@ -366,6 +373,7 @@ void CStereoSimulator::generate(const std::string& rawlogPath, const std::string
 			2.0, m_trav.name << ": frame " << (i + 1) << "/" << n << " (" << std::setprecision(3) << (i + 1) / el
 							 << " frames/s)");
 	}
+	if (pending.valid()) pending.get();
 	io::writeAtomically(tumPath, [&](const std::string& tmp) {
 		std::ofstream out(tmp);
 		if (!out) throw std::runtime_error("'" + tumPath + "': cannot write ground truth");
