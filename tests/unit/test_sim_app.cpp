@@ -137,6 +137,13 @@ TEST(SimApp, UnwritableOutputLeavesNothing)
 	std::string out;
 	EXPECT_NE(runCommand(appPath() + " sim -q -c " + cfg + " -o " + dir + "/afile/out", &out), 0);
 	EXPECT_NE(out.find("afile/out"), std::string::npos) << out;
+	// A failure after every frame was rendered: the ground-truth path is
+	// taken by a directory. Neither the rawlog nor any temporary is left.
+	fs::create_directories(dir + "/late/noon.tum");
+	EXPECT_NE(runCommand(appPath() + " sim -q -c " + cfg + " -o " + dir + "/late --traversals noon", &out), 0);
+	EXPECT_NE(out.find("noon.tum"), std::string::npos) << out;
+	EXPECT_EQ(filesIn(dir + "/late"), 0u) << "partial output left behind";
+	EXPECT_FALSE(fs::exists(dir + "/late/noon.rawlog"));
 	// An existing directory we cannot write into (skip when running as root,
 	// which ignores permissions).
 	fs::create_directories(dir + "/ro");
