@@ -118,6 +118,12 @@ int run(int argc, char** argv)
 		opts.dumpToTextStream(std::cout);
 		return 0;
 	}
+	if (!quiet.getValue())
+	{
+		std::cout << "Simulator options (" << cfg.getValue() << "):\n";
+		opts.dumpToTextStream(std::cout);
+		std::cout << "\n";
+	}
 	// Resolve every name before rendering anything: no partial dataset.
 	std::vector<shadyloc::sim::TTraversal> todo;
 	if (which.isSet())

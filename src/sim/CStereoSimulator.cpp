@@ -13,6 +13,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <future>
 #include <iomanip>
@@ -349,7 +350,7 @@ void CStereoSimulator::generate(const std::string& rawlogPath, const std::string
 	m_prevGain = 0;
 	io::RawlogWriter writer(rawlogPath);
 	std::ostringstream tum;
-	tum << "# ground truth of '" << rawlogPath << "' (traversal " << m_trav.name
+	tum << "# ground truth of " << std::filesystem::path(rawlogPath).filename().string() << " (traversal " << m_trav.name
 		<< "): T_world_left, pose of the LEFT camera (z forward, x right, y down) in the world (x east, y north, z up)\n"
 		<< "# timestamp tx ty tz qx qy qz qw\n";
 	const auto t0 = std::chrono::steady_clock::now();

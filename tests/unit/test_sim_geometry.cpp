@@ -255,3 +255,21 @@ TEST(SimGeometry, DeterministicAndSeedsMatter)
 	b.renderFrame(3, &auxOver);
 	EXPECT_EQ(cv::countNonZero(auxOver.sun > 0), 0);
 }
+
+// The options dump is itself a valid sim.ini that loads back to the same options.
+TEST(SimOptions, DumpLoadsBackIdentically)
+{
+	const auto o = TSimOptions::FromFile(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
+	std::ostringstream a;
+	o.dumpToTextStream(a);
+	const std::string path = shadyloc::test::tempDir("sim_options") + "/dump.ini";
+	std::ofstream(path) << a.str();
+	const auto o2 = TSimOptions::FromFile(path);
+	std::ostringstream b;
+	o2.dumpToTextStream(b);
+	EXPECT_EQ(a.str(), b.str());
+	ASSERT_EQ(o2.traversals.size(), 4u);
+	EXPECT_TRUE(o2.traversal("overcast").overcast);
+	EXPECT_EQ(o2.camera.width, 512);
+	EXPECT_THROW(o2.traversal("dusk"), SimOptionsError);
+}
