@@ -144,6 +144,13 @@ TEST(SimApp, UnwritableOutputLeavesNothing)
 	EXPECT_NE(out.find("noon.tum"), std::string::npos) << out;
 	EXPECT_EQ(filesIn(dir + "/late"), 0u) << "partial output left behind";
 	EXPECT_FALSE(fs::exists(dir + "/late/noon.rawlog"));
+}
+
+TEST(SimApp, ReadOnlyOutputDirectory)
+{
+	const std::string dir = tempDir("sim_app_readonly");
+	const std::string cfg = tinyConfig(dir);
+	std::string out;
 	// An existing directory we cannot write into (skip when running as root,
 	// which ignores permissions).
 	fs::create_directories(dir + "/ro");
