@@ -1,0 +1,185 @@
+/* shadyloc sim: render stereo traversals of the simulated route as rawlogs
+ * with ground truth, and optional contact sheets to look at them. */
+#include "Command.h"
+
+#include <shadyloc/image/ColourTransforms.h>
+#include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/sim/CStereoSimulator.h>
+
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <mrpt/system/string_utils.h>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <chrono>
+#include <filesystem>
+#include <iostream>
+#include <set>
+
+namespace fs = std::filesystem;
+
+namespace
+{
+/** Collects a few frames of one traversal and lays them out on one image. */
+class ContactSheet
+{
+   public:
+	ContactSheet(int frames, int tiles, double scale, const shadyloc::sim::TSimCameraOptions& cam)
+		: m_cam(cam), m_scale(scale)
+	{
+		for (int j = 0; j < tiles; j++)
+			m_pick.insert(tiles == 1 ? 0 : static_cast<int>(std::lround(j * (frames - 1.0) / (tiles - 1))));
+		m_mid = *std::next(m_pick.begin(), static_cast<long>(m_pick.size() / 2));
+	}
+	void add(const shadyloc::sim::TSimFrame& f)
+	{
+		if (!m_pick.count(f.index)) return;
+		char s[64];
+		std::snprintf(s, sizeof(s), "left #%d  s=%.0f m", f.index, f.route_s_m);
+		m_tiles.push_back(label(half(f.left), s));
+		if (f.index != m_mid) return;
+		cv::Mat mono, inv, grey3, inv3;
+		shadyloc::image::toMonochrome(f.left, mono, shadyloc::image::ChannelOrder::BGR);
+		const auto p = shadyloc::image::InvariantParams::FromWavelengths(
+			m_cam.spectral.peak_nm[0], m_cam.spectral.peak_nm[1], m_cam.spectral.peak_nm[2]);
+		shadyloc::image::InvariantTransform(p).apply(f.left, inv);
+		cv::cvtColor(mono, grey3, cv::COLOR_GRAY2BGR);
+		cv::cvtColor(inv, inv3, cv::COLOR_GRAY2BGR);
+		m_extra = {label(half(f.right), "right #" + std::to_string(f.index)),
+				   label(half(grey3), "mono #" + std::to_string(f.index)),
+				   label(half(inv3), "invariant #" + std::to_string(f.index))};
+	}
+	void write(const std::string& path, const std::string& title) const
+	{
+		std::vector<cv::Mat> all = m_tiles;
+		all.insert(all.end(), m_extra.begin(), m_extra.end());
+		if (all.empty()) return;
+		const int cols = 3, w = all[0].cols, h = all[0].rows;
+		const int rows = static_cast<int>((all.size() + cols - 1) / cols);
+		cv::Mat sheet(rows * h + 22, cols * w, CV_8UC3, cv::Scalar(30, 30, 30));
+		cv::putText(sheet, title, {6, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.42, {255, 255, 255}, 1, cv::LINE_AA);
+		for (size_t i = 0; i < all.size(); i++)
+			all[i].copyTo(sheet(cv::Rect(static_cast<int>(i % cols) * w, 22 + static_cast<int>(i / cols) * h, w, h)));
+		shadyloc::io::writeAtomically(path, [&](const std::string& tmp) {
+			if (!cv::imwrite(tmp, sheet, {cv::IMWRITE_PNG_COMPRESSION, 9}))
+				throw std::runtime_error("'" + path + "': cannot write contact sheet");
+		});
+		std::cout << "contact sheet: " << path << "\n";
+	}
+
+   private:
+	cv::Mat half(const cv::Mat& m) const
+	{
+		cv::Mat out;
+		cv::resize(m, out, cv::Size(), m_scale, m_scale, cv::INTER_AREA);
+		return out;
+	}
+	static cv::Mat label(cv::Mat m, const std::string& s)
+	{
+		cv::putText(m, s, {4, 12}, cv::FONT_HERSHEY_SIMPLEX, 0.35, {0, 0, 0}, 2, cv::LINE_AA);
+		cv::putText(m, s, {4, 12}, cv::FONT_HERSHEY_SIMPLEX, 0.35, {255, 255, 255}, 1, cv::LINE_AA);
+		return m;
+	}
+	const shadyloc::sim::TSimCameraOptions& m_cam;
+	double m_scale = 0.5;
+	std::set<int> m_pick;
+	int m_mid = 0;
+	std::vector<cv::Mat> m_tiles, m_extra;
+};
+
+int run(int argc, char** argv)
+{
+	TCLAP::CmdLine cmd(
+		"Renders colour stereo traversals of one simulated outdoor route under different lighting "
+		"(spectral sun + sky model, ray-cast shadows, dappled canopy light) as rawlogs: "
+		"OUTDIR/<traversal>.rawlog (CObservationStereoImages 'CAMERA', linear BGR) and "
+		"OUTDIR/<traversal>.tum (ground truth: left camera in the world).",
+		' ', "0.1");
+	TCLAP::ValueArg<std::string> cfg("c", "config", "simulator .ini (see config/sim.ini)", true, "", "sim.ini", cmd);
+	TCLAP::ValueArg<std::string> out("o", "output", "output directory (created if missing)", true, "", "dir", cmd);
+	TCLAP::ValueArg<int> frames("", "frames", "frames per traversal (default: the .ini's)", false, -1, "N", cmd);
+	TCLAP::ValueArg<std::string> which(
+		"", "traversals", "comma-separated traversal names (default: all in [sim] traversals)", false, "", "a,b", cmd);
+	TCLAP::ValueArg<std::string> sheet(
+		"", "contact-sheet", "also write <PREFIX><traversal>.png: a few left frames, right/mono/invariant of one",
+		false, "", "PREFIX", cmd);
+	TCLAP::ValueArg<int> tiles("", "sheet-frames", "left frames per contact sheet", false, 6, "N", cmd);
+	TCLAP::ValueArg<double> sheetScale("", "sheet-scale", "contact sheet tile size / image size", false, 0.375, "f", cmd);
+	TCLAP::ValueArg<double> startS(
+		"", "start-s", "route position of the first frame, m (default: each traversal's start_s_m)", false, 0, "m", cmd);
+	TCLAP::SwitchArg dump("", "dump-options", "print the effective options and exit", cmd);
+	TCLAP::SwitchArg quiet("q", "quiet", "no progress output", cmd);
+	cmd.parse(argc, argv);
+
+	const auto opts = shadyloc::sim::TSimOptions::FromFile(cfg.getValue());
+	if (dump.getValue())
+	{
+		opts.dumpToTextStream(std::cout);
+		return 0;
+	}
+	if (!quiet.getValue())
+	{
+		std::cout << "Simulator options (" << cfg.getValue() << "):\n";
+		opts.dumpToTextStream(std::cout);
+		std::cout << "\n";
+	}
+	// Resolve every name before rendering anything: no partial dataset.
+	std::vector<shadyloc::sim::TTraversal> todo;
+	if (which.isSet())
+	{
+		std::vector<std::string> names;
+		mrpt::system::tokenize(which.getValue(), ", ", names);
+		if (names.empty()) throw std::invalid_argument("--traversals: empty list");
+		for (const auto& n : names) todo.push_back(opts.traversal(n));
+	}
+	else
+		todo = opts.traversals;
+	if (frames.isSet() && frames.getValue() < 1) throw std::invalid_argument("--frames must be >= 1");
+	if (tiles.getValue() < 1 || tiles.getValue() > 30) throw std::invalid_argument("--sheet-frames must be in [1, 30]");
+	if (!(sheetScale.getValue() > 0.05 && sheetScale.getValue() <= 1))
+		throw std::invalid_argument("--sheet-scale must be in (0.05, 1]");
+	if (startS.isSet())
+		for (auto& t : todo) t.start_s_m = startS.getValue();
+
+	const fs::path dir(out.getValue());
+	std::error_code ec;
+	fs::create_directories(dir, ec);
+	if (!fs::is_directory(dir)) throw std::runtime_error("'" + dir.string() + "': cannot create output directory");
+
+	shadyloc::sim::CStereoSimulator sim(opts);
+	sim.setMinLoggingLevel(quiet.getValue() ? mrpt::system::LVL_WARN : mrpt::system::LVL_INFO);
+	const auto t0 = std::chrono::steady_clock::now();
+	int total = 0;
+	for (const auto& t : todo)
+	{
+		sim.setTraversal(t);
+		const int n = frames.isSet() ? frames.getValue() : t.frames;
+		ContactSheet cs(n, tiles.getValue(), sheetScale.getValue(), opts.camera);
+		sim.generate((dir / (t.name + ".rawlog")).string(), (dir / (t.name + ".tum")).string(), n,
+			[&](const shadyloc::sim::TSimFrame& f) {
+				if (sheet.isSet()) cs.add(f);
+			});
+		total += n;
+		if (sheet.isSet())
+		{
+			char title[256];
+			if (t.overcast)
+				std::snprintf(title, sizeof(title), "%s: overcast, sky %.0f K, sigma %.0f nm", t.name.c_str(),
+					t.sky_temperature_K, opts.camera.spectral.sigma_nm);
+			else
+				std::snprintf(title, sizeof(title), "%s: sun az %.0f el %.0f, %.0f K, sky %.0f K, sigma %.0f nm",
+					t.name.c_str(), t.sun_azimuth_deg, t.sun_elevation_deg, t.sun_temperature_K,
+					t.sky_temperature_K, opts.camera.spectral.sigma_nm);
+			cs.write(sheet.getValue() + t.name + ".png", title);
+		}
+	}
+	const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+	if (!quiet.getValue())
+		std::cout << "sim: " << todo.size() << " traversal(s), " << total << " stereo frames in " << el << " s ("
+				  << total / el << " frames/s) -> " << dir.string() << "\n";
+	return 0;
+}
+shadyloc::apps::RegisterCommand reg(
+	"sim", {"render simulated stereo traversals under different lighting (-c sim.ini -o dir)", run});
+}  // namespace
