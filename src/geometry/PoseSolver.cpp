@@ -144,7 +144,27 @@ TRansacResult ransacStereoPose(
 		d = {c[i0].P_curr, c[i1].P_curr, c[i2].P_curr};
 		Eigen::Isometry3d T;
 		if (!rigidTransform3D(s, d, T)) continue;
-		const int k = countInliers(calib, c, T, o.inlier_threshold_px, nullptr);
+		int k = countInliers(calib, c, T, o.inlier_threshold_px, nullptr);
+		if (k > best && k >= 6)
+		{
+			// Local optimisation (Chum et al., LO-RANSAC, DAGM 2003): a minimal
+			// 3D-3D set is noisy (far points' depths are poor), so refit by
+			// Gauss-Newton on the image residuals of its inliers and recount.
+			for (int lo = 0; lo < 2; lo++)
+			{
+				std::vector<uint8_t> f(c.size(), 0);
+				countInliers(calib, c, T, o.inlier_threshold_px, &f);
+				TPoseSolverOptions so;
+				so.max_iterations = 4;
+				so.sigma_px = 1.0;
+				const auto sol = solveStereoPose(calib, c, f, T, so);
+				if (!sol.ok) break;
+				const int k2 = countInliers(calib, c, sol.T_curr_ref, o.inlier_threshold_px, nullptr);
+				if (k2 <= k) break;
+				k = k2;
+				T = sol.T_curr_ref;
+			}
+		}
 		if (k > best)
 		{
 			best = k;
