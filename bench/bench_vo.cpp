@@ -12,6 +12,7 @@
 #include <shadyloc/vo/SyntheticCorridor.h>
 
 #include <benchmark/benchmark.h>
+#include <opencv2/features2d.hpp>
 
 #include <opencv2/core/utility.hpp>
 
@@ -196,21 +197,26 @@ void BM_BothOverOneRatio(benchmark::State& st)
 }
 BENCHMARK(BM_BothOverOneRatio)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
 
-/** Stage micro-benchmarks, mono channel, frame 0. */
-void BM_StageFastGrid(benchmark::State& st)
+/** Stage micro-benchmarks, frame 0. */
+void BM_StageFastGrid(benchmark::State& st, bool invariant)
 {
 	const auto& d = data();
+	const cv::Mat& L = invariant ? d.invL[0] : d.monoL[0];
+	const cv::Mat& R = invariant ? d.invR[0] : d.monoR[0];
 	features::TStereoFeatureOptions o;
-	std::vector<cv::KeyPoint> kl, kr;
+	std::vector<cv::KeyPoint> kl, kr, raw;
 	for (auto _ : st)
 	{
-		features::detectFastGrid(d.monoL[0], o.fast_threshold, o.grid_cols, o.grid_rows, o.max_per_cell, 17, kl);
-		features::detectFastGrid(d.monoR[0], o.fast_threshold, o.grid_cols, o.grid_rows, o.max_per_cell_right, 6, kr);
+		features::detectFastGrid(L, o.fast_threshold, o.grid_cols, o.grid_rows, o.max_per_cell, 17, kl);
+		features::detectFastGrid(R, o.fast_threshold, o.grid_cols, o.grid_rows, o.max_per_cell_right, 6, kr);
 	}
+	cv::FAST(L, raw, o.fast_threshold, true);
+	st.counters["raw_left"] = static_cast<double>(raw.size());
 	st.counters["left"] = static_cast<double>(kl.size());
 	st.counters["right"] = static_cast<double>(kr.size());
 }
-BENCHMARK(BM_StageFastGrid)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StageFastGrid, mono, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StageFastGrid, invariant, true)->Unit(benchmark::kMicrosecond);
 
 void BM_StageStereoMeasurements(benchmark::State& st)
 {
