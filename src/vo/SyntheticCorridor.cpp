@@ -42,10 +42,10 @@ geometry::TStereoCalib SyntheticCorridor::calib() const
 	return c;
 }
 
-Eigen::Vector3d SyntheticCorridor::shade(const Eigen::Vector3d& O, const Eigen::Vector3d& d) const
+double SyntheticCorridor::intersect(const Eigen::Vector3d& O, const Eigen::Vector3d& d, int& plane) const
 {
 	double best = std::numeric_limits<double>::infinity();
-	int plane = -1;
+	plane = -1;
 	auto test = [&](double o, double dd, double wall, int id) {
 		if (std::abs(dd) < 1e-12) return;
 		const double t = (wall - o) / dd;
@@ -61,6 +61,22 @@ Eigen::Vector3d SyntheticCorridor::shade(const Eigen::Vector3d& O, const Eigen::
 	test(O.y(), d.y(), m_o.half_height, 3);
 	test(O.z(), d.z(), m_o.length, 4);
 	test(O.z(), d.z(), -m_o.length, 5);
+	return best;
+}
+
+double SyntheticCorridor::depth(const Eigen::Isometry3d& T, double u, double v) const
+{
+	const geometry::TStereoCalib c = calib();
+	const Eigen::Vector3d dc((u - c.cx) / c.fx, (v - c.cy) / c.fy, 1.0);  // z = 1 in the camera
+	int plane;
+	const double t = intersect(T.translation(), T.linear() * dc, plane);
+	return plane < 0 ? 0.0 : t;	 // with dc.z = 1, the ray parameter is the depth
+}
+
+Eigen::Vector3d SyntheticCorridor::shade(const Eigen::Vector3d& O, const Eigen::Vector3d& d) const
+{
+	int plane;
+	const double best = intersect(O, d, plane);
 	if (plane < 0) return Eigen::Vector3d(0, 0, 0);
 	const Eigen::Vector3d P = O + best * d;
 	double a, b;

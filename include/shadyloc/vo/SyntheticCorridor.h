@@ -43,12 +43,18 @@ class SyntheticCorridor
 	 * noiseSeed varies the pixel noise between frames. */
 	void render(const Eigen::Isometry3d& T_world_left, cv::Mat& leftBGR, cv::Mat& rightBGR, uint32_t noiseSeed = 0) const;
 
+	/** Depth Z [m] (along the camera's optical axis) of the surface seen
+	 * through pixel (u, v) of a camera at T_world_cam; 0 if nothing is hit. */
+	double depth(const Eigen::Isometry3d& T_world_cam, double u, double v) const;
+
 	/** A smooth example path: forward `speed` m per frame, sway and yaw/pitch wobble. */
 	static Eigen::Isometry3d examplePose(int frame, double speed = 0.1);
 
    private:
 	void renderEye(const Eigen::Isometry3d& T_world_cam, cv::Mat& out, uint32_t noiseSeed) const;
 	Eigen::Vector3d shade(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir) const;
+	/** Ray parameter of the first hit (inf if none) and the plane index. */
+	double intersect(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir, int& plane) const;
 	TCorridorOptions m_o;
 };
 
