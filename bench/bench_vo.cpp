@@ -12,6 +12,7 @@
 #include <shadyloc/vo/SyntheticCorridor.h>
 
 #include <benchmark/benchmark.h>
+#include <opencv2/imgcodecs.hpp>
 #include <opencv2/features2d.hpp>
 
 #include <opencv2/core/utility.hpp>
@@ -59,6 +60,52 @@ const TData& data()
 			inv.convert(r, b);
 			d.invL.push_back(a.clone());
 			d.invR.push_back(b.clone());
+		}
+		return d;
+	}();
+	return d;
+}
+
+/** Real images: Middlebury Adirondack (quarter resolution, 718x496), 512x384
+ * windows cropped at offsets moving 3 px right and 1 px down per frame (the
+ * calibration is kept, so the VO sees a small rotation-like image motion).
+ * Empty if the shared data is absent. */
+struct TRealData
+{
+	geometry::TStereoCalib calib;
+	features::TStereoFeatureOptions fopt;
+	std::vector<cv::Mat> monoL, monoR, invL, invR;
+};
+const TRealData& realData()
+{
+	static const TRealData d = [] {
+		TRealData d;
+		const std::string dir = std::string(SHADYLOC_SHARED_DATA_DIR) + "/middlebury/Adirondack/";
+		const cv::Mat l = cv::imread(dir + "im0.png", cv::IMREAD_COLOR), r = cv::imread(dir + "im1.png", cv::IMREAD_COLOR);
+		if (l.empty() || r.empty()) return d;
+		// calib.txt of Adirondack: cam0 cx 322.037, cam1 cx 375.308, f 1038.018, b 176.252 mm.
+		d.calib.fx = d.calib.fy = 1038.018;
+		d.calib.cx = 322.037;
+		d.calib.cxR = 375.308;
+		d.calib.cy = 243.393;
+		d.calib.baseline = 0.176252;
+		d.fopt.min_disparity = 50;	// measured 8..65 px + doffs 53.3
+		d.fopt.max_disparity = 125;
+		auto ip = image::InvariantParams::FromAlphaBeta(0.48, 0.5065);
+		ip.linearisation = image::Linearisation::SRGB;
+		const vo::ChannelConverter mono(vo::Channel::Mono), inv(vo::Channel::Invariant, ip);
+		cv::Mat ml, mr, il, ir;
+		mono.convert(l, ml);
+		mono.convert(r, mr);
+		inv.convert(l, il);
+		inv.convert(r, ir);
+		for (int k = 0; k < kFrames; k++)
+		{
+			const cv::Rect roi(20 + 3 * k, 40 + k, 512, 384);
+			d.monoL.push_back(ml(roi).clone());
+			d.monoR.push_back(mr(roi).clone());
+			d.invL.push_back(il(roi).clone());
+			d.invR.push_back(ir(roi).clone());
 		}
 		return d;
 	}();
@@ -159,14 +206,82 @@ void BM_VOFrameBothSerial(benchmark::State& st)
 }
 BENCHMARK(BM_VOFrameBothSerial)->Unit(benchmark::kMillisecond)->UseRealTime();
 
+/** One channel on the real (Middlebury) crops. */
+void BM_VOFrameReal(benchmark::State& st, bool invariant)
+{
+	const auto& d = realData();
+	if (d.monoL.empty())
+	{
+		st.SkipWithError("../shared/data/middlebury/Adirondack absent");
+		return;
+	}
+	const auto& L = invariant ? d.invL : d.monoL;
+	const auto& R = invariant ? d.invR : d.monoR;
+	vo::StereoVO vo(vo::TStereoVOOptions(), d.fopt);
+	vo.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+	vo::TVOTimings sum;
+	int64_t i = 0, untracked = 0, stereo = 0;
+	for (auto _ : st)
+	{
+		const int k = pingPong(i);
+		const auto r = vo.process(L[k], R[k], d.calib, 0.1 * i);
+		accumulate(sum, r.ms);
+		untracked += !vo::isTracked(r.status);
+		stereo += r.stereo;
+		i++;
+	}
+	addStageCounters(st, sum, i);
+	st.counters["stereo"] = double(stereo) / std::max<int64_t>(1, i);
+	st.counters["untracked"] = static_cast<double>(untracked);
+}
+BENCHMARK_CAPTURE(BM_VOFrameReal, mono, false)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK_CAPTURE(BM_VOFrameReal, invariant, true)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+/** Both channels on two threads on the real crops. */
+void BM_VOFrameRealBothParallel(benchmark::State& st)
+{
+	const auto& d = realData();
+	if (d.monoL.empty())
+	{
+		st.SkipWithError("../shared/data/middlebury/Adirondack absent");
+		return;
+	}
+	vo::StereoVO voM(vo::TStereoVOOptions(), d.fopt), voI(vo::TStereoVOOptions(), d.fopt);
+	voM.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+	voI.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+	int64_t i = 0;
+	for (auto _ : st)
+	{
+		const int k = pingPong(i);
+		auto fm = std::async(std::launch::async, [&] { return voM.process(d.monoL[k], d.monoR[k], d.calib, 0.1 * i); });
+		benchmark::DoNotOptimize(voI.process(d.invL[k], d.invR[k], d.calib, 0.1 * i));
+		fm.get();
+		i++;
+	}
+}
+BENCHMARK(BM_VOFrameRealBothParallel)->Unit(benchmark::kMillisecond)->UseRealTime();
+
 /** The goal's ratio, measured in one loop: per iteration, one mono frame
  * alone, then a mono and an invariant frame on two threads (separate VO
  * instances), then one invariant frame alone. Counters: ratio =
  * wall(both) / wall(mono alone), ratio_vs_inv = wall(both) / wall(invariant alone). */
-void BM_BothOverOneRatio(benchmark::State& st)
+void BM_BothOverOneRatio(benchmark::State& st, bool real)
 {
-	const auto& d = data();
-	vo::StereoVO solo, soloI, voM, voI;
+	const auto& syn = data();
+	const auto& rd = realData();
+	if (real && rd.monoL.empty())
+	{
+		st.SkipWithError("../shared/data/middlebury/Adirondack absent");
+		return;
+	}
+	const auto& monoL = real ? rd.monoL : syn.monoL;
+	const auto& monoR = real ? rd.monoR : syn.monoR;
+	const auto& invL = real ? rd.invL : syn.invL;
+	const auto& invR = real ? rd.invR : syn.invR;
+	const auto& calib = real ? rd.calib : syn.calib;
+	const features::TStereoFeatureOptions fopt = real ? rd.fopt : features::TStereoFeatureOptions();
+	const vo::TStereoVOOptions vopt;
+	vo::StereoVO solo(vopt, fopt), soloI(vopt, fopt), voM(vopt, fopt), voI(vopt, fopt);
 	for (auto* v : {&solo, &soloI, &voM, &voI}) v->setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	using C = std::chrono::steady_clock;
 	double one = 0, oneI = 0, both = 0;
@@ -174,15 +289,14 @@ void BM_BothOverOneRatio(benchmark::State& st)
 	for (auto _ : st)
 	{
 		const int k = pingPong(i);
-		// Both first, then each channel alone (the order changes nothing: see docs/vo.md).
 		auto t0 = C::now();
-		auto fm = std::async(std::launch::async, [&] { return voM.process(d.monoL[k], d.monoR[k], d.calib, 0.1 * i); });
-		benchmark::DoNotOptimize(voI.process(d.invL[k], d.invR[k], d.calib, 0.1 * i));
+		auto fm = std::async(std::launch::async, [&] { return voM.process(monoL[k], monoR[k], calib, 0.1 * i); });
+		benchmark::DoNotOptimize(voI.process(invL[k], invR[k], calib, 0.1 * i));
 		fm.get();
 		auto t1 = C::now();
-		benchmark::DoNotOptimize(solo.process(d.monoL[k], d.monoR[k], d.calib, 0.1 * i));
+		benchmark::DoNotOptimize(solo.process(monoL[k], monoR[k], calib, 0.1 * i));
 		auto t2 = C::now();
-		benchmark::DoNotOptimize(soloI.process(d.invL[k], d.invR[k], d.calib, 0.1 * i));
+		benchmark::DoNotOptimize(soloI.process(invL[k], invR[k], calib, 0.1 * i));
 		auto t3 = C::now();
 		both += std::chrono::duration<double, std::milli>(t1 - t0).count();
 		one += std::chrono::duration<double, std::milli>(t2 - t1).count();
@@ -195,7 +309,8 @@ void BM_BothOverOneRatio(benchmark::State& st)
 	st.counters["ratio"] = one > 0 ? both / one : 0;  // vs the mono channel alone
 	st.counters["ratio_vs_inv"] = oneI > 0 ? both / oneI : 0;  // vs the invariant channel alone
 }
-BENCHMARK(BM_BothOverOneRatio)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+BENCHMARK_CAPTURE(BM_BothOverOneRatio, synthetic, false)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
+BENCHMARK_CAPTURE(BM_BothOverOneRatio, middlebury, true)->Unit(benchmark::kMillisecond)->UseRealTime()->MinTime(3.0);
 
 /** Stage micro-benchmarks, frame 0. */
 void BM_StageFastGrid(benchmark::State& st, bool invariant)
