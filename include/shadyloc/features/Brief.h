@@ -1,0 +1,60 @@
+/* ShadyLoc — BRIEF binary descriptor (Calonder, Lepetit, Strecha, Fua,
+ * "BRIEF: Binary Robust Independent Elementary Features", ECCV 2010).
+ *
+ * 256 intensity comparisons between pixel pairs of a smoothed patch around the
+ * keypoint; the pairs are drawn once from an isotropic Gaussian around the
+ * centre (the paper's sampling strategy G II, sigma^2 = S^2/25) with a fixed
+ * seed, so descriptors from different runs and processes compare. Written
+ * here: Debian's OpenCV ships no xfeatures2d.
+ */
+#pragma once
+
+#include <opencv2/core/mat.hpp>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace shadyloc::features
+{
+/** 256-bit descriptor. */
+struct TBriefDescriptor
+{
+	std::array<uint64_t, 4> w{};  //!< bit i of the descriptor is bit (i%64) of w[i/64]
+
+	bool operator==(const TBriefDescriptor& o) const { return w == o.w; }
+};
+
+/** Hamming distance (number of differing bits, 0..256) via popcount. */
+inline int hamming(const TBriefDescriptor& a, const TBriefDescriptor& b)
+{
+	return __builtin_popcountll(a.w[0] ^ b.w[0]) + __builtin_popcountll(a.w[1] ^ b.w[1]) +
+		   __builtin_popcountll(a.w[2] ^ b.w[2]) + __builtin_popcountll(a.w[3] ^ b.w[3]);
+}
+
+class BriefExtractor
+{
+   public:
+	/** patchSize S [px] (even, >= 8): tests lie within the SxS square around
+	 * the keypoint; seed fixes the test pattern. */
+	explicit BriefExtractor(int patchSize = 32, uint32_t seed = 0x5ad710c);
+
+	/** Smoothing before the tests (the paper's 9x9 Gaussian, sigma 2); call
+	 * once per image. */
+	static void smooth(const cv::Mat& grey8, cv::Mat& smoothed8);
+
+	/** Descriptor at integer pixel (x, y) of a smoothed CV_8UC1 image. False
+	 * if the patch does not fit in the image (closer than radius() to a border). */
+	bool compute(const cv::Mat& smoothed8, int x, int y, TBriefDescriptor& d) const;
+
+	int radius() const { return m_radius; }	 //!< S/2 [px]
+	int patchSize() const { return 2 * m_radius; }
+	/** The test pattern: 256 pairs of offsets (dx1, dy1, dx2, dy2). */
+	const std::vector<std::array<int8_t, 4>>& pattern() const { return m_pattern; }
+
+   private:
+	int m_radius;
+	std::vector<std::array<int8_t, 4>> m_pattern;
+};
+
+}  // namespace shadyloc::features

@@ -1,0 +1,131 @@
+/* ShadyLoc — stereo measurements of one rectified grey stereo pair: FAST
+ * corners spread over the image by grid buckets, stereo correspondence by
+ * ZNCC patch matching along the epipolar row (candidates: right-image FAST
+ * corners within the disparity range), sub-pixel refinement (parabola),
+ * left-right consistency and ambiguity rejection, a BRIEF descriptor, a pixel
+ * patch and a triangulated landmark with its covariance per measurement
+ * (McManus et al. 2014, Section II-A).
+ *
+ * The same code runs on either channel: the input is just a grey image pair
+ * (monochrome, or the illumination-invariant image).
+ */
+#pragma once
+
+#include <shadyloc/features/Brief.h>
+#include <shadyloc/geometry/StereoCamera.h>
+
+#include <mrpt/config/CLoadableOptions.h>
+
+#include <Eigen/Core>
+#include <opencv2/core/mat.hpp>
+#include <opencv2/core/types.hpp>
+
+#include <array>
+#include <vector>
+
+namespace shadyloc::features
+{
+/** Side of the stored pixel patch (for sub-pixel refinement against later frames). */
+constexpr int kPatchSize = 9;
+
+/** One stereo measurement: a left-right correspondence and what follows from it. */
+struct TStereoMeasurement
+{
+	float uL = 0, v = 0;  //!< left keypoint (integer FAST corner, refined later if at all) [px]
+	float uR = 0;  //!< right keypoint, sub-pixel, on the left row v [px]
+	float response = 0;	 //!< FAST score of the left corner
+	float zncc = 0;	 //!< stereo patch correlation in [-1, 1]
+	TBriefDescriptor desc;	//!< BRIEF of the left keypoint
+	std::array<uint8_t, kPatchSize * kPatchSize> patch{};  //!< left pixels around (uL, v), row-major
+	Eigen::Vector3d P = Eigen::Vector3d::Zero();  //!< landmark in the left camera frame [m]
+	Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();	//!< covariance of P [m^2]
+};
+
+/** Stage times of one extraction [ms]. */
+struct TFeatureTimings
+{
+	double detect_ms = 0, stereo_ms = 0, describe_ms = 0;
+};
+
+/** All measurements of one stereo frame. */
+struct TStereoFrame
+{
+	std::vector<TStereoMeasurement> meas;
+	size_t cornersLeft = 0, cornersRight = 0;  //!< FAST corners kept per eye
+	TFeatureTimings timings;
+	cv::Mat left;  //!< the left grey image (shared, not copied)
+};
+
+/** FAST corners (OpenCV) spread by a grid: the image is cut into cols x rows
+ * cells and each keeps its `perCell` strongest corners (all if perCell <= 0).
+ * Corners closer than `border` px to an edge are dropped. */
+void detectFastGrid(
+	const cv::Mat& grey8, int threshold, int cols, int rows, int perCell, int border,
+	std::vector<cv::KeyPoint>& out);
+
+/** ZNCC in [-1, 1] between the (2r+1)^2 patches centred at (xa, ya) in a and
+ * (xb, yb) in b; both must lie inside their images. -1 for a flat patch. */
+float zncc(const cv::Mat& a, int xa, int ya, const cv::Mat& b, int xb, int yb, int r);
+
+/** Vertex offset in [-0.5, 0.5] of the parabola through (-1, cm), (0, c0), (1, cp). */
+inline float parabolaPeak(float cm, float c0, float cp)
+{
+	const float den = cm - 2 * c0 + cp;
+	if (!(den < -1e-9f)) return 0.f;  // not a maximum: keep the integer position
+	const float o = 0.5f * (cm - cp) / den;
+	return o < -0.5f ? -0.5f : (o > 0.5f ? 0.5f : o);
+}
+
+/** Options of StereoFeatureExtractor ([features] in config/vo.ini). */
+struct TStereoFeatureOptions : public mrpt::config::CLoadableOptions
+{
+	int fast_threshold = 12;  //!< FAST intensity threshold [grey levels]
+	int grid_cols = 8;	//!< buckets across the image
+	int grid_rows = 6;	//!< buckets down the image
+	int max_per_cell = 20;	//!< strongest left corners kept per bucket
+	int max_per_cell_right = 60;  //!< per bucket in the right image (more: matches must be among them)
+	double min_disparity = 1.0;	 //!< smallest true disparity D = fx b / Z searched [px]
+	double max_disparity = 96.0;  //!< largest true disparity searched [px]
+	int row_tolerance = 1;	//!< right corners within +-this many rows are candidates [px]
+	int patch_radius = 3;  //!< stereo ZNCC patch is (2r+1)^2 [px]
+	double min_zncc = 0.8;	//!< weakest accepted stereo correlation
+	double max_ambiguity = 0.6;	 //!< reject if (1-best)/(1-second best) exceeds this
+	double lr_tolerance_px = 1.0;  //!< left-right consistency: reverse match within this [px]
+/** Depth-discontinuity check: the four windows shifted by patch_radius
+ * (left, right, up, down) must also correlate at the found disparity at
+ * least this well; a corner on an object's silhouette fails it (its
+ * background half lies at another disparity). -1 disables. */
+double min_zncc_shifted = 0.5;
+	int brief_patch_size = 32;	//!< BRIEF patch side S [px]
+	uint32_t brief_seed = 0x5ad710c;  //!< BRIEF test pattern seed (maps and live runs must agree)
+	double sigma_px = 0.5;	//!< pixel noise of uL, v, uR for landmark covariances [px]
+	double max_depth = 80.0;  //!< landmarks farther than this are dropped [m]
+
+	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
+	void dumpToTextStream(std::ostream& out) const override;
+	/** Throws std::invalid_argument naming the bad option. */
+	void validate() const;
+};
+
+class StereoFeatureExtractor
+{
+   public:
+	using TOptions = TStereoFeatureOptions;
+
+	explicit StereoFeatureExtractor(const TOptions& o = TOptions());
+	const TOptions& options() const { return m_opts; }
+
+	/** Measurements of a rectified CV_8UC1 pair of equal size. Throws
+	 * std::invalid_argument on wrong image types or sizes. */
+	void process(
+		const cv::Mat& left8, const cv::Mat& right8, const geometry::TStereoCalib& calib,
+		TStereoFrame& out) const;
+
+	const BriefExtractor& brief() const { return m_brief; }
+
+   private:
+	TOptions m_opts;
+	BriefExtractor m_brief;
+};
+
+}  // namespace shadyloc::features

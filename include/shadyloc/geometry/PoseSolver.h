@@ -1,0 +1,106 @@
+/* ShadyLoc — relative pose of a stereo frame against a set of 3D landmarks:
+ * RANSAC on 3D-3D correspondences (3-point minimal sets solved in closed form,
+ * Horn 1987 / Umeyama 1991, no scale), then a robust Gauss-Newton on the stereo
+ * reprojection error (uL, v, uR) with a Huber kernel, and the 6x6 covariance
+ * of the result from the inverse of J^T W J.
+ *
+ * Pose perturbation (the convention of every covariance here): a pose T
+ * (R, t) is perturbed on the left, T' = (exp([phi]x) R, exp([phi]x) t + rho),
+ * xi = (rho, phi) in R^6, translation first [m, rad]. To first order this is
+ * SE(3)'s left perturbation exp(xi^) T.
+ */
+#pragma once
+
+#include <shadyloc/geometry/StereoCamera.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <vector>
+
+namespace shadyloc::geometry
+{
+using Matrix6d = Eigen::Matrix<double, 6, 6>;
+using Vector6d = Eigen::Matrix<double, 6, 1>;
+using Matrix36d = Eigen::Matrix<double, 3, 6>;
+
+/** The left retraction above: T' = (exp([phi]x) R, exp([phi]x) t + rho). */
+Eigen::Isometry3d retractLeft(const Vector6d& xi, const Eigen::Isometry3d& T);
+
+/** Adjoint of T for xi = (rho, phi): Ad = [[R, [t]x R], [0, R]]. */
+Matrix6d adjoint(const Eigen::Isometry3d& T);
+
+/** Covariance of T^-1 given that of T (both in the left convention). */
+Matrix6d invertCovariance(const Eigen::Isometry3d& T, const Matrix6d& covT);
+
+/** One correspondence: a landmark in the reference frame and its measurement
+ * in the current frame. */
+struct TStereoCorrespondence
+{
+	Eigen::Vector3d P_ref;	//!< landmark in the reference (keyframe) left camera [m]
+	Eigen::Matrix3d cov_ref = Eigen::Matrix3d::Zero();	//!< its covariance [m^2]
+	Eigen::Vector3d z_curr;	 //!< measurement (uL, v, uR) in the current frame [px]
+	Eigen::Vector3d P_curr;	 //!< triangulation of z_curr in the current frame [m]
+};
+
+/** Residual r = project(T_curr_ref * P_ref) - z and J = dr/dxi (3x6) for the
+ * left perturbation of T_curr_ref. False if the point is behind the camera. */
+bool stereoResidual(
+	const TStereoCalib& calib, const Eigen::Isometry3d& T_curr_ref, const Eigen::Vector3d& P_ref,
+	const Eigen::Vector3d& z, Eigen::Vector3d& r, Matrix36d* J = nullptr);
+
+/** Closed-form rigid transform T with dst_i ~ T src_i (least squares, no
+ * scale). False if fewer than 3 points or (near) collinear. */
+bool rigidTransform3D(
+	const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst,
+	Eigen::Isometry3d& T);
+
+struct TRansacOptions
+{
+	int max_iterations = 200;  //!< upper bound on hypotheses
+	double confidence = 0.999;	//!< stop when this probability of an all-inlier set is reached
+	double inlier_threshold_px = 2.0;  //!< max |r| (norm of (duL, dv, duR)) of an inlier [px]
+	uint32_t seed = 42;	 //!< fixed seed: runs are repeatable
+};
+
+struct TRansacResult
+{
+	bool ok = false;
+	Eigen::Isometry3d T_curr_ref = Eigen::Isometry3d::Identity();
+	std::vector<uint8_t> inlier;  //!< one flag per correspondence
+	int inliers = 0;
+	int iterations = 0;
+};
+
+/** 3-point RANSAC; the hypothesis with most inliers is refitted on all its
+ * inliers (3D-3D) before the final inlier count. */
+TRansacResult ransacStereoPose(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const TRansacOptions& o);
+
+struct TPoseSolverOptions
+{
+	int max_iterations = 15;  //!< Gauss-Newton iterations
+	double sigma_px = 0.5;	//!< measurement noise per pixel coordinate [px]
+	double huber_k = 2.0;  //!< Huber threshold on the whitened residual norm [sigmas]
+	double convergence = 1e-7;	//!< stop when |dxi| falls below this
+	bool use_landmark_covariance = true;  //!< add the projected cov_ref to each residual's covariance
+};
+
+struct TPoseSolution
+{
+	bool ok = false;
+	Eigen::Isometry3d T_curr_ref = Eigen::Isometry3d::Identity();
+	/** Covariance of T_ref_curr (= T_curr_ref^-1), left convention [m^2, rad^2]. */
+	Matrix6d cov_T_ref_curr = Matrix6d::Identity();
+	int iterations = 0;
+	double rms_px = 0;	//!< RMS reprojection residual over the used correspondences [px]
+};
+
+/** Robust Gauss-Newton from T_init over the correspondences with use[i] != 0
+ * (all if use is empty). */
+TPoseSolution solveStereoPose(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c,
+	const std::vector<uint8_t>& use, const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o);
+
+}  // namespace shadyloc::geometry

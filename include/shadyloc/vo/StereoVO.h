@@ -1,0 +1,154 @@
+/* ShadyLoc — keyframe-based stereo visual odometry (McManus et al. 2014,
+ * Section II-A), one class for both image channels: it sees only a grey
+ * CV_8UC1 stereo pair, monochrome or illumination-invariant.
+ *
+ * Per frame: stereo measurements (features::StereoFeatureExtractor); the
+ * previous keyframe's landmarks are projected with the pose predicted from
+ * the last motion (constant velocity) and matched by BRIEF inside a window
+ * around each projection; matches are refined to sub-pixel by correlating the
+ * keyframe's stored pixel patch; 3-point RANSAC removes outliers; a robust
+ * Gauss-Newton on the stereo reprojection error gives T_kf_curr and its
+ * covariance. A frame becomes a keyframe when motion or loss of overlap call
+ * for it. Frames that cannot be tracked are reported (status), get the
+ * predicted pose, and tracking resumes at the next good frame.
+ */
+#pragma once
+
+#include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/geometry/PoseSolver.h>
+#include <shadyloc/geometry/StereoCamera.h>
+
+#include <mrpt/config/CLoadableOptions.h>
+#include <mrpt/system/COutputLogger.h>
+
+#include <Eigen/Geometry>
+
+#include <string>
+#include <vector>
+
+namespace shadyloc::vo
+{
+/** What happened to a frame (the `status` column of the stats CSV). */
+enum class FrameStatus
+{
+	Ok,	 //!< tracked against the keyframe
+	First,	//!< first keyframe of the run (defines the world frame)
+	FewFeatures,  //!< too few stereo measurements: not tracked, predicted pose
+	FewMatches,	 //!< too few BRIEF matches to the keyframe: predicted pose
+	FewInliers,	 //!< RANSAC found too few inliers: predicted pose
+	SolverFailed,  //!< Gauss-Newton diverged or degenerate: predicted pose
+	WildMotion,	 //!< solution jumps beyond the motion bounds: rejected, predicted pose
+	Reinit	//!< lost too long: a new keyframe starts a new chain segment here
+};
+std::string toString(FrameStatus s);
+/** True when the frame's pose came from measurements (Ok, First, Reinit). */
+inline bool isTracked(FrameStatus s)
+{
+	return s == FrameStatus::Ok || s == FrameStatus::First || s == FrameStatus::Reinit;
+}
+
+/** A keyframe: what the survey map stores. */
+struct TKeyframe
+{
+	uint32_t id = 0;  //!< 0, 1, 2, ... in creation order
+	size_t frame = 0;  //!< index of the frame it was made from
+	double timestamp = 0;  //!< [s]
+	/** Pose of this keyframe's left camera in the previous keyframe's left camera
+	 * (identity for the first). */
+	Eigen::Isometry3d T_prevkf_kf = Eigen::Isometry3d::Identity();
+	/** Covariance of T_prevkf_kf, left perturbation (translation, rotation)
+	 * [m^2, rad^2] (geometry/PoseSolver.h). */
+	geometry::Matrix6d cov = geometry::Matrix6d::Zero();
+	/** True if T_prevkf_kf is a prediction across a tracking gap (Reinit), not a
+	 * measurement: the chain is broken here and cov is large. */
+	bool chain_break = false;
+	/** Pose in the first keyframe's frame (the product of the chain), for convenience. */
+	Eigen::Isometry3d T_world_kf = Eigen::Isometry3d::Identity();
+	std::vector<features::TStereoMeasurement> meas;	 //!< landmarks in this keyframe's frame
+};
+
+/** Stage times of one frame [ms]. */
+struct TVOTimings
+{
+	double detect = 0, stereo = 0, describe = 0, match = 0, ransac = 0, solve = 0, total = 0;
+};
+
+/** Result of one frame. */
+struct TFrameResult
+{
+	size_t frame = 0;
+	double timestamp = 0;  //!< [s]
+	FrameStatus status = FrameStatus::Ok;
+	bool keyframe = false;	//!< this frame became a keyframe
+	size_t features = 0;  //!< FAST corners kept in the left image
+	size_t stereo = 0;	//!< stereo measurements (with landmark)
+	size_t tracked = 0;	 //!< BRIEF matches to the keyframe (after refinement)
+	size_t inliers = 0;	 //!< RANSAC / solver inliers
+	double rms_px = 0;	//!< solver RMS residual [px]
+	Eigen::Isometry3d T_world_curr = Eigen::Isometry3d::Identity();	 //!< left camera in the first frame
+	Eigen::Isometry3d T_kf_curr = Eigen::Isometry3d::Identity();  //!< relative to the reference keyframe
+	geometry::Matrix6d cov_kf_curr = geometry::Matrix6d::Zero();  //!< of T_kf_curr (left convention)
+	TVOTimings ms;
+};
+
+/** Options of StereoVO ([vo] in config/vo.ini). */
+struct TStereoVOOptions : public mrpt::config::CLoadableOptions
+{
+	double search_radius_px = 20;  //!< BRIEF search window around each predicted projection [px]
+	double search_radius_lost_px = 80;	//!< window after a failure or when the first try finds too few [px]
+	int max_hamming = 60;  //!< largest BRIEF distance of a match [bits of 256]
+	double match_ratio = 0.85;	//!< best must be < ratio * second best distance in the window
+	double refine_min_zncc = 0.7;  //!< patch refinement must correlate this well, or the match is dropped
+	int refine_radius = 2;	//!< patch refinement moves at most this far from the BRIEF match [px]
+	int min_stereo = 20;  //!< fewer stereo measurements: FewFeatures
+	int min_matches = 12;  //!< fewer matches to the keyframe: FewMatches
+	int min_inliers = 10;  //!< fewer inliers: FewInliers
+	double ransac_threshold_px = 2.0;  //!< RANSAC inlier bound on |(duL, dv, duR)| [px]
+	int ransac_iterations = 200;  //!< RANSAC upper bound
+	double sigma_px = 0.5;	//!< measurement noise for the solver [px]
+	double huber_k = 2.0;  //!< Huber threshold [sigmas]
+	double kf_translation = 1.0;  //!< new keyframe beyond this distance from the keyframe [m]
+	double kf_rotation_deg = 10.0;	//!< ... or this rotation [deg]
+	double kf_min_tracked_fraction = 0.35;	//!< ... or when inliers / keyframe landmarks fall below this
+	int kf_min_inliers = 40;  //!< ... or when inliers fall below this
+	double max_step_translation = 2.0;	//!< per-frame motion above this is rejected (WildMotion) [m]
+	double max_step_rotation_deg = 30.0;  //!< per-frame rotation above this is rejected [deg]
+	int max_lost_frames = 3;  //!< after this many untracked frames in a row, re-initialise (Reinit)
+	bool constant_velocity = true;	//!< predict with the last motion (else identity)
+
+	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
+	void dumpToTextStream(std::ostream& out) const override;
+	void validate() const;	//!< throws std::invalid_argument naming the option
+};
+
+class StereoVO : public mrpt::system::COutputLogger
+{
+   public:
+	using TOptions = TStereoVOOptions;
+	StereoVO(const TOptions& o = TOptions(), const features::TStereoFeatureOptions& fo = {});
+
+	/** One rectified grey stereo pair (CV_8UC1, equal sizes). prior_T_prev_curr,
+	 * if given, replaces the constant-velocity prediction (e.g. the baseline
+	 * channel's VO predicting for the invariant one). */
+	TFrameResult process(
+		const cv::Mat& left8, const cv::Mat& right8, const geometry::TStereoCalib& calib,
+		double timestamp, const Eigen::Isometry3d* prior_T_prev_curr = nullptr);
+
+	const std::vector<TKeyframe>& keyframes() const { return m_keyframes; }
+	const TOptions& options() const { return m_opts; }
+	const features::StereoFeatureExtractor& extractor() const { return m_extractor; }
+	/** Last frame-to-frame motion estimate (the constant-velocity model). */
+	const Eigen::Isometry3d& lastMotion() const { return m_velocity; }
+	void reset();
+
+   private:
+	TOptions m_opts;
+	features::StereoFeatureExtractor m_extractor;
+	std::vector<TKeyframe> m_keyframes;
+	size_t m_frame = 0;
+	int m_lost = 0;	 //!< untracked frames in a row
+	Eigen::Isometry3d m_T_world_prev = Eigen::Isometry3d::Identity();
+	Eigen::Isometry3d m_velocity = Eigen::Isometry3d::Identity();  //!< T_prev_curr of the last tracked step
+};
+
+}  // namespace shadyloc::vo

@@ -1,0 +1,35 @@
+/* shadyloc traj-error: ATE, RPE and KITTI-style drift of a trajectory. */
+#include "Command.h"
+
+#include <shadyloc/eval/TrajectoryError.h>
+
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+
+#include <iostream>
+
+namespace
+{
+int run(int argc, char** argv)
+{
+	TCLAP::CmdLine cmd(
+		"Trajectory error of an estimate against ground truth (both TUM): poses associated by "
+		"timestamp, SE(3) alignment without scale (Horn/Umeyama), ATE RMSE, per-step RPE, and "
+		"KITTI-style translational [%] / rotational [deg/m] error over sub-sequences of 100..800 m "
+		"(scaled down for runs shorter than 1 km; the lengths used are printed).",
+		' ', "0.1");
+	TCLAP::ValueArg<std::string> gt("", "gt", "ground truth (TUM)", true, "", "gt.tum", cmd);
+	TCLAP::ValueArg<std::string> est("", "est", "estimate (TUM)", true, "", "traj.tum", cmd);
+	TCLAP::ValueArg<double> maxDt(
+		"", "max-dt", "largest timestamp difference of an associated pair [s]", false, 0.02, "s", cmd);
+	cmd.parse(argc, argv);
+	const auto g = shadyloc::eval::readTum(gt.getValue());
+	const auto e = shadyloc::eval::readTum(est.getValue());
+	const auto r = shadyloc::eval::computeErrors(g, e, maxDt.getValue());
+	std::cout << "ground truth: " << gt.getValue() << " (" << g.size() << " poses)\n"
+			  << "estimate:     " << est.getValue() << " (" << e.size() << " poses)\n"
+			  << r.asText();
+	return 0;
+}
+shadyloc::apps::RegisterCommand reg(
+	"traj-error", {"ATE/RPE/KITTI-style drift of a TUM trajectory (--gt gt.tum --est traj.tum)", run});
+}  // namespace

@@ -1,0 +1,352 @@
+/* ShadyLoc — FAST grid detection and stereo measurements. */
+#include <shadyloc/features/StereoFeatures.h>
+
+#include <mrpt/config/CConfigFileBase.h>
+
+#include <opencv2/features2d.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ostream>
+#include <stdexcept>
+
+namespace shadyloc::features
+{
+namespace
+{
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0)
+{
+	return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+}  // namespace
+
+// ---- options ------------------------------------------------------------------
+void TStereoFeatureOptions::loadFromConfigFile(
+	const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+	MRPT_LOAD_CONFIG_VAR(fast_threshold, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(grid_cols, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(grid_rows, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(max_per_cell, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(max_per_cell_right, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(min_disparity, double, c, s);
+	MRPT_LOAD_CONFIG_VAR(max_disparity, double, c, s);
+	MRPT_LOAD_CONFIG_VAR(row_tolerance, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(patch_radius, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(min_zncc, double, c, s);
+	MRPT_LOAD_CONFIG_VAR(max_ambiguity, double, c, s);
+	MRPT_LOAD_CONFIG_VAR(lr_tolerance_px, double, c, s);
+	MRPT_LOAD_CONFIG_VAR(min_zncc_shifted, double, c, s);
+	MRPT_LOAD_CONFIG_VAR(brief_patch_size, int, c, s);
+	brief_seed = static_cast<uint32_t>(c.read_uint64_t(s, "brief_seed", brief_seed));
+	MRPT_LOAD_CONFIG_VAR(sigma_px, double, c, s);
+	MRPT_LOAD_CONFIG_VAR(max_depth, double, c, s);
+	try
+	{
+		validate();
+	}
+	catch (const std::exception& e)
+	{
+		throw std::invalid_argument("[" + s + "] " + e.what());
+	}
+}
+
+void TStereoFeatureOptions::dumpToTextStream(std::ostream& o) const
+{
+	o << "fast_threshold = " << fast_threshold << "   ; FAST threshold [grey levels]\n"
+	  << "grid_cols = " << grid_cols << "   ; buckets across\n"
+	  << "grid_rows = " << grid_rows << "   ; buckets down\n"
+	  << "max_per_cell = " << max_per_cell << "   ; left corners kept per bucket\n"
+	  << "max_per_cell_right = " << max_per_cell_right << "   ; right corners kept per bucket\n"
+	  << "min_disparity = " << min_disparity << "   ; true disparity fx*b/Z [px]\n"
+	  << "max_disparity = " << max_disparity << "   ; true disparity fx*b/Z [px]\n"
+	  << "row_tolerance = " << row_tolerance << "   ; candidate rows +- [px]\n"
+	  << "patch_radius = " << patch_radius << "   ; ZNCC patch (2r+1)^2 [px]\n"
+	  << "min_zncc = " << min_zncc << "   ; weakest stereo correlation\n"
+	  << "max_ambiguity = " << max_ambiguity << "   ; (1-best)/(1-second) bound\n"
+	  << "lr_tolerance_px = " << lr_tolerance_px << "   ; left-right check [px]\n"
+	  << "min_zncc_shifted = " << min_zncc_shifted << "   ; silhouette check, -1 = off\n"
+	  << "brief_patch_size = " << brief_patch_size << "   ; BRIEF patch side [px]\n"
+	  << "brief_seed = " << brief_seed << "   ; BRIEF pattern seed\n"
+	  << "sigma_px = " << sigma_px << "   ; pixel noise for landmark covariance [px]\n"
+	  << "max_depth = " << max_depth << "   ; farthest landmark kept [m]\n";
+}
+
+void TStereoFeatureOptions::validate() const
+{
+	auto bad = [](const std::string& what) { throw std::invalid_argument("option " + what); };
+	if (fast_threshold < 1 || fast_threshold > 254) bad("fast_threshold must be in [1,254]");
+	if (grid_cols < 1 || grid_rows < 1) bad("grid_cols/grid_rows must be >= 1");
+	if (!(min_disparity > 0) || !(max_disparity > min_disparity))
+		bad("min_disparity must be > 0 and < max_disparity");
+	if (row_tolerance < 0 || row_tolerance > 3) bad("row_tolerance must be in [0,3]");
+	if (patch_radius < 1 || patch_radius > 7) bad("patch_radius must be in [1,7]");
+	if (!(min_zncc > -1 && min_zncc < 1)) bad("min_zncc must be in (-1,1)");
+	if (!(max_ambiguity > 0 && max_ambiguity <= 1)) bad("max_ambiguity must be in (0,1]");
+	if (!(sigma_px > 0)) bad("sigma_px must be > 0");
+	if (!(max_depth > 0)) bad("max_depth must be > 0");
+}
+
+// ---- FAST on a grid -----------------------------------------------------------
+void detectFastGrid(
+	const cv::Mat& grey8, int threshold, int cols, int rows, int perCell, int border,
+	std::vector<cv::KeyPoint>& out)
+{
+	std::vector<cv::KeyPoint> all;
+	cv::FAST(grey8, all, threshold, true, cv::FastFeatureDetector::TYPE_9_16);
+	out.clear();
+	const int W = grey8.cols, H = grey8.rows;
+	std::vector<std::vector<cv::KeyPoint>> cells(static_cast<size_t>(cols * rows));
+	for (const auto& k : all)
+	{
+		const int x = static_cast<int>(k.pt.x), y = static_cast<int>(k.pt.y);
+		if (x < border || y < border || x >= W - border || y >= H - border) continue;
+		const int cx = std::min(cols - 1, x * cols / W), cy = std::min(rows - 1, y * rows / H);
+		cells[cy * cols + cx].push_back(k);
+	}
+	for (auto& c : cells)
+	{
+		if (perCell > 0 && static_cast<int>(c.size()) > perCell)
+		{
+			std::nth_element(c.begin(), c.begin() + perCell, c.end(), [](const auto& a, const auto& b) {
+				return a.response > b.response;
+			});
+			c.resize(perCell);
+		}
+		out.insert(out.end(), c.begin(), c.end());
+	}
+}
+
+float zncc(const cv::Mat& a, int xa, int ya, const cv::Mat& b, int xb, int yb, int r)
+{
+	int sa = 0, sb = 0;
+	int64_t saa = 0, sbb = 0, sab = 0;
+	for (int dy = -r; dy <= r; dy++)
+	{
+		const uint8_t* pa = a.ptr<uint8_t>(ya + dy) + xa - r;
+		const uint8_t* pb = b.ptr<uint8_t>(yb + dy) + xb - r;
+		for (int dx = 0; dx <= 2 * r; dx++)
+		{
+			const int va = pa[dx], vb = pb[dx];
+			sa += va;
+			sb += vb;
+			saa += va * va;
+			sbb += vb * vb;
+			sab += va * vb;
+		}
+	}
+	const double n = (2 * r + 1) * (2 * r + 1);
+	const double va = saa - double(sa) * sa / n, vb = sbb - double(sb) * sb / n;
+	if (va < 1e-6 || vb < 1e-6) return -1.f;
+	return static_cast<float>((sab - double(sa) * sb / n) / std::sqrt(va * vb));
+}
+
+namespace
+{
+/** Standard deviation of the (2r+1)^2 patch at (x, y) [grey levels]. */
+double patchStd(const cv::Mat& a, int x, int y, int r)
+{
+	int s = 0;
+	int64_t ss = 0;
+	for (int dy = -r; dy <= r; dy++)
+	{
+		const uint8_t* p = a.ptr<uint8_t>(y + dy) + x - r;
+		for (int dx = 0; dx <= 2 * r; dx++)
+		{
+			s += p[dx];
+			ss += p[dx] * p[dx];
+		}
+	}
+	const double n = (2 * r + 1) * (2 * r + 1), m = s / n;
+	return std::sqrt(std::max(0.0, ss / n - m * m));
+}
+}  // namespace
+
+// ---- stereo -------------------------------------------------------------------
+StereoFeatureExtractor::StereoFeatureExtractor(const TOptions& o)
+	: m_opts(o), m_brief(o.brief_patch_size, o.brief_seed)
+{
+	m_opts.validate();
+}
+
+namespace
+{
+/** Corner x positions per image row. */
+struct RowIndex
+{
+	std::vector<std::vector<int>> rows;
+	void build(const std::vector<cv::KeyPoint>& kps, int H)
+	{
+		rows.assign(H, {});
+		for (const auto& k : kps) rows[static_cast<int>(k.pt.y)].push_back(static_cast<int>(k.pt.x));
+	}
+};
+
+struct TBest
+{
+	int x = -1;
+	float s1 = -2.f, s2 = -2.f;	 //!< best and second-best (distinct position) scores
+};
+
+/** Best candidate of `rows` (rows y-tol..y+tol, x in [xmin, xmax]) for the
+ * patch of `from` at (x0, y) compared with `to` on row y. */
+TBest bestOnRow(
+	const cv::Mat& from, int x0, int y, const cv::Mat& to, const RowIndex& idx, int tol, int xmin,
+	int xmax, int r)
+{
+	TBest b;
+	const int H = to.rows, W = to.cols;
+	xmin = std::max(xmin, r + 2);
+	xmax = std::min(xmax, W - r - 3);
+	std::vector<std::pair<int, float>> cand;
+	for (int yy = std::max(0, y - tol); yy <= std::min(H - 1, y + tol); yy++)
+		for (int x : idx.rows[yy])
+			if (x >= xmin && x <= xmax) cand.emplace_back(x, zncc(from, x0, y, to, x, y, r));
+	for (const auto& c : cand)
+		if (c.second > b.s1)
+		{
+			b.s1 = c.second;
+			b.x = c.first;
+		}
+	// The second best must be elsewhere: corners one pixel apart (neighbouring
+	// rows) are the same image structure, not a competing match.
+	for (const auto& c : cand)
+		if (std::abs(c.first - b.x) > 1 && c.second > b.s2) b.s2 = c.second;
+	return b;
+}
+}  // namespace
+
+void StereoFeatureExtractor::process(
+	const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib,
+	TStereoFrame& out) const
+{
+	if (left.type() != CV_8UC1 || right.type() != CV_8UC1 || left.size() != right.size() || left.empty())
+		throw std::invalid_argument(
+			"StereoFeatureExtractor: needs two non-empty CV_8UC1 images of equal size");
+	const auto& o = m_opts;
+	out.meas.clear();
+	out.left = left;
+	auto t0 = Clock::now();
+	const int r = o.patch_radius;
+	const int borderL = std::max({m_brief.radius() + 1, r + 4, kPatchSize / 2 + 3});
+	const int borderR = r + 3;
+	std::vector<cv::KeyPoint> kl, kr;
+	detectFastGrid(left, o.fast_threshold, o.grid_cols, o.grid_rows, o.max_per_cell, borderL, kl);
+	detectFastGrid(right, o.fast_threshold, o.grid_cols, o.grid_rows, o.max_per_cell_right, borderR, kr);
+	out.cornersLeft = kl.size();
+	out.cornersRight = kr.size();
+	out.timings.detect_ms = msSince(t0);
+
+	t0 = Clock::now();
+	RowIndex rowsR, rowsL;
+	rowsR.build(kr, right.rows);
+	rowsL.build(kl, left.rows);
+	const double doffs = calib.doffs();
+	const int W = left.cols;
+	struct TPair
+	{
+		int kp;
+		float uR, s;
+	};
+	std::vector<TPair> pairs;
+	pairs.reserve(kl.size());
+	for (size_t i = 0; i < kl.size(); i++)
+	{
+		const int xl = static_cast<int>(kl[i].pt.x), y = static_cast<int>(kl[i].pt.y);
+		// uR = uL + doffs - D for D in [min, max]
+		const int xmin = static_cast<int>(std::floor(xl + doffs - o.max_disparity));
+		const int xmax = static_cast<int>(std::ceil(xl + doffs - o.min_disparity));
+		const TBest b = bestOnRow(left, xl, y, right, rowsR, o.row_tolerance, xmin, xmax, r);
+		if (b.x < 0 || b.s1 < o.min_zncc) continue;
+		if (b.s2 > -2.f && (1.0 - b.s1) > o.max_ambiguity * (1.0 - b.s2)) continue;
+		// Dense refinement on the left row around the candidate corner: climb to
+		// the local maximum (at most two steps), then fit a parabola.
+		int x = b.x;
+		float c0 = zncc(left, xl, y, right, x, y, r);
+		float cm = 0, cp = 0;
+		bool peak = false;
+		for (int step = 0; step < 3; step++)
+		{
+			if (x - 1 < r + 1 || x + 1 > W - r - 2) break;
+			cm = zncc(left, xl, y, right, x - 1, y, r);
+			cp = zncc(left, xl, y, right, x + 1, y, r);
+			if (c0 >= cm && c0 >= cp)
+			{
+				peak = true;
+				break;
+			}
+			if (cm > cp)
+			{
+				x--;
+				cp = c0;
+				c0 = cm;
+			}
+			else
+			{
+				x++;
+				cm = c0;
+				c0 = cp;
+			}
+		}
+		if (!peak || c0 < o.min_zncc) continue;
+		const float uR = x + parabolaPeak(cm, c0, cp);
+		const double D = calib.disparity(xl, uR);
+		if (D < o.min_disparity || D > o.max_disparity) continue;
+		if (o.min_zncc_shifted > -1)
+		{
+			// Windows beside the patch (disjoint from it: shift 2r+1) at the
+			// same disparity. Near-flat windows carry no evidence and are skipped.
+			const int sh = 2 * r + 1;
+			const int sx[4] = {-sh, sh, 0, 0}, sy[4] = {0, 0, -sh, sh};
+			bool ok = true;
+			for (int k = 0; k < 4 && ok; k++)
+			{
+				const int xa = xl + sx[k], xb = x + sx[k], yy = y + sy[k];
+				if (xa - r < 0 || xa + r >= W || xb - r < 0 || xb + r >= W || yy - r < 0 ||
+					yy + r >= left.rows)
+					continue;
+				if (patchStd(left, xa, yy, r) < 3.0) continue;
+				ok = zncc(left, xa, yy, right, xb, yy, r) >= o.min_zncc_shifted;
+			}
+			if (!ok) continue;
+		}
+		// Left-right consistency: the right position's best left corner must be this one.
+		const int xlmin = static_cast<int>(std::floor(x - doffs + o.min_disparity));
+		const int xlmax = static_cast<int>(std::ceil(x - doffs + o.max_disparity));
+		const TBest back = bestOnRow(right, x, y, left, rowsL, o.row_tolerance, xlmin, xlmax, r);
+		if (back.x < 0 || std::abs(back.x - xl) > o.lr_tolerance_px) continue;
+		pairs.push_back({static_cast<int>(i), uR, c0});
+	}
+	out.timings.stereo_ms = msSince(t0);
+
+	t0 = Clock::now();
+	cv::Mat smoothed;
+	BriefExtractor::smooth(left, smoothed);
+	out.meas.reserve(pairs.size());
+	const int ph = kPatchSize / 2;
+	for (const auto& p : pairs)
+	{
+		const auto& k = kl[p.kp];
+		TStereoMeasurement m;
+		m.uL = std::floor(k.pt.x);
+		m.v = std::floor(k.pt.y);
+		m.uR = p.uR;
+		m.response = k.response;
+		m.zncc = p.s;
+		Eigen::Matrix3d J;
+		if (!calib.triangulate(m.uL, m.v, m.uR, m.P, &J) || m.P.z() > o.max_depth) continue;
+		m.cov = calib.triangulationCovariance(J, o.sigma_px);
+		if (!m_brief.compute(smoothed, static_cast<int>(m.uL), static_cast<int>(m.v), m.desc)) continue;
+		for (int dy = -ph; dy <= ph; dy++)
+		{
+			const uint8_t* row = left.ptr<uint8_t>(static_cast<int>(m.v) + dy) + static_cast<int>(m.uL) - ph;
+			std::copy(row, row + kPatchSize, m.patch.begin() + (dy + ph) * kPatchSize);
+		}
+		out.meas.push_back(m);
+	}
+	out.timings.describe_ms = msSince(t0);
+}
+
+}  // namespace shadyloc::features

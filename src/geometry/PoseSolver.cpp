@@ -1,0 +1,270 @@
+/* ShadyLoc — stereo pose: 3-point RANSAC and robust Gauss-Newton. */
+#include <shadyloc/geometry/PoseSolver.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace shadyloc::geometry
+{
+namespace
+{
+Eigen::Matrix3d skew(const Eigen::Vector3d& v)
+{
+	Eigen::Matrix3d S;
+	S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+	return S;
+}
+Eigen::Matrix3d expSO3(const Eigen::Vector3d& phi)
+{
+	const double a = phi.norm();
+	if (a < 1e-12) return Eigen::Matrix3d::Identity() + skew(phi);
+	return Eigen::AngleAxisd(a, phi / a).toRotationMatrix();
+}
+}  // namespace
+
+Eigen::Isometry3d retractLeft(const Vector6d& xi, const Eigen::Isometry3d& T)
+{
+	const Eigen::Matrix3d dR = expSO3(xi.tail<3>());
+	Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
+	out.linear() = dR * T.linear();
+	out.translation() = dR * T.translation() + xi.head<3>();
+	return out;
+}
+
+Matrix6d adjoint(const Eigen::Isometry3d& T)
+{
+	Matrix6d A = Matrix6d::Zero();
+	const Eigen::Matrix3d R = T.linear();
+	A.topLeftCorner<3, 3>() = R;
+	A.topRightCorner<3, 3>() = skew(T.translation()) * R;
+	A.bottomRightCorner<3, 3>() = R;
+	return A;
+}
+
+Matrix6d invertCovariance(const Eigen::Isometry3d& T, const Matrix6d& covT)
+{
+	// (exp(xi) T)^-1 = T^-1 exp(-xi) = exp(-Ad_{T^-1} xi) T^-1
+	const Matrix6d A = adjoint(T.inverse());
+	return A * covT * A.transpose();
+}
+
+bool stereoResidual(
+	const TStereoCalib& calib, const Eigen::Isometry3d& T_curr_ref, const Eigen::Vector3d& P_ref,
+	const Eigen::Vector3d& z, Eigen::Vector3d& r, Matrix36d* J)
+{
+	const Eigen::Vector3d p = T_curr_ref * P_ref;
+	if (!(p.z() > 1e-3)) return false;
+	Eigen::Matrix3d Jp;
+	r = calib.project(p, J ? &Jp : nullptr) - z;
+	if (J)
+	{
+		J->leftCols<3>() = Jp;
+		J->rightCols<3>() = -Jp * skew(p);
+	}
+	return true;
+}
+
+bool rigidTransform3D(
+	const std::vector<Eigen::Vector3d>& src, const std::vector<Eigen::Vector3d>& dst,
+	Eigen::Isometry3d& T)
+{
+	const size_t n = src.size();
+	if (n < 3 || dst.size() != n) return false;
+	Eigen::Vector3d ms = Eigen::Vector3d::Zero(), md = Eigen::Vector3d::Zero();
+	for (size_t i = 0; i < n; i++)
+	{
+		ms += src[i];
+		md += dst[i];
+	}
+	ms /= double(n);
+	md /= double(n);
+	Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+	double spread = 0;
+	for (size_t i = 0; i < n; i++)
+	{
+		S += (dst[i] - md) * (src[i] - ms).transpose();
+		spread += (src[i] - ms).squaredNorm();
+	}
+	Eigen::JacobiSVD<Eigen::Matrix3d> svd(S, Eigen::ComputeFullU | Eigen::ComputeFullV);
+	const Eigen::Vector3d sv = svd.singularValues();
+	// Collinear points leave the rotation about their line undetermined.
+	if (!(sv(1) > 1e-9 * std::max(1.0, sv(0))) || spread < 1e-12) return false;
+	Eigen::Matrix3d D = Eigen::Matrix3d::Identity();
+	if ((svd.matrixU() * svd.matrixV().transpose()).determinant() < 0) D(2, 2) = -1;
+	const Eigen::Matrix3d R = svd.matrixU() * D * svd.matrixV().transpose();
+	T = Eigen::Isometry3d::Identity();
+	T.linear() = R;
+	T.translation() = md - R * ms;
+	return true;
+}
+
+namespace
+{
+int countInliers(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const Eigen::Isometry3d& T,
+	double thr, std::vector<uint8_t>* flags)
+{
+	int n = 0;
+	const double thr2 = thr * thr;
+	Eigen::Vector3d r;
+	for (size_t i = 0; i < c.size(); i++)
+	{
+		const bool in = stereoResidual(calib, T, c[i].P_ref, c[i].z_curr, r) && r.squaredNorm() < thr2;
+		if (flags) (*flags)[i] = in;
+		n += in;
+	}
+	return n;
+}
+}  // namespace
+
+TRansacResult ransacStereoPose(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const TRansacOptions& o)
+{
+	TRansacResult res;
+	const int n = static_cast<int>(c.size());
+	res.inlier.assign(c.size(), 0);
+	if (n < 3) return res;
+	std::mt19937 rng(o.seed);
+	std::uniform_int_distribution<int> pick(0, n - 1);
+	int best = -1;
+	Eigen::Isometry3d bestT = Eigen::Isometry3d::Identity();
+	int maxIt = o.max_iterations;
+	std::vector<Eigen::Vector3d> s(3), d(3);
+	for (int it = 0; it < maxIt; it++)
+	{
+		res.iterations = it + 1;
+		int i0 = pick(rng), i1 = pick(rng), i2 = pick(rng);
+		if (i0 == i1 || i0 == i2 || i1 == i2) continue;
+		s = {c[i0].P_ref, c[i1].P_ref, c[i2].P_ref};
+		d = {c[i0].P_curr, c[i1].P_curr, c[i2].P_curr};
+		Eigen::Isometry3d T;
+		if (!rigidTransform3D(s, d, T)) continue;
+		int k = countInliers(calib, c, T, o.inlier_threshold_px, nullptr);
+		if (k > best && k >= 6)
+		{
+			// Local optimisation (Chum et al., LO-RANSAC, DAGM 2003): a minimal
+			// 3D-3D set is noisy (far points' depths are poor), so refit by
+			// Gauss-Newton on the image residuals of its inliers and recount.
+			for (int lo = 0; lo < 2; lo++)
+			{
+				std::vector<uint8_t> f(c.size(), 0);
+				countInliers(calib, c, T, o.inlier_threshold_px, &f);
+				TPoseSolverOptions so;
+				so.max_iterations = 4;
+				so.sigma_px = 1.0;
+				const auto sol = solveStereoPose(calib, c, f, T, so);
+				if (!sol.ok) break;
+				const int k2 = countInliers(calib, c, sol.T_curr_ref, o.inlier_threshold_px, nullptr);
+				if (k2 <= k) break;
+				k = k2;
+				T = sol.T_curr_ref;
+			}
+		}
+		if (k > best)
+		{
+			best = k;
+			bestT = T;
+			// Adaptive bound: iterations for `confidence` of one all-inlier sample.
+			const double w = double(k) / n;
+			const double p3 = w * w * w;
+			if (p3 > 1e-9 && p3 < 1.0)
+			{
+				const double need = std::log(1 - o.confidence) / std::log(1 - p3);
+				maxIt = std::min(o.max_iterations, static_cast<int>(std::ceil(need)) + 1);
+			}
+			else if (p3 >= 1.0)
+				maxIt = std::min(maxIt, it + 1);
+		}
+	}
+	if (best < 3) return res;
+	std::vector<uint8_t> flags(c.size(), 0);
+	countInliers(calib, c, bestT, o.inlier_threshold_px, &flags);
+	// Refit on all inliers (least squares in 3D), keep it if it does not lose inliers.
+	s.clear();
+	d.clear();
+	for (int i = 0; i < n; i++)
+		if (flags[i])
+		{
+			s.push_back(c[i].P_ref);
+			d.push_back(c[i].P_curr);
+		}
+	Eigen::Isometry3d T;
+	if (rigidTransform3D(s, d, T))
+	{
+		std::vector<uint8_t> f2(c.size(), 0);
+		if (countInliers(calib, c, T, o.inlier_threshold_px, &f2) >= best)
+		{
+			bestT = T;
+			flags.swap(f2);
+		}
+	}
+	res.T_curr_ref = bestT;
+	res.inlier = flags;
+	res.inliers = static_cast<int>(std::count(flags.begin(), flags.end(), 1));
+	res.ok = res.inliers >= 3;
+	return res;
+}
+
+TPoseSolution solveStereoPose(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c,
+	const std::vector<uint8_t>& use, const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o)
+{
+	TPoseSolution sol;
+	Eigen::Isometry3d T = T_init;
+	const double s2 = o.sigma_px * o.sigma_px;
+	Matrix6d H = Matrix6d::Zero();
+	double sumSq = 0;
+	int used = 0;
+	for (int it = 0; it <= o.max_iterations; it++)
+	{
+		H.setZero();
+		Vector6d g = Vector6d::Zero();
+		sumSq = 0;
+		used = 0;
+		for (size_t i = 0; i < c.size(); i++)
+		{
+			if (!use.empty() && !use[i]) continue;
+			Eigen::Vector3d r;
+			Matrix36d J;
+			if (!stereoResidual(calib, T, c[i].P_ref, c[i].z_curr, r, &J)) continue;
+			// Residual covariance: pixel noise plus the reference landmark's
+			// uncertainty seen through the projection (J_P = d r / d P_ref).
+			Eigen::Matrix3d S = s2 * Eigen::Matrix3d::Identity();
+			if (o.use_landmark_covariance)
+			{
+				const Eigen::Matrix3d JP = J.leftCols<3>() * T.linear();
+				S += JP * c[i].cov_ref * JP.transpose();
+			}
+			const Eigen::Matrix3d W = S.inverse();
+			const double e = std::sqrt(std::max(0.0, r.dot(W * r)));  // whitened norm
+			const double w = e <= o.huber_k ? 1.0 : o.huber_k / e;	// Huber IRLS weight
+			H += w * J.transpose() * W * J;
+			g += w * J.transpose() * W * r;
+			sumSq += r.squaredNorm();
+			used++;
+		}
+		if (used < 3) return sol;
+		if (it == o.max_iterations) break;
+		const Vector6d dx = H.ldlt().solve(-g);
+		if (!dx.allFinite()) return sol;
+		T = retractLeft(dx, T);
+		sol.iterations = it + 1;
+		if (dx.norm() < o.convergence) break;
+	}
+	// H is from the last linearisation (at the final T, or one step of size < convergence before it).
+	Eigen::FullPivLU<Matrix6d> lu(H);
+	if (!lu.isInvertible()) return sol;
+	const Matrix6d covCurrRef = lu.inverse();
+	sol.T_curr_ref = T;
+	sol.cov_T_ref_curr = invertCovariance(T, covCurrRef);
+	sol.rms_px = std::sqrt(sumSq / std::max(1, used) / 3.0);
+	sol.ok = sol.cov_T_ref_curr.allFinite();
+	return sol;
+}
+
+}  // namespace shadyloc::geometry

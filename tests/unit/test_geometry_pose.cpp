@@ -1,0 +1,195 @@
+/* Tests of the pose geometry: Jacobians against numeric differentiation,
+ * closed-form 3D-3D alignment, RANSAC with outliers, Gauss-Newton and its
+ * covariance. */
+#include <shadyloc/geometry/PoseSolver.h>
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <random>
+
+using namespace shadyloc::geometry;
+
+namespace
+{
+TStereoCalib calib()
+{
+	TStereoCalib c;
+	c.fx = c.fy = 400;
+	c.cx = 256;
+	c.cy = 192;
+	c.cxR = 256;
+	c.baseline = 0.12;
+	return c;
+}
+Eigen::Isometry3d somePose()
+{
+	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+	T.linear() = (Eigen::AngleAxisd(0.1, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(-0.05, Eigen::Vector3d::UnitX()))
+					 .toRotationMatrix();
+	T.translation() = Eigen::Vector3d(0.2, -0.05, 0.5);
+	return T;
+}
+
+/** Landmarks in front of the reference camera, and their noisy measurements
+ * from the current camera (T_curr_ref); `outliers` of them replaced by junk. */
+std::vector<TStereoCorrespondence> makeProblem(
+	const Eigen::Isometry3d& T_curr_ref, int n, int outliers, double noise_px, uint32_t seed)
+{
+	std::mt19937 rng(seed);
+	std::uniform_real_distribution<double> ux(-4, 4), uy(-2, 2), uz(3, 25), uo(-60, 60);
+	std::normal_distribution<double> nz(0, noise_px);
+	const TStereoCalib c = calib();
+	std::vector<TStereoCorrespondence> out;
+	while (static_cast<int>(out.size()) < n)
+	{
+		TStereoCorrespondence k;
+		k.P_ref = Eigen::Vector3d(ux(rng), uy(rng), uz(rng));
+		const Eigen::Vector3d p = T_curr_ref * k.P_ref;
+		if (p.z() < 1) continue;
+		k.z_curr = c.project(p) + Eigen::Vector3d(nz(rng), nz(rng), nz(rng));
+		if (static_cast<int>(out.size()) < outliers) k.z_curr += Eigen::Vector3d(uo(rng), uo(rng), 0);
+		if (!c.triangulate(k.z_curr.x(), k.z_curr.y(), k.z_curr.z(), k.P_curr)) continue;
+		out.push_back(k);
+	}
+	return out;
+}
+double transErr(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B)
+{
+	return (A.translation() - B.translation()).norm();
+}
+double rotErrDeg(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B)
+{
+	return Eigen::AngleAxisd(A.linear().transpose() * B.linear()).angle() * 180 / M_PI;
+}
+}  // namespace
+
+TEST(GeometryPose, ResidualJacobianMatchesNumeric)
+{
+	const TStereoCalib c = calib();
+	const Eigen::Isometry3d T = somePose();
+	const Eigen::Vector3d P(0.8, -0.3, 5.0), z(300, 180, 290);
+	Eigen::Vector3d r;
+	Matrix36d J;
+	ASSERT_TRUE(stereoResidual(c, T, P, z, r, &J));
+	const double h = 1e-6;
+	for (int k = 0; k < 6; k++)
+	{
+		Vector6d d = Vector6d::Zero();
+		d(k) = h;
+		Eigen::Vector3d rp, rm;
+		ASSERT_TRUE(stereoResidual(c, retractLeft(d, T), P, z, rp));
+		ASSERT_TRUE(stereoResidual(c, retractLeft(-d, T), P, z, rm));
+		const Eigen::Vector3d num = (rp - rm) / (2 * h);
+		// Central differences on ~100 px/m quantities: 1e-4 relative is numeric noise.
+		EXPECT_LT((num - J.col(k)).norm(), 1e-4 * std::max(1.0, num.norm())) << "column " << k;
+	}
+}
+
+TEST(GeometryPose, CovarianceInversionMatchesSampling)
+{
+	// Cov(T^-1) from the adjoint, against the spread of sampled inverses.
+	const Eigen::Isometry3d T = somePose();
+	Matrix6d C = Matrix6d::Zero();
+	C.diagonal() << 1e-4, 2e-4, 4e-4, 1e-5, 3e-5, 2e-5;
+	const Matrix6d Cinv = invertCovariance(T, C);
+	std::mt19937 rng(5);
+	std::normal_distribution<double> n01;
+	const Eigen::LLT<Matrix6d> L(C);
+	Matrix6d S = Matrix6d::Zero();
+	const int N = 20000;
+	const Eigen::Isometry3d Ti = T.inverse();
+	for (int i = 0; i < N; i++)
+	{
+		Vector6d w;
+		for (int k = 0; k < 6; k++) w(k) = n01(rng);
+		const Eigen::Isometry3d Ts = retractLeft(L.matrixL() * w, T).inverse();
+		// xi with Ts = retract(xi, Ti): rotation part from R_s Ri^T, translation t_s - dR t_i.
+		const Eigen::Matrix3d dR = Ts.linear() * Ti.linear().transpose();
+		const Eigen::AngleAxisd aa(dR);
+		Vector6d xi;
+		xi.tail<3>() = aa.angle() * aa.axis();
+		xi.head<3>() = Ts.translation() - dR * Ti.translation();
+		S += xi * xi.transpose();
+	}
+	S /= N;
+	// Sampling error of a variance estimate with N = 20000 is ~1 %; 5 % of the
+	// largest entry bounds it with margin and still catches a wrong adjoint.
+	EXPECT_LT((S - Cinv).cwiseAbs().maxCoeff(), 0.05 * Cinv.cwiseAbs().maxCoeff());
+}
+
+TEST(GeometryPose, RigidTransformIsExactAndRejectsCollinear)
+{
+	const Eigen::Isometry3d T = somePose();
+	std::vector<Eigen::Vector3d> s = {{0, 0, 5}, {1, 0, 6}, {0, 1, 7}, {2, -1, 9}}, d;
+	for (const auto& p : s) d.push_back(T * p);
+	Eigen::Isometry3d E;
+	ASSERT_TRUE(rigidTransform3D(s, d, E));
+	EXPECT_LT(transErr(E, T), 1e-9);
+	EXPECT_LT(rotErrDeg(E, T), 1e-6);
+	std::vector<Eigen::Vector3d> line = {{0, 0, 1}, {0, 0, 2}, {0, 0, 3}};
+	EXPECT_FALSE(rigidTransform3D(line, line, E));
+}
+
+TEST(GeometryPose, RansacAndSolverRecoverPoseDespiteOutliers)
+{
+	const Eigen::Isometry3d T = somePose();
+	// 200 correspondences, 30 % outliers, 0.5 px noise.
+	const auto c = makeProblem(T, 200, 60, 0.5, 11);
+	TRansacOptions ro;
+	const auto rs = ransacStereoPose(calib(), c, ro);
+	ASSERT_TRUE(rs.ok);
+	int falseIn = 0, trueIn = 0;
+	for (int i = 0; i < 200; i++) (i < 60 ? falseIn : trueIn) += rs.inlier[i];
+	// Outliers are shifted by up to 60 px; a few may land within 2 px by chance.
+	EXPECT_LE(falseIn, 3);
+	EXPECT_GE(trueIn, 130);	 // 2 px bound on 0.5 px noise (3-vector norm): ~99 % of 140
+	TPoseSolverOptions so;
+	so.use_landmark_covariance = false;	 // these landmarks are exact
+	const auto sol = solveStereoPose(calib(), c, rs.inlier, rs.T_curr_ref, so);
+	ASSERT_TRUE(sol.ok);
+	// 140 points at 3-25 m with 0.5 px noise: the pose is good to a few mm / 0.05 deg.
+	EXPECT_LT(transErr(sol.T_curr_ref, T), 0.01);
+	EXPECT_LT(rotErrDeg(sol.T_curr_ref, T), 0.05);
+	EXPECT_NEAR(sol.rms_px, 0.5, 0.1);
+}
+
+TEST(GeometryPose, CovarianceMatchesMonteCarloSpread)
+{
+	// Solve the same geometry under 200 noise draws: the spread of the
+	// estimates must agree with the reported covariance.
+	const Eigen::Isometry3d T = somePose();
+	TPoseSolverOptions so;
+	so.use_landmark_covariance = false;
+	so.sigma_px = 0.5;
+	so.huber_k = 100;  // plain least squares: the covariance formula assumes it
+	Matrix6d S = Matrix6d::Zero(), Cmean = Matrix6d::Zero();
+	const int N = 200;
+	const Eigen::Isometry3d Ti = T.inverse();
+	for (int i = 0; i < N; i++)
+	{
+		const auto c = makeProblem(T, 80, 0, 0.5, 100 + i);
+		const auto sol = solveStereoPose(calib(), c, {}, T, so);
+		ASSERT_TRUE(sol.ok);
+		const Eigen::Isometry3d E = sol.T_curr_ref.inverse();  // the covariance is of T_ref_curr
+		const Eigen::Matrix3d dR = E.linear() * Ti.linear().transpose();
+		const Eigen::AngleAxisd aa(dR);
+		Vector6d xi;
+		xi.tail<3>() = aa.angle() * aa.axis();
+		xi.head<3>() = E.translation() - dR * Ti.translation();
+		S += xi * xi.transpose();
+		Cmean += sol.cov_T_ref_curr;
+	}
+	S /= N;
+	Cmean /= N;
+	// Each problem has different landmarks, so compare the mean covariance.
+	// With N = 200 a variance estimate has ~10 % standard error: accept the
+	// ratio of diagonals within [0.6, 1.6].
+	for (int k = 0; k < 6; k++)
+	{
+		const double ratio = S(k, k) / Cmean(k, k);
+		EXPECT_GT(ratio, 0.6) << "axis " << k;
+		EXPECT_LT(ratio, 1.6) << "axis " << k;
+	}
+}
