@@ -1,4 +1,5 @@
 /* ShadyLoc — trajectory error metrics. */
+#include <shadyloc/datasets/Tum.h>
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/geometry/PoseSolver.h>
 #include <shadyloc/io/AtomicFile.h>
@@ -12,30 +13,16 @@
 
 namespace shadyloc::eval
 {
+// TUM parsing and writing live in datasets/Tum; here only the conversion
+// between MRPT poses and the Eigen isometries the metrics use.
 Trajectory readTum(const std::string& path)
 {
-	std::ifstream f(path);
-	if (!f) throw std::runtime_error("cannot open trajectory file '" + path + "'");
 	Trajectory out;
-	std::string line;
-	int ln = 0;
-	while (std::getline(f, line))
+	for (const auto& p : datasets::readTum(path))
 	{
-		ln++;
-		const auto p = line.find_first_not_of(" \t\r");
-		if (p == std::string::npos || line[p] == '#') continue;
-		std::istringstream is(line);
-		double t, x, y, z, qx, qy, qz, qw;
-		if (!(is >> t >> x >> y >> z >> qx >> qy >> qz >> qw))
-			throw std::runtime_error(
-				path + ":" + std::to_string(ln) + ": expected 'timestamp tx ty tz qx qy qz qw'");
-		Eigen::Quaterniond q(qw, qx, qy, qz);
-		if (!(q.norm() > 0.5 && q.norm() < 1.5))
-			throw std::runtime_error(path + ":" + std::to_string(ln) + ": quaternion is not unit");
 		TStampedPose s;
-		s.t = t;
-		s.T.linear() = q.normalized().toRotationMatrix();
-		s.T.translation() = Eigen::Vector3d(x, y, z);
+		s.t = p.t;
+		s.T.matrix() = p.pose.getHomogeneousMatrixVal<mrpt::math::CMatrixDouble44>().asEigen();
 		out.push_back(s);
 	}
 	std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
@@ -44,19 +31,14 @@ Trajectory readTum(const std::string& path)
 
 void writeTum(const std::string& path, const Trajectory& traj)
 {
-	io::writeAtomically(path, [&](const std::string& tmp) {
-		std::ofstream f(tmp);
-		if (!f) throw std::runtime_error("cannot write '" + tmp + "'");
-		f << "# timestamp tx ty tz qx qy qz qw\n" << std::setprecision(9);
-		for (const auto& s : traj)
-		{
-			const Eigen::Quaterniond q(s.T.linear());
-			const auto& t = s.T.translation();
-			f << std::fixed << std::setprecision(6) << s.t << std::setprecision(9) << ' ' << t.x() << ' '
-			  << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' ' << q.z() << ' ' << q.w() << '\n';
-		}
-		if (!f) throw std::runtime_error("write error on '" + tmp + "'");
-	});
+	datasets::TTrajectory out;
+	for (const auto& s : traj)
+	{
+		mrpt::math::CMatrixDouble44 m;
+		m.asEigen() = s.T.matrix();
+		out.push_back({s.t, mrpt::poses::CPose3D(m)});
+	}
+	datasets::writeTum(path, out);
 }
 
 std::vector<std::pair<size_t, size_t>> associate(const Trajectory& gt, const Trajectory& est, double maxDt)

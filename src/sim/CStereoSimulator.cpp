@@ -1,4 +1,5 @@
 /* ShadyLoc simulator — rendering, exposure, noise, rawlog output. */
+#include <shadyloc/datasets/Tum.h>
 #include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/sim/CStereoSimulator.h>
@@ -349,10 +350,7 @@ void CStereoSimulator::generate(const std::string& rawlogPath, const std::string
 	const int n = frames > 0 ? frames : m_trav.frames;
 	m_prevGain = 0;
 	io::RawlogWriter writer(rawlogPath);
-	std::ostringstream tum;
-	tum << "# ground truth of " << std::filesystem::path(rawlogPath).filename().string() << " (traversal " << m_trav.name
-		<< "): T_world_left, pose of the LEFT camera (z forward, x right, y down) in the world (x east, y north, z up)\n"
-		<< "# timestamp tx ty tz qx qy qz qw\n";
+	datasets::TTrajectory groundTruth;
 	const auto t0 = std::chrono::steady_clock::now();
 	// Compressing and writing frame i (~20 ms, one thread) overlaps with
 	// rendering frame i+1; at most one write is in flight (the writer is not
@@ -364,10 +362,7 @@ void CStereoSimulator::generate(const std::string& rawlogPath, const std::string
 		auto obs = makeObservation(f);
 		if (pending.valid()) pending.get();
 		pending = std::async(std::launch::async, [&writer, obs] { writer.write(*obs); });
-		const mrpt::poses::CPose3DQuat q(f.T_world_left);
-		tum << std::fixed << std::setprecision(6) << f.timestamp << " " << q.x() << " " << q.y() << " " << q.z()
-			<< " " << std::setprecision(9) << q.quat().x() << " " << q.quat().y() << " " << q.quat().z() << " "
-			<< q.quat().r() << "\n";
+		groundTruth.push_back({f.timestamp, f.T_world_left});
 		if (onFrame) onFrame(f);
 		const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 		MRPT_LOG_THROTTLE_INFO_STREAM(
@@ -375,13 +370,11 @@ void CStereoSimulator::generate(const std::string& rawlogPath, const std::string
 							 << " frames/s)");
 	}
 	if (pending.valid()) pending.get();
-	io::writeAtomically(tumPath, [&](const std::string& tmp) {
-		std::ofstream out(tmp);
-		if (!out) throw std::runtime_error("'" + tumPath + "': cannot write ground truth");
-		out << tum.str();
-		out.close();
-		if (!out) throw std::runtime_error("'" + tumPath + "': write failed");
-	});
+	datasets::writeTum(
+		tumPath, groundTruth,
+		"ground truth of " + std::filesystem::path(rawlogPath).filename().string() + " (traversal " + m_trav.name +
+			"): T_world_left, pose of the LEFT camera (z forward, x right, y down) in the world (x east, y north, "
+			"z up)");
 	try
 	{
 		writer.commit();

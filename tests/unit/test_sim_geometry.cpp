@@ -4,6 +4,7 @@
 #include "../support/TestSupport.h"
 
 #include <shadyloc/io/Rawlog.h>
+#include <shadyloc/datasets/Tum.h>
 #include <shadyloc/sim/CStereoSimulator.h>
 
 #include <gtest/gtest.h>
@@ -27,24 +28,6 @@ TSimOptions smallOptions(int w, int h)
 	o.camera.width = w;
 	o.camera.height = h;
 	return o;
-}
-
-/** TUM lines (comments skipped): timestamp, T_world_left. */
-std::vector<std::pair<double, mrpt::poses::CPose3D>> readTum(const std::string& path)
-{
-	std::ifstream in(path);
-	std::vector<std::pair<double, mrpt::poses::CPose3D>> out;
-	std::string line;
-	while (std::getline(in, line))
-	{
-		if (line.empty() || line[0] == '#') continue;
-		std::istringstream is(line);
-		double t, x, y, z, qx, qy, qz, qw;
-		is >> t >> x >> y >> z >> qx >> qy >> qz >> qw;
-		out.emplace_back(
-			t, mrpt::poses::CPose3D(mrpt::poses::CPose3DQuat(x, y, z, mrpt::math::CQuaternionDouble(qw, qx, qy, qz))));
-	}
-	return out;
 }
 
 /** Centroid of purple (marker-coloured) pixels within radius r of (u, v). */
@@ -100,7 +83,7 @@ TEST(SimGeometry, MarkersProjectWhereGroundTruthSays)
 	CStereoSimulator sim(o);
 	sim.generate(dir + "/g.rawlog", dir + "/g.tum");
 
-	const auto tum = readTum(dir + "/g.tum");
+	const auto tum = shadyloc::datasets::readTum(dir + "/g.tum");
 	ASSERT_EQ(tum.size(), 6u);
 	shadyloc::io::RawlogReader reader(dir + "/g.rawlog");
 	mrpt::obs::CObservationStereoImages::Ptr obs;
@@ -111,7 +94,7 @@ TEST(SimGeometry, MarkersProjectWhereGroundTruthSays)
 		obs = std::dynamic_pointer_cast<mrpt::obs::CObservationStereoImages>(o2);
 		ASSERT_TRUE(obs);
 	}
-	EXPECT_NEAR(mrpt::Clock::toDouble(obs->timestamp), tum[kFrame].first, 1e-4);
+	EXPECT_NEAR(mrpt::Clock::toDouble(obs->timestamp), tum[kFrame].t, 1e-4);
 	const auto& K = obs->leftCamera;
 	const double b = obs->rightCameraPose.x();
 	EXPECT_NEAR(b, 0.12, 1e-9);
@@ -119,7 +102,7 @@ TEST(SimGeometry, MarkersProjectWhereGroundTruthSays)
 	const cv::Mat right = obs->imageRight.asCvMat<cv::Mat>(mrpt::img::SHALLOW_COPY);
 	ASSERT_EQ(left.type(), CV_8UC3);
 
-	const mrpt::poses::CPose3D T_world_left = tum[kFrame].second;
+	const mrpt::poses::CPose3D T_world_left = tum[kFrame].pose;
 	// The renderer's own material labels, rendered from the pose read back
 	// from the TUM file: free of the shading of the marker (its shadowed
 	// lower half is darker, which biases the colour detection below by a
