@@ -2,7 +2,7 @@
  * offscreen through MRPT's 3D scene (no display needed). */
 #include "Command.h"
 
-#include <shadyloc/datasets/Tum.h>
+#include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/render/TrajectorySnapshot.h>
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
@@ -23,6 +23,9 @@ int run(int argc, char** argv)
 	TCLAP::ValueArg<std::string> title("", "title", "title text", false, "", "text", cmd);
 	TCLAP::ValueArg<std::string> up(
 		"", "up", "axis out of the picture: x, y (camera frames), z, or a (auto)", false, "a", "axis", cmd);
+	TCLAP::SwitchArg align(
+		"", "align", "align every trajectory to the first (SE(3), no scale, by timestamps), "
+		"e.g. a VO estimate to its ground truth", cmd);
 	TCLAP::ValueArg<unsigned> width("", "width", "image width [px]", false, 1000, "px", cmd);
 	TCLAP::ValueArg<unsigned> height("", "height", "image height [px]", false, 800, "px", cmd);
 	cmd.parse(argc, argv);
@@ -30,6 +33,7 @@ int run(int argc, char** argv)
 	static const mrpt::img::TColor palette[] = {
 		{0, 0, 0}, {215, 40, 40}, {30, 90, 210}, {40, 160, 60}, {230, 140, 0}, {140, 60, 170}};
 	std::vector<shadyloc::render::TrajectoryLayer> layers;
+	shadyloc::eval::Trajectory reference;  // the first trajectory, for --align
 	for (const auto& spec : trajs.getValue())
 	{
 		auto colon = spec.rfind(':');
@@ -39,7 +43,21 @@ int run(int argc, char** argv)
 		shadyloc::render::TrajectoryLayer l;
 		l.name = name;
 		l.colour = palette[layers.size() % std::size(palette)];
-		for (const auto& p : shadyloc::datasets::readTum(file)) l.points.push_back({p.pose.x(), p.pose.y(), p.pose.z()});
+		const auto traj = shadyloc::eval::readTum(file);
+		Eigen::Isometry3d T_ref_this = Eigen::Isometry3d::Identity();
+		if (align.getValue() && !reference.empty())
+		{
+			const auto err = shadyloc::eval::computeErrors(reference, traj);
+			if (err.matched < 3)
+				throw std::runtime_error("'" + file + "': fewer than 3 poses share timestamps with the first trajectory: cannot --align");
+			T_ref_this = err.T_gt_est;
+		}
+		if (reference.empty()) reference = traj;
+		for (const auto& p : traj)
+		{
+			const Eigen::Vector3d x = T_ref_this * p.T.translation();
+			l.points.push_back({x.x(), x.y(), x.z()});
+		}
 		if (l.points.size() < 2)
 			throw std::runtime_error("'" + file + "': fewer than two poses to draw");
 		layers.push_back(l);

@@ -74,3 +74,39 @@ TEST(RenderSnapshot, AppRendersTumFilesAndRejectsBadOnes)
 	EXPECT_NE(out.find("bad.tum"), std::string::npos) << out;
 	EXPECT_FALSE(std::filesystem::exists(dir + "/b.png"));
 }
+
+// --align draws an estimate in the first trajectory's frame: a copy of the
+// ground truth moved by a rigid transform then lies exactly on it (the red
+// copy, drawn on top, hides the black truth), and not without --align.
+TEST(RenderSnapshot, AppAlignsEstimatesToTheFirstTrajectory)
+{
+	const auto dir = shadyloc::test::tempDir("render_align");
+	{
+		std::ofstream gt(dir + "/gt.tum"), moved(dir + "/moved.tum");
+		for (int i = 0; i < 40; i++)
+		{
+			const double x = i, y = 0.05 * i * i;
+			gt << i << " " << x << " " << y << " 0 0 0 0 1\n";
+			// rotated 90 deg about z (quaternion (0,0,s,s)) and shifted
+			moved << i << " " << -y + 5 << " " << x - 3 << " 2 0 0 0.7071067812 0.7071067812\n";
+		}
+	}
+	auto blackPixels = [&](const std::string& extra) {
+		std::string out;
+		EXPECT_EQ(shadyloc::test::runCommand(shadyloc::test::appPath() + " render-traj --width 300 --height 200 -t " + dir +
+											  "/gt.tum -t " + dir + "/moved.tum -o " + dir + "/a.png " + extra, &out), 0)
+			<< out;
+		const cv::Mat img = cv::imread(dir + "/a.png");
+		int n = 0;
+		for (int y = 40; y < img.rows; y++)	// below the legend
+			for (int x = 0; x < img.cols; x++)
+			{
+				const auto p = img.at<cv::Vec3b>(y, x);
+				n += p[0] < 60 && p[1] < 60 && p[2] < 60;
+			}
+		return n;
+	};
+	const int aligned = blackPixels("--align"), unaligned = blackPixels("");
+	EXPECT_LT(aligned, 20) << "ground truth should be hidden under the aligned copy";
+	EXPECT_GT(unaligned, 200);
+}
