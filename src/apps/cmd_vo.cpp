@@ -91,6 +91,10 @@ int run(int argc, char** argv)
 	vopt.loadFromConfigFile(*cfg, "vo");
 	features::TStereoFeatureOptions fopt;
 	fopt.loadFromConfigFile(*cfg, "features");
+	// Per-channel overrides: the invariant image has less contrast and more
+	// pixel noise than the mono one (config/vo.ini: [features.invariant]).
+	const std::string chSection = "features." + vo::toString(conv.channel());
+	if (cfg->sectionExists(chSection)) fopt.loadFromConfigFile(*cfg, chSection);
 	vo::StereoVO vo(vopt, fopt);
 	vo.setMinLoggingLevel(quiet.getValue() ? mrpt::system::LVL_ERROR : mrpt::system::LVL_WARN);
 

@@ -82,8 +82,8 @@ struct TStereoFeatureOptions : public mrpt::config::CLoadableOptions
 	int fast_threshold = 12;  //!< FAST intensity threshold [grey levels]
 	int grid_cols = 8;	//!< buckets across the image
 	int grid_rows = 6;	//!< buckets down the image
-	int max_per_cell = 20;	//!< strongest left corners kept per bucket
-	int max_per_cell_right = 60;  //!< per bucket in the right image (more: matches must be among them)
+	int max_per_cell = 40;	//!< strongest left corners kept per bucket
+	int max_per_cell_right = 150;  //!< per bucket in the right image (more: matches must be among them)
 	double min_disparity = 1.0;	 //!< smallest true disparity D = fx b / Z searched [px]
 	double max_disparity = 96.0;  //!< largest true disparity searched [px]
 	int row_tolerance = 1;	//!< right corners within +-this many rows are candidates [px]
@@ -100,6 +100,11 @@ double min_zncc_shifted = 0.5;
 	uint32_t brief_seed = 0x5ad710c;  //!< BRIEF test pattern seed (maps and live runs must agree)
 	double sigma_px = 0.5;	//!< pixel noise of uL, v, uR for landmark covariances [px]
 	double max_depth = 80.0;  //!< landmarks farther than this are dropped [m]
+	/** Gaussian pre-smoothing of both images before detection, stereo and
+	 * patches (0 = off) [px]. Pixel noise that is independent in the two eyes
+	 * (e.g. the invariant image's log-ratio noise) makes FAST fire on noise and
+	 * breaks the stereo correlation; smoothing trades a little localisation for that. */
+	double presmooth_sigma = 0.0;
 
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
