@@ -89,12 +89,8 @@ int run(int argc, char** argv)
 	const auto conv = vo::ChannelConverter::FromConfig(*cfg, channel.getValue());
 	vo::TStereoVOOptions vopt;
 	vopt.loadFromConfigFile(*cfg, "vo");
-	features::TStereoFeatureOptions fopt;
-	fopt.loadFromConfigFile(*cfg, "features");
-	// Per-channel overrides: the invariant image has less contrast and more
-	// pixel noise than the mono one (config/vo.ini: [features.invariant]).
-	const std::string chSection = "features." + vo::toString(conv.channel());
-	if (cfg->sectionExists(chSection)) fopt.loadFromConfigFile(*cfg, chSection);
+	// [features], then the channel's overrides ([features.invariant]).
+	const features::TStereoFeatureOptions fopt = vo::featureOptionsFor(*cfg, conv.channel());
 	vo::StereoVO vo(vopt, fopt);
 	vo.setMinLoggingLevel(quiet.getValue() ? mrpt::system::LVL_ERROR : mrpt::system::LVL_WARN);
 

@@ -82,8 +82,8 @@ struct TStereoFeatureOptions : public mrpt::config::CLoadableOptions
 	int fast_threshold = 12;  //!< FAST intensity threshold [grey levels]
 	int grid_cols = 8;	//!< buckets across the image
 	int grid_rows = 6;	//!< buckets down the image
-	int max_per_cell = 40;	//!< strongest left corners kept per bucket
-	int max_per_cell_right = 150;  //!< per bucket in the right image (more: matches must be among them)
+	int max_per_cell = 20;	//!< strongest left corners kept per bucket
+	int max_per_cell_right = 60;  //!< per bucket in the right image (more: matches must be among them)
 	double min_disparity = 1.0;	 //!< smallest true disparity D = fx b / Z searched [px]
 	double max_disparity = 96.0;  //!< largest true disparity searched [px]
 	int row_tolerance = 1;	//!< right corners within +-this many rows are candidates [px]
