@@ -106,7 +106,7 @@ struct TStereoVOOptions : public mrpt::config::CLoadableOptions
 	double ransac_threshold_px = 4.0;  //!< RANSAC inlier bound on |(duL, dv, duR)| [px]
 	int ransac_iterations = 200;  //!< RANSAC upper bound
 	double sigma_px = 0.5;	//!< measurement noise for the solver [px]
-	double huber_k = 2.0;  //!< Huber threshold [sigmas]
+	double huber_k = 1.0;  //!< Huber threshold [sigmas]
 	double kf_translation = 1.0;  //!< new keyframe beyond this distance from the keyframe [m]
 	double kf_rotation_deg = 10.0;	//!< ... or this rotation [deg]
 	double kf_min_tracked_fraction = 0.35;	//!< ... or when inliers / keyframe landmarks fall below this
