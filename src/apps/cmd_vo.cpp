@@ -89,8 +89,8 @@ int run(int argc, char** argv)
 	const auto conv = vo::ChannelConverter::FromConfig(*cfg, channel.getValue());
 	vo::TStereoVOOptions vopt;
 	vopt.loadFromConfigFile(*cfg, "vo");
-	features::TStereoFeatureOptions fopt;
-	fopt.loadFromConfigFile(*cfg, "features");
+	// [features], then the channel's overrides ([features.invariant]).
+	const features::TStereoFeatureOptions fopt = vo::featureOptionsFor(*cfg, conv.channel());
 	vo::StereoVO vo(vopt, fopt);
 	vo.setMinLoggingLevel(quiet.getValue() ? mrpt::system::LVL_ERROR : mrpt::system::LVL_WARN);
 

@@ -4,6 +4,7 @@
 #include <mrpt/config/CConfigFileBase.h>
 
 #include <opencv2/features2d.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <chrono>
@@ -43,6 +44,7 @@ void TStereoFeatureOptions::loadFromConfigFile(
 	brief_seed = static_cast<uint32_t>(c.read_uint64_t(s, "brief_seed", brief_seed));
 	MRPT_LOAD_CONFIG_VAR(sigma_px, double, c, s);
 	MRPT_LOAD_CONFIG_VAR(max_depth, double, c, s);
+	MRPT_LOAD_CONFIG_VAR(presmooth_sigma, double, c, s);
 	try
 	{
 		validate();
@@ -71,7 +73,8 @@ void TStereoFeatureOptions::dumpToTextStream(std::ostream& o) const
 	  << "brief_patch_size = " << brief_patch_size << "   ; BRIEF patch side [px]\n"
 	  << "brief_seed = " << brief_seed << "   ; BRIEF pattern seed\n"
 	  << "sigma_px = " << sigma_px << "   ; pixel noise for landmark covariance [px]\n"
-	  << "max_depth = " << max_depth << "   ; farthest landmark kept [m]\n";
+	  << "max_depth = " << max_depth << "   ; farthest landmark kept [m]\n"
+	  << "presmooth_sigma = " << presmooth_sigma << "   ; Gaussian pre-smoothing, 0 = off [px]\n";
 }
 
 void TStereoFeatureOptions::validate() const
@@ -87,6 +90,7 @@ void TStereoFeatureOptions::validate() const
 	if (!(max_ambiguity > 0 && max_ambiguity <= 1)) bad("max_ambiguity must be in (0,1]");
 	if (!(sigma_px > 0)) bad("sigma_px must be > 0");
 	if (!(max_depth > 0)) bad("max_depth must be > 0");
+	if (!(presmooth_sigma >= 0 && presmooth_sigma <= 5)) bad("presmooth_sigma must be in [0,5]");
 }
 
 // ---- FAST on a grid -----------------------------------------------------------
@@ -219,16 +223,23 @@ TBest bestOnRow(
 }  // namespace
 
 void StereoFeatureExtractor::process(
-	const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib,
+	const cv::Mat& leftIn, const cv::Mat& rightIn, const geometry::TStereoCalib& calib,
 	TStereoFrame& out) const
 {
-	if (left.type() != CV_8UC1 || right.type() != CV_8UC1 || left.size() != right.size() || left.empty())
+	if (leftIn.type() != CV_8UC1 || rightIn.type() != CV_8UC1 || leftIn.size() != rightIn.size() ||
+		leftIn.empty())
 		throw std::invalid_argument(
 			"StereoFeatureExtractor: needs two non-empty CV_8UC1 images of equal size");
 	const auto& o = m_opts;
 	out.meas.clear();
-	out.left = left;
 	auto t0 = Clock::now();
+	cv::Mat left = leftIn, right = rightIn;
+	if (o.presmooth_sigma > 0)
+	{
+		cv::GaussianBlur(leftIn, left, cv::Size(), o.presmooth_sigma);
+		cv::GaussianBlur(rightIn, right, cv::Size(), o.presmooth_sigma);
+	}
+	out.left = left;  // what the patches come from: later frames correlate against this
 	const int r = o.patch_radius;
 	const int borderL = std::max({m_brief.radius() + 1, r + 4, kPatchSize / 2 + 3});
 	const int borderR = r + 3;

@@ -53,4 +53,14 @@ std::string ChannelConverter::asString() const
 	return m_channel == Channel::Mono ? "mono" : "invariant (" + m_params.asString() + ")";
 }
 
+features::TStereoFeatureOptions featureOptionsFor(
+	const mrpt::config::CConfigFileBase& cfg, Channel c, const std::string& base)
+{
+	features::TStereoFeatureOptions o;
+	o.loadFromConfigFile(cfg, base);
+	const std::string s = base + "." + toString(c);
+	if (cfg.sectionExists(s)) o.loadFromConfigFile(cfg, s);
+	return o;
+}
+
 }  // namespace shadyloc::vo

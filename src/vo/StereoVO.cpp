@@ -323,7 +323,7 @@ TFrameResult StereoVO::process(
 			for (int dy = -1; dy <= 1; dy++)
 				for (int dx = -1; dx <= 1; dx++)
 				{
-					c[dy + 1][dx + 1] = patchZncc(kf.meas[j].patch, left8, x + dx, y + dy);
+					c[dy + 1][dx + 1] = patchZncc(kf.meas[j].patch, fr.left, x + dx, y + dy);
 					if (c[dy + 1][dx + 1] > c[by + 1][bx + 1]) bx = dx, by = dy;
 				}
 			if (bx == 0 && by == 0)

@@ -100,6 +100,11 @@ double min_zncc_shifted = 0.5;
 	uint32_t brief_seed = 0x5ad710c;  //!< BRIEF test pattern seed (maps and live runs must agree)
 	double sigma_px = 0.5;	//!< pixel noise of uL, v, uR for landmark covariances [px]
 	double max_depth = 80.0;  //!< landmarks farther than this are dropped [m]
+	/** Gaussian pre-smoothing of both images before detection, stereo and
+	 * patches (0 = off) [px]. Pixel noise that is independent in the two eyes
+	 * (e.g. the invariant image's log-ratio noise) makes FAST fire on noise and
+	 * breaks the stereo correlation; smoothing trades a little localisation for that. */
+	double presmooth_sigma = 0.0;
 
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;

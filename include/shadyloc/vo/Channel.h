@@ -4,6 +4,7 @@
  * keys as the CFilterInvariant section of config/filters.ini). */
 #pragma once
 
+#include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/image/ColourTransforms.h>
 
 #include <mrpt/config/CConfigFileBase.h>
@@ -51,5 +52,13 @@ class ChannelConverter
 	image::ChannelOrder m_order;
 	std::shared_ptr<image::InvariantTransform> m_inv;
 };
+
+/** Feature options for channel c: section `base` ([features]), then the
+ * keys of `base.<channel>` ([features.invariant], [features.mono]) if that
+ * section exists override them. The invariant image has less contrast and more
+ * pixel noise than the mono one, so it usually wants its own FAST threshold
+ * and pre-smoothing. Throws std::invalid_argument naming the section at fault. */
+features::TStereoFeatureOptions featureOptionsFor(
+	const mrpt::config::CConfigFileBase& cfg, Channel c, const std::string& base = "features");
 
 }  // namespace shadyloc::vo

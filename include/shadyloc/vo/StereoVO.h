@@ -94,19 +94,19 @@ struct TFrameResult
 /** Options of StereoVO ([vo] in config/vo.ini). */
 struct TStereoVOOptions : public mrpt::config::CLoadableOptions
 {
-	double search_radius_px = 20;  //!< BRIEF search window around each predicted projection [px]
+	double search_radius_px = 40;  //!< BRIEF search window around each predicted projection [px]
 	double search_radius_lost_px = 80;	//!< window after a failure or when the first try finds too few [px]
-	int max_hamming = 60;  //!< largest BRIEF distance of a match [bits of 256]
-	double match_ratio = 0.85;	//!< best must be < ratio * second best distance in the window
-	double refine_min_zncc = 0.7;  //!< patch refinement must correlate this well, or the match is dropped
+	int max_hamming = 90;  //!< largest BRIEF distance of a match [bits of 256]
+	double match_ratio = 0.95;	//!< best must be < ratio * second best distance in the window
+	double refine_min_zncc = 0.5;  //!< patch refinement must correlate this well, or the match is dropped
 	int refine_radius = 2;	//!< patch refinement moves at most this far from the BRIEF match [px]
 	int min_stereo = 20;  //!< fewer stereo measurements: FewFeatures
 	int min_matches = 12;  //!< fewer matches to the keyframe: FewMatches
 	int min_inliers = 10;  //!< fewer inliers: FewInliers
-	double ransac_threshold_px = 2.0;  //!< RANSAC inlier bound on |(duL, dv, duR)| [px]
+	double ransac_threshold_px = 4.0;  //!< RANSAC inlier bound on |(duL, dv, duR)| [px]
 	int ransac_iterations = 200;  //!< RANSAC upper bound
 	double sigma_px = 0.5;	//!< measurement noise for the solver [px]
-	double huber_k = 2.0;  //!< Huber threshold [sigmas]
+	double huber_k = 1.0;  //!< Huber threshold [sigmas]
 	double kf_translation = 1.0;  //!< new keyframe beyond this distance from the keyframe [m]
 	double kf_rotation_deg = 10.0;	//!< ... or this rotation [deg]
 	double kf_min_tracked_fraction = 0.35;	//!< ... or when inliers / keyframe landmarks fall below this

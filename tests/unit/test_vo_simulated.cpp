@@ -1,0 +1,108 @@
+/* Stereo VO on a short sequence rendered by the shadow simulator (the
+ * realistic outdoor data: trees, buildings, shadows, sensor noise, auto
+ * exposure, ~0.8 m per frame): KITTI-style drift of both channels with the
+ * configuration made for the simulator's camera (config/vo_sim.ini). */
+#include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/sim/CStereoSimulator.h>
+#include <shadyloc/sim/SimOptions.h>
+#include <shadyloc/vo/Channel.h>
+#include <shadyloc/vo/StereoVO.h>
+
+#include "../support/TestSupport.h"
+
+#include <mrpt/config/CConfigFile.h>
+
+#include <cstdio>
+
+using namespace shadyloc;
+
+namespace
+{
+struct TSimSequence
+{
+	geometry::TStereoCalib calib;
+	std::vector<cv::Mat> left, right;  // colour, BGR, linear
+	eval::Trajectory gt;  // left camera in the world
+};
+
+/** Renders `frames` frames of one traversal at w x h (the default scene). */
+TSimSequence render(const std::string& traversal, int w, int h, int frames)
+{
+	auto o = sim::TSimOptions::FromFile(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
+	o.camera.width = w;
+	o.camera.height = h;
+	o.traversals = {o.traversal(traversal)};
+	sim::CStereoSimulator s(o);
+	s.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+	TSimSequence seq;
+	for (int i = 0; i < frames; i++)
+	{
+		const sim::TSimFrame f = s.renderFrame(i);
+		if (i == 0) seq.calib = geometry::TStereoCalib::FromObservation(*s.makeObservation(f));
+		seq.left.push_back(f.left);
+		seq.right.push_back(f.right);
+		const auto M = f.T_world_left.getHomogeneousMatrixVal<mrpt::math::CMatrixDouble44>();
+		eval::TStampedPose p;
+		p.t = f.timestamp;
+		p.T.matrix() = M.asEigen();
+		seq.gt.push_back(p);
+	}
+	return seq;
+}
+
+eval::TTrajectoryErrors runVO(const TSimSequence& seq, vo::Channel ch, size_t* tracked)
+{
+	mrpt::config::CConfigFile cfg(std::string(SHADYLOC_SOURCE_DIR) + "/config/vo_sim.ini");
+	const auto conv = vo::ChannelConverter::FromConfig(cfg, vo::toString(ch));
+	vo::TStereoVOOptions vopt;
+	vopt.loadFromConfigFile(cfg, "vo");
+	vo::StereoVO v(vopt, vo::featureOptionsFor(cfg, ch));
+	v.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+	eval::Trajectory est;
+	*tracked = 0;
+	for (size_t i = 0; i < seq.left.size(); i++)
+	{
+		cv::Mat l8, r8;
+		conv.convert(seq.left[i], l8);
+		conv.convert(seq.right[i], r8);
+		const auto r = v.process(l8, r8, seq.calib, seq.gt[i].t);
+		*tracked += vo::isTracked(r.status);
+		est.push_back({seq.gt[i].t, r.T_world_curr});
+	}
+	return eval::computeErrors(seq.gt, est);
+}
+}  // namespace
+
+// 30 frames (~20 m) of the noon and overcast traversals at the simulator's
+// default 512x384 (~4 s in Release; at 256x192 the disparities halve and the
+// drift roughly triples, so half size would test the resolution, not the VO).
+// On the 60-frame default dataset the same configuration measures mono
+// 0.26-1.86 % and invariant 2.3-5.4 % (docs/vo.md, "Simulator sequences").
+// Bounds: twice the mono goal (1 %) and 5/3 of the invariant goal (3 %): a
+// 20 m run averages fewer, shorter segments, so one bad step weighs more; the
+// run is deterministic (seeded renderer and RANSAC), so the margins do not
+// need to absorb randomness. Measured: noon 0.29 % / 4.43 %, overcast 0.86 % / 4.79 %.
+TEST(VOSimulated, ShortTraversalDriftBothChannels)
+{
+	for (const char* trav : {"noon", "overcast"})
+	{
+		const auto seq = render(trav, 512, 384, 30);
+		size_t trMono = 0, trInv = 0;
+		const auto em = runVO(seq, vo::Channel::Mono, &trMono);
+		const auto ei = runVO(seq, vo::Channel::Invariant, &trInv);
+		std::printf(
+			"[ sim VO ] %s 512x384, %.1f m: mono %.2f %% %.4f deg/m (%zu tracked), invariant %.2f %% "
+			"%.4f deg/m (%zu tracked)\n",
+			trav, em.path_length, em.kitti_trans_pct, em.kitti_rot_deg_per_m, trMono, ei.kitti_trans_pct,
+			ei.kitti_rot_deg_per_m, trInv);
+		EXPECT_GT(em.path_length, 15.0) << trav;  // the simulator really moved ~0.8 m per frame
+		// Mono: every frame tracked, drift < 2 %.
+		EXPECT_EQ(trMono, seq.left.size()) << trav;
+		EXPECT_LT(em.kitti_trans_pct, 2.0) << trav;
+		EXPECT_LT(em.kitti_rot_deg_per_m, 0.1) << trav;
+		// Invariant: lower contrast, noisier; at most a couple of untracked frames, drift < 5 %.
+		EXPECT_GE(trInv + 2, seq.left.size()) << trav;
+		EXPECT_LT(ei.kitti_trans_pct, 5.0) << trav;
+		EXPECT_LT(ei.kitti_rot_deg_per_m, 0.2) << trav;
+	}
+}
