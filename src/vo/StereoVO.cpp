@@ -319,13 +319,16 @@ TFrameResult StereoVO::process(
 		bool peak = false;
 		for (int step = 0; step <= o.refine_radius && inside(x, y); step++)
 		{
+			// All nine scores first, then the arg-max: comparing against the
+			// centre before it is computed read an uninitialised value (the
+			// run-to-run nondeterminism found with valgrind).
+			for (int dy = -1; dy <= 1; dy++)
+				for (int dx = -1; dx <= 1; dx++)
+					c[dy + 1][dx + 1] = patchZncc(kf.meas[j].patch, fr.left, x + dx, y + dy);
 			int bx = 0, by = 0;
 			for (int dy = -1; dy <= 1; dy++)
 				for (int dx = -1; dx <= 1; dx++)
-				{
-					c[dy + 1][dx + 1] = patchZncc(kf.meas[j].patch, fr.left, x + dx, y + dy);
 					if (c[dy + 1][dx + 1] > c[by + 1][bx + 1]) bx = dx, by = dy;
-				}
 			if (bx == 0 && by == 0)
 			{
 				peak = true;
