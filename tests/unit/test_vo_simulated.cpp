@@ -77,11 +77,15 @@ eval::TTrajectoryErrors runVO(const TSimSequence& seq, vo::Channel ch, size_t* t
 // default 512x384 (~4 s in Release; at 256x192 the disparities halve and the
 // drift roughly triples, so half size would test the resolution, not the VO).
 // On the 60-frame default dataset the same configuration measures mono
-// 0.26-1.86 % and invariant 2.3-5.4 % (docs/vo.md, "Simulator sequences").
-// Bounds: twice the mono goal (1 %) and 5/3 of the invariant goal (3 %): a
-// 20 m run averages fewer, shorter segments, so one bad step weighs more; the
-// run is deterministic (seeded renderer and RANSAC), so the margins do not
-// need to absorb randomness. Measured: noon 0.29 % / 4.43 %, overcast 0.86 % / 4.79 %.
+// 0.29-0.76 % and invariant 2.3-6.3 % (docs/vo.md, "Simulator sequences").
+// Mono: the goal itself (1 %): measured 0.26 % on both 20 m runs and at most
+// 0.76 % on the four 40-48 m traversals, so the bound fails on a real
+// regression (the per-step scale bias before far landmarks were dropped gave
+// 1.3-2.2 % on the long runs), not on noise: the run is deterministic (seeded
+// renderer and RANSAC, tested by VODeterminism). Invariant: the goal (3 %) is
+// not met on every full traversal yet, so 5/3 of it: a 20 m run averages
+// fewer, shorter segments and one bad step weighs more. Measured: noon
+// 0.26 % / 2.16 %, overcast 0.26 % / 2.29 %.
 TEST(VOSimulated, ShortTraversalDriftBothChannels)
 {
 	for (const char* trav : {"noon", "overcast"})
@@ -96,9 +100,9 @@ TEST(VOSimulated, ShortTraversalDriftBothChannels)
 			trav, em.path_length, em.kitti_trans_pct, em.kitti_rot_deg_per_m, trMono, ei.kitti_trans_pct,
 			ei.kitti_rot_deg_per_m, trInv);
 		EXPECT_GT(em.path_length, 15.0) << trav;  // the simulator really moved ~0.8 m per frame
-		// Mono: every frame tracked, drift < 2 %.
+		// Mono: every frame tracked, drift below the 1 % goal.
 		EXPECT_EQ(trMono, seq.left.size()) << trav;
-		EXPECT_LT(em.kitti_trans_pct, 2.0) << trav;
+		EXPECT_LT(em.kitti_trans_pct, 1.0) << trav;
 		EXPECT_LT(em.kitti_rot_deg_per_m, 0.1) << trav;
 		// Invariant: lower contrast, noisier; at most a couple of untracked frames, drift < 5 %.
 		EXPECT_GE(trInv + 2, seq.left.size()) << trav;
