@@ -54,9 +54,7 @@ eval::TTrajectoryErrors runVO(const TSimSequence& seq, vo::Channel ch, size_t* t
 {
 	mrpt::config::CConfigFile cfg(std::string(SHADYLOC_SOURCE_DIR) + "/config/vo_sim.ini");
 	const auto conv = vo::ChannelConverter::FromConfig(cfg, vo::toString(ch));
-	vo::TStereoVOOptions vopt;
-	vopt.loadFromConfigFile(cfg, "vo");
-	vo::StereoVO v(vopt, vo::featureOptionsFor(cfg, ch));
+	vo::StereoVO v(vo::voOptionsFor(cfg, ch), vo::featureOptionsFor(cfg, ch));
 	v.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	eval::Trajectory est;
 	*tracked = 0;
