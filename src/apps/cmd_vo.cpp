@@ -87,9 +87,8 @@ int run(int argc, char** argv)
 		throw std::runtime_error("input rawlog '" + in.getValue() + "' does not exist");
 
 	const auto conv = vo::ChannelConverter::FromConfig(*cfg, channel.getValue());
-	vo::TStereoVOOptions vopt;
-	vopt.loadFromConfigFile(*cfg, "vo");
-	// [features], then the channel's overrides ([features.invariant]).
+	// [vo] / [features], then the channel's overrides ([vo.mono], [features.invariant]).
+	const vo::TStereoVOOptions vopt = vo::voOptionsFor(*cfg, conv.channel());
 	const features::TStereoFeatureOptions fopt = vo::featureOptionsFor(*cfg, conv.channel());
 	vo::StereoVO vo(vopt, fopt);
 	vo.setMinLoggingLevel(quiet.getValue() ? mrpt::system::LVL_ERROR : mrpt::system::LVL_WARN);

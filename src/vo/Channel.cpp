@@ -63,4 +63,13 @@ features::TStereoFeatureOptions featureOptionsFor(
 	return o;
 }
 
+TStereoVOOptions voOptionsFor(const mrpt::config::CConfigFileBase& cfg, Channel c, const std::string& base)
+{
+	TStereoVOOptions o;
+	o.loadFromConfigFile(cfg, base);
+	const std::string s = base + "." + toString(c);
+	if (cfg.sectionExists(s)) o.loadFromConfigFile(cfg, s);
+	return o;
+}
+
 }  // namespace shadyloc::vo

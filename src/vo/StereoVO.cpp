@@ -97,6 +97,8 @@ void TStereoVOOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c
 	MRPT_LOAD_CONFIG_VAR(min_stereo, int, c, s);
 	MRPT_LOAD_CONFIG_VAR(min_matches, int, c, s);
 	MRPT_LOAD_CONFIG_VAR(min_inliers, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(near_min_disparity, double, c, s);
+	MRPT_LOAD_CONFIG_VAR(near_min_matches, int, c, s);
 	MRPT_LOAD_CONFIG_VAR(ransac_threshold_px, double, c, s);
 	MRPT_LOAD_CONFIG_VAR(ransac_iterations, int, c, s);
 	MRPT_LOAD_CONFIG_VAR(sigma_px, double, c, s);
@@ -130,6 +132,8 @@ void TStereoVOOptions::dumpToTextStream(std::ostream& o) const
 	  << "min_stereo = " << min_stereo << "\n"
 	  << "min_matches = " << min_matches << "\n"
 	  << "min_inliers = " << min_inliers << "\n"
+	  << "near_min_disparity = " << near_min_disparity << "   ; far landmarks left out of the solve when enough near ones, 0 = off [px]\n"
+	  << "near_min_matches = " << near_min_matches << "\n"
 	  << "ransac_threshold_px = " << ransac_threshold_px << "   ; [px]\n"
 	  << "ransac_iterations = " << ransac_iterations << "\n"
 	  << "sigma_px = " << sigma_px << "   ; [px]\n"
@@ -153,6 +157,8 @@ void TStereoVOOptions::validate() const
 	if (!(match_ratio > 0 && match_ratio <= 1)) bad("match_ratio must be in (0,1]");
 	if (refine_radius < 0 || refine_radius > 4) bad("refine_radius must be in [0,4]");
 	if (min_inliers < 3 || min_matches < min_inliers) bad("need 3 <= min_inliers <= min_matches");
+	if (!(near_min_disparity >= 0) || near_min_matches < min_matches)
+		bad("near_min_disparity must be >= 0 and near_min_matches >= min_matches");
 	if (!(ransac_threshold_px > 0) || ransac_iterations < 1) bad("ransac_threshold_px/iterations must be > 0");
 	if (!(sigma_px > 0) || !(huber_k > 0)) bad("sigma_px and huber_k must be > 0");
 	if (!(kf_translation > 0) || !(kf_rotation_deg > 0)) bad("kf_translation/kf_rotation_deg must be > 0");
@@ -319,13 +325,16 @@ TFrameResult StereoVO::process(
 		bool peak = false;
 		for (int step = 0; step <= o.refine_radius && inside(x, y); step++)
 		{
+			// All nine scores first, then the arg-max: comparing against the
+			// centre before it is computed read an uninitialised value (the
+			// run-to-run nondeterminism found with valgrind).
+			for (int dy = -1; dy <= 1; dy++)
+				for (int dx = -1; dx <= 1; dx++)
+					c[dy + 1][dx + 1] = patchZncc(kf.meas[j].patch, fr.left, x + dx, y + dy);
 			int bx = 0, by = 0;
 			for (int dy = -1; dy <= 1; dy++)
 				for (int dx = -1; dx <= 1; dx++)
-				{
-					c[dy + 1][dx + 1] = patchZncc(kf.meas[j].patch, fr.left, x + dx, y + dy);
 					if (c[dy + 1][dx + 1] > c[by + 1][bx + 1]) bx = dx, by = dy;
-				}
 			if (bx == 0 && by == 0)
 			{
 				peak = true;
@@ -346,6 +355,15 @@ TFrameResult StereoVO::process(
 		k.z_curr = Eigen::Vector3d(x + ox, y + oy, m.uR + du);
 		if (!calib.triangulate(k.z_curr.x(), k.z_curr.y(), k.z_curr.z(), k.P_curr)) continue;
 		corr.push_back(k);
+	}
+	if (o.near_min_disparity > 0)
+	{
+		// Near landmarks only, if there are enough of them (see the option).
+		const double fb = calib.fx * calib.baseline;
+		std::vector<geometry::TStereoCorrespondence> nearCorr;
+		for (const auto& k : corr)
+			if (fb / k.P_ref.z() >= o.near_min_disparity) nearCorr.push_back(k);
+		if (static_cast<int>(nearCorr.size()) >= o.near_min_matches) corr.swap(nearCorr);
 	}
 	res.tracked = corr.size();
 	res.ms.match = msSince(t0);

@@ -54,9 +54,7 @@ eval::TTrajectoryErrors runVO(const TSimSequence& seq, vo::Channel ch, size_t* t
 {
 	mrpt::config::CConfigFile cfg(std::string(SHADYLOC_SOURCE_DIR) + "/config/vo_sim.ini");
 	const auto conv = vo::ChannelConverter::FromConfig(cfg, vo::toString(ch));
-	vo::TStereoVOOptions vopt;
-	vopt.loadFromConfigFile(cfg, "vo");
-	vo::StereoVO v(vopt, vo::featureOptionsFor(cfg, ch));
+	vo::StereoVO v(vo::voOptionsFor(cfg, ch), vo::featureOptionsFor(cfg, ch));
 	v.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	eval::Trajectory est;
 	*tracked = 0;
@@ -77,11 +75,15 @@ eval::TTrajectoryErrors runVO(const TSimSequence& seq, vo::Channel ch, size_t* t
 // default 512x384 (~4 s in Release; at 256x192 the disparities halve and the
 // drift roughly triples, so half size would test the resolution, not the VO).
 // On the 60-frame default dataset the same configuration measures mono
-// 0.26-1.86 % and invariant 2.3-5.4 % (docs/vo.md, "Simulator sequences").
-// Bounds: twice the mono goal (1 %) and 5/3 of the invariant goal (3 %): a
-// 20 m run averages fewer, shorter segments, so one bad step weighs more; the
-// run is deterministic (seeded renderer and RANSAC), so the margins do not
-// need to absorb randomness. Measured: noon 0.29 % / 4.43 %, overcast 0.86 % / 4.79 %.
+// 0.30-0.86 % and invariant 2.3-6.3 % (docs/vo.md, "Simulator sequences").
+// Mono: the goal itself (1 %): measured 0.25-0.47 % on the 20 m runs and at most
+// 0.86 % on the four 40-48 m traversals, so the bound fails on a real
+// regression (the per-step scale bias before far landmarks were left out gave
+// 1.3-2.2 % on the long runs), not on noise: the run is deterministic (seeded
+// renderer and RANSAC, tested by VODeterminism). Invariant: the goal (3 %) is
+// not met on every full traversal yet, so 5/3 of it: a 20 m run averages
+// fewer, shorter segments and one bad step weighs more. Measured: noon
+// 0.25 % / 2.16 %, overcast 0.47 % / 2.29 %.
 TEST(VOSimulated, ShortTraversalDriftBothChannels)
 {
 	for (const char* trav : {"noon", "overcast"})
@@ -96,9 +98,9 @@ TEST(VOSimulated, ShortTraversalDriftBothChannels)
 			trav, em.path_length, em.kitti_trans_pct, em.kitti_rot_deg_per_m, trMono, ei.kitti_trans_pct,
 			ei.kitti_rot_deg_per_m, trInv);
 		EXPECT_GT(em.path_length, 15.0) << trav;  // the simulator really moved ~0.8 m per frame
-		// Mono: every frame tracked, drift < 2 %.
+		// Mono: every frame tracked, drift below the 1 % goal.
 		EXPECT_EQ(trMono, seq.left.size()) << trav;
-		EXPECT_LT(em.kitti_trans_pct, 2.0) << trav;
+		EXPECT_LT(em.kitti_trans_pct, 1.0) << trav;
 		EXPECT_LT(em.kitti_rot_deg_per_m, 0.1) << trav;
 		// Invariant: lower contrast, noisier; at most a couple of untracked frames, drift < 5 %.
 		EXPECT_GE(trInv + 2, seq.left.size()) << trav;

@@ -8,6 +8,7 @@
 
 #include "../support/TestSupport.h"
 
+#include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/serialization/CArchive.h>
 
@@ -59,12 +60,13 @@ struct TRun
 };
 
 /** Runs the VO on the sequence in one channel; `blank` frames get a flat grey pair. */
-TRun runVO(vo::Channel ch, const std::vector<int>& blank = {})
+TRun runVO(
+	vo::Channel ch, const std::vector<int>& blank = {}, const vo::TStereoVOOptions& opts = {})
 {
 	const auto& s = sequence();
 	// Synthetic colours are linear already: no linearisation.
 	const vo::ChannelConverter conv(ch);
-	vo::StereoVO vo;
+	vo::StereoVO vo(opts);
 	vo.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	TRun run;
 	for (int k = 0; k < kFrames; k++)
@@ -355,4 +357,54 @@ TEST(VOSynthetic, LongerRunAtBumblebeeResolution)
 	EXPECT_GT(vm.keyframes().size(), 10u);
 	EXPECT_LT(e1.kitti_trans_pct, 1.0);
 	EXPECT_LT(e2.kitti_trans_pct, 3.0);
+}
+
+TEST(VOSynthetic, NearLandmarkPreferenceTracksAndKeepsAccuracy)
+{
+	// near_min_disparity = 5 px: with f = 250 px and b = 0.2 m only landmarks
+	// nearer than 10 m enter the solve when >= 40 such matches exist (the
+	// corridor's walls give ~200 matches per frame, most of them near).
+	vo::TStereoVOOptions o;
+	o.near_min_disparity = 5;
+	o.near_min_matches = 40;
+	const TRun run = runVO(vo::Channel::Mono, {}, o);
+	const TRun all = runVO(vo::Channel::Mono);
+	size_t used = 0, usedAll = 0;
+	for (size_t k = 0; k < run.frames.size(); k++)
+	{
+		EXPECT_TRUE(vo::isTracked(run.frames[k].status)) << "frame " << k;
+		used += run.frames[k].tracked;
+		usedAll += all.frames[k].tracked;
+	}
+	// The option really removed far matches from the solve ...
+	EXPECT_LT(used, usedAll);
+	// ... and the result still meets the mono goal (see MonoTranslationalErrorBelowOnePercent).
+	const auto e = eval::computeErrors(sequence().gt, run.est);
+	printRun("mono near", run, e);
+	EXPECT_LT(e.kitti_trans_pct, 1.0);
+	EXPECT_LT(e.ate_rmse, 0.05);
+}
+
+TEST(VOSynthetic, PerChannelVOOptionsOverrideTheBaseSection)
+{
+	mrpt::config::CConfigFileMemory cfg(
+		"[vo]\nnear_min_disparity = 0\nmax_hamming = 70\n[vo.mono]\nnear_min_disparity = 3\n");
+	const auto m = vo::voOptionsFor(cfg, vo::Channel::Mono);
+	const auto i = vo::voOptionsFor(cfg, vo::Channel::Invariant);
+	EXPECT_EQ(m.near_min_disparity, 3.0);
+	EXPECT_EQ(i.near_min_disparity, 0.0);
+	EXPECT_EQ(m.max_hamming, 70);  // base keys reach both channels
+	EXPECT_EQ(i.max_hamming, 70);
+	// A bad value names the section and the option.
+	mrpt::config::CConfigFileMemory bad("[vo]\n[vo.mono]\nnear_min_matches = 2\n");
+	try
+	{
+		vo::voOptionsFor(bad, vo::Channel::Mono);
+		ADD_FAILURE() << "near_min_matches < min_matches accepted";
+	}
+	catch (const std::invalid_argument& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("[vo.mono]"), std::string::npos) << e.what();
+		EXPECT_NE(std::string(e.what()).find("near_min_matches"), std::string::npos) << e.what();
+	}
 }

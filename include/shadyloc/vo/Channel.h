@@ -5,6 +5,7 @@
 #pragma once
 
 #include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/vo/StereoVO.h>
 #include <shadyloc/image/ColourTransforms.h>
 
 #include <mrpt/config/CConfigFileBase.h>
@@ -60,5 +61,10 @@ class ChannelConverter
  * and pre-smoothing. Throws std::invalid_argument naming the section at fault. */
 features::TStereoFeatureOptions featureOptionsFor(
 	const mrpt::config::CConfigFileBase& cfg, Channel c, const std::string& base = "features");
+
+/** VO options for channel c, the same way: section `base` ([vo]), then the
+ * keys of `base.<channel>` ([vo.mono], [vo.invariant]) if present. */
+TStereoVOOptions voOptionsFor(
+	const mrpt::config::CConfigFileBase& cfg, Channel c, const std::string& base = "vo");
 
 }  // namespace shadyloc::vo

@@ -103,6 +103,14 @@ struct TStereoVOOptions : public mrpt::config::CLoadableOptions
 	int min_stereo = 20;  //!< fewer stereo measurements: FewFeatures
 	int min_matches = 12;  //!< fewer matches to the keyframe: FewMatches
 	int min_inliers = 10;  //!< fewer inliers: FewInliers
+	/** Pose from near landmarks when there are enough: keyframe landmarks with a
+	 * true disparity fx*b/Z below this are left out of RANSAC and the solve
+	 * when at least `near_min_matches` matches remain (0 = off) [px]. Far
+	 * landmarks constrain rotation but barely translation, and their measured
+	 * disparity can be biased (corners on depth discontinuities: the foreground
+	 * texture dominates the patch), which shortens every step (docs/vo.md). */
+	double near_min_disparity = 0.0;
+	int near_min_matches = 40;	//!< matches needed to drop the far ones (else all are used)
 	double ransac_threshold_px = 4.0;  //!< RANSAC inlier bound on |(duL, dv, duR)| [px]
 	int ransac_iterations = 200;  //!< RANSAC upper bound
 	double sigma_px = 0.5;	//!< measurement noise for the solver [px]
