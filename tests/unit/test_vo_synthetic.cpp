@@ -208,7 +208,16 @@ TEST(VOSynthetic, SceneChangeReinitialisesAChainSegment)
 	for (int k = 0; k < 30; k++)
 	{
 		cv::Mat cl = s.left[k], cr = s.right[k], l, r;
-		if (k >= 20) other.render(T0 * s.gt[k].T, cl, cr, k);
+		// Fresh images: rendering into cl/cr would overwrite the shared
+		// sequence() frames (cv::Mat copies share pixels) and corrupt every
+		// later test in the same process (it made NearLandmarkPreference fail
+		// after this test in one binary run).
+		if (k >= 20)
+		{
+			cl = cv::Mat();
+			cr = cv::Mat();
+			other.render(T0 * s.gt[k].T, cl, cr, k);
+		}
 		conv.convert(cl, l);
 		conv.convert(cr, r);
 		res.push_back(vo.process(l, r, s.calib, s.gt[k].t));
