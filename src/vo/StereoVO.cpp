@@ -94,6 +94,7 @@ void TStereoVOOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c
 	MRPT_LOAD_CONFIG_VAR(match_ratio, double, c, s);
 	MRPT_LOAD_CONFIG_VAR(refine_min_zncc, double, c, s);
 	MRPT_LOAD_CONFIG_VAR(refine_radius, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(refine_iterations, int, c, s);
 	MRPT_LOAD_CONFIG_VAR(min_stereo, int, c, s);
 	MRPT_LOAD_CONFIG_VAR(min_matches, int, c, s);
 	MRPT_LOAD_CONFIG_VAR(min_inliers, int, c, s);
@@ -129,6 +130,7 @@ void TStereoVOOptions::dumpToTextStream(std::ostream& o) const
 	  << "match_ratio = " << match_ratio << "   ; best/second best distance\n"
 	  << "refine_min_zncc = " << refine_min_zncc << "   ; patch refinement correlation\n"
 	  << "refine_radius = " << refine_radius << "   ; [px]\n"
+	  << "refine_iterations = " << refine_iterations << "   ; Gauss-Newton steps, 0 = parabola only\n"
 	  << "min_stereo = " << min_stereo << "\n"
 	  << "min_matches = " << min_matches << "\n"
 	  << "min_inliers = " << min_inliers << "\n"
@@ -156,6 +158,7 @@ void TStereoVOOptions::validate() const
 	if (max_hamming < 1 || max_hamming > 256) bad("max_hamming must be in [1,256]");
 	if (!(match_ratio > 0 && match_ratio <= 1)) bad("match_ratio must be in (0,1]");
 	if (refine_radius < 0 || refine_radius > 4) bad("refine_radius must be in [0,4]");
+	if (refine_iterations < 0 || refine_iterations > 20) bad("refine_iterations must be in [0,20]");
 	if (min_inliers < 3 || min_matches < min_inliers) bad("need 3 <= min_inliers <= min_matches");
 	if (!(near_min_disparity >= 0) || near_min_matches < min_matches)
 		bad("near_min_disparity must be >= 0 and near_min_matches >= min_matches");
@@ -345,8 +348,20 @@ TFrameResult StereoVO::process(
 			y += by;
 		}
 		if (!peak || c[1][1] < o.refine_min_zncc) continue;
-		const float ox = features::parabolaPeak(c[1][0], c[1][1], c[1][2]);
-		const float oy = features::parabolaPeak(c[0][1], c[1][1], c[2][1]);
+		float ox = features::parabolaPeak(c[1][0], c[1][1], c[1][2]);
+		float oy = features::parabolaPeak(c[0][1], c[1][1], c[2][1]);
+		{
+			// The parabola locks towards integer pixels; Gauss-Newton on the
+			// interpolated image does not (features::refinePatch2D).
+			float xr, yr;
+			if (features::refinePatch2D(
+					kf.meas[j].patch.data(), features::kPatchSize, fr.left, x + ox, y + oy,
+					o.refine_iterations, xr, yr))
+			{
+				ox = xr - x;
+				oy = yr - y;
+			}
+		}
 		geometry::TStereoCorrespondence k;
 		k.P_ref = kf.meas[j].P;
 		k.cov_ref = kf.meas[j].cov;

@@ -76,6 +76,28 @@ inline float parabolaPeak(float cm, float c0, float cp)
 	return o < -0.5f ? -0.5f : (o > 0.5f ? 0.5f : o);
 }
 
+/** Sub-pixel x in `right` of the (2r+1)^2 patch of `left` centred at integer
+ * (xl, y), on row y, starting from x0 (e.g. the parabola's vertex): Gauss-Newton
+ * on sum (R(x + dx) - g L(xl + dx) - c)^2 over (x, g, c), R sampled along the
+ * row by cubic convolution (Keys, a = -1/2), at most `iterations` steps. The
+ * parabola through three integer-shift correlation scores pulls estimates
+ * towards integer shifts ("pixel locking", Shimizu & Okutomi, ICCV 2001); since
+ * uL is an integer corner, that locks disparities towards integers. Returns x0
+ * when the iteration leaves x0 +- 1 px or the image, or is ill-conditioned. */
+float refineRowShift(
+	const cv::Mat& left, int xl, int y, const cv::Mat& right, float x0, int r, int iterations);
+
+/** Sub-pixel position in `img` of a size x size template (row-major, centred
+ * on its middle pixel), starting from (x0, y0) (e.g. a 2D parabola's vertex):
+ * Gauss-Newton on sum (I(x + dx, y + dy) - g T(dx, dy) - c)^2 over (x, y, g, c),
+ * I sampled by separable cubic convolution (Keys, a = -1/2), at most
+ * `iterations` steps. The 2D counterpart of refineRowShift (no pixel locking).
+ * Returns false (x, y untouched) when the iteration leaves (x0, y0) +- 1 px or
+ * the image, or is ill-conditioned. */
+bool refinePatch2D(
+	const uint8_t* tmpl, int size, const cv::Mat& img, float x0, float y0, int iterations, float& x,
+	float& y);
+
 /** Options of StereoFeatureExtractor ([features] in config/vo.ini). */
 struct TStereoFeatureOptions : public mrpt::config::CLoadableOptions
 {
@@ -105,6 +127,9 @@ double min_zncc_shifted = 0.5;
 	 * (e.g. the invariant image's log-ratio noise) makes FAST fire on noise and
 	 * breaks the stereo correlation; smoothing trades a little localisation for that. */
 	double presmooth_sigma = 0.0;
+	/** Gauss-Newton steps refining the stereo match's sub-pixel uR after the
+	 * parabola fit (refineRowShift); 0 = the parabola only. */
+	int subpixel_iterations = 5;
 
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;

@@ -100,6 +100,7 @@ struct TStereoVOOptions : public mrpt::config::CLoadableOptions
 	double match_ratio = 0.95;	//!< best must be < ratio * second best distance in the window
 	double refine_min_zncc = 0.5;  //!< patch refinement must correlate this well, or the match is dropped
 	int refine_radius = 2;	//!< patch refinement moves at most this far from the BRIEF match [px]
+	int refine_iterations = 5;	//!< Gauss-Newton steps after the 2D parabola (features::refinePatch2D); 0 = parabola only
 	int min_stereo = 20;  //!< fewer stereo measurements: FewFeatures
 	int min_matches = 12;  //!< fewer matches to the keyframe: FewMatches
 	int min_inliers = 10;  //!< fewer inliers: FewInliers
