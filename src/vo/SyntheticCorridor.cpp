@@ -1,4 +1,5 @@
 /* ShadyLoc — ray-cast textured corridor for VO tests. */
+#include <shadyloc/sim/Noise.h>
 #include <shadyloc/vo/SyntheticCorridor.h>
 
 #include <opencv2/core.hpp>
@@ -12,13 +13,7 @@ namespace
 {
 uint32_t hash3(int32_t a, int32_t b, uint32_t c)
 {
-	uint32_t h = static_cast<uint32_t>(a) * 0x8da6b343u ^ static_cast<uint32_t>(b) * 0xd8163841u ^ c * 0xcb1ab31fu;
-	h ^= h >> 16;
-	h *= 0x7feb352du;
-	h ^= h >> 15;
-	h *= 0x846ca68bu;
-	h ^= h >> 16;
-	return h;
+	return sim::hash32(static_cast<uint32_t>(a) * 0x8da6b343u ^ static_cast<uint32_t>(b) * 0xd8163841u ^ c * 0xcb1ab31fu);
 }
 /** Random colour (B, G, R in [25, 230]) of a texture cell. */
 Eigen::Vector3d cellColour(double a, double b, double cell, uint32_t salt)
