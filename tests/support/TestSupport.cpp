@@ -1,6 +1,8 @@
 /* ShadyLoc tests: support code. */
 #include "TestSupport.h"
 
+#include <shadyloc/io/Rawlog.h>
+
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CSensoryFrame.h>
@@ -41,6 +43,20 @@ int runCommand(const std::string& cmd, std::string* output)
 	const int status = pclose(pipe);
 	if (output) *output = out;
 	return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::vector<mrpt::obs::CObservationStereoImages::Ptr> readStereoFrames(const std::string& rawlog)
+{
+	std::vector<mrpt::obs::CObservationStereoImages::Ptr> out;
+	io::RawlogReader r(rawlog);
+	while (auto obj = r.next())
+		for (auto& o : io::observationsIn(obj))
+			if (auto s = std::dynamic_pointer_cast<mrpt::obs::CObservationStereoImages>(o))
+			{
+				io::loadExternalImages(*s);
+				out.push_back(s);
+			}
+	return out;
 }
 
 std::string appPath() { return SHADYLOC_APP; }

@@ -9,6 +9,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace shadyloc::test
 {
@@ -32,6 +33,10 @@ int runCommand(const std::string& cmd, std::string* output = nullptr);
 
 std::string appPath();	  //!< the built `shadyloc` executable
 std::string pluginPath();  //!< the built MRPT plugin module
+
+/** Every stereo observation of a rawlog (both styles), external images
+ * loaded, read through the project's checked reader. */
+std::vector<mrpt::obs::CObservationStereoImages::Ptr> readStereoFrames(const std::string& rawlog);
 
 /** A synthetic colour stereo frame: textured, coloured patches, a shadow band
  * (sky-lit: dimmer and bluer) that moves with `frame`. */

@@ -37,16 +37,6 @@ void makeFolders(const std::string& dir, int n, int w = 48, int h = 32)
 	  << "width=" << w << "\nheight=" << h << "\n";
 }
 
-std::vector<mrpt::obs::CObservationStereoImages::Ptr> readStereo(const std::string& rawlog)
-{
-	std::vector<mrpt::obs::CObservationStereoImages::Ptr> out;
-	shadyloc::io::RawlogReader r(rawlog);
-	while (auto obj = r.next())
-		for (auto& o : shadyloc::io::observationsIn(obj))
-			if (auto s = std::dynamic_pointer_cast<mrpt::obs::CObservationStereoImages>(o))
-				out.push_back(s);
-	return out;
-}
 }  // namespace
 
 TEST(DatasetsFolder, ImportsPairsWithCalibrationAndRate)
@@ -60,7 +50,7 @@ TEST(DatasetsFolder, ImportsPairsWithCalibrationAndRate)
 	imp.options.sensorLabel = "STEREO";
 	const auto res = imp.run(dir + "/L", dir + "/R", dir + "/calib.ini", dir + "/out.rawlog");
 	EXPECT_EQ(res.frames, 4u);
-	const auto obs = readStereo(dir + "/out.rawlog");
+	const auto obs = shadyloc::test::readStereoFrames(dir + "/out.rawlog");
 	ASSERT_EQ(obs.size(), 4u);
 	for (int i = 0; i < 4; i++)
 	{
@@ -91,7 +81,7 @@ TEST(DatasetsFolder, ImportsPairsWithCalibrationAndRate)
 			dir + "/calib.ini --times " + dir + "/times.txt --max-frames 3 -o " + dir + "/t.rawlog",
 		&text);
 	ASSERT_EQ(rc, 0) << text;
-	const auto t = readStereo(dir + "/t.rawlog");
+	const auto t = shadyloc::test::readStereoFrames(dir + "/t.rawlog");
 	ASSERT_EQ(t.size(), 3u);
 	EXPECT_NEAR(mrpt::Clock::toDouble(t[2]->timestamp), 11.25, 1e-9);
 }

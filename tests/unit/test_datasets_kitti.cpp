@@ -121,19 +121,6 @@ std::vector<std::string> readLines(const std::string& path)
 	return out;
 }
 
-std::vector<mrpt::obs::CObservationStereoImages::Ptr> readStereo(const std::string& rawlog)
-{
-	std::vector<mrpt::obs::CObservationStereoImages::Ptr> out;
-	shadyloc::io::RawlogReader r(rawlog);
-	while (auto obj = r.next())
-		for (auto& o : shadyloc::io::observationsIn(obj))
-			if (auto s = std::dynamic_pointer_cast<mrpt::obs::CObservationStereoImages>(o))
-			{
-				shadyloc::io::loadExternalImages(*s);
-				out.push_back(s);
-			}
-	return out;
-}
 
 bool samePixels(const cv::Mat& a, const cv::Mat& b)
 {
@@ -215,7 +202,7 @@ TEST_P(DatasetsKittiRoundTrip, ImagesBitExactPosesToPrintPrecision)
 	EXPECT_EQ(fs::is_directory(shadyloc::io::imagesDirFor(rawlog)), external);
 
 	// What the rawlog holds: calibration, baseline, timestamps, BGR images.
-	const auto obs = readStereo(rawlog);
+	const auto obs = shadyloc::test::readStereoFrames(rawlog);
 	ASSERT_EQ(obs.size(), size_t(kFrames));
 	const double t2x = (kP[2][3] - kP[2][2] * kP[2][11]) / kP[2][0];
 	const double t3x = (kP[3][3] - kP[3][2] * kP[3][11]) / kP[3][0];
