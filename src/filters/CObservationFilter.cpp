@@ -94,6 +94,7 @@ mrpt::obs::CObservation::Ptr CObservationFilter::apply(const mrpt::obs::CObserva
 		std::vector<const mrpt::img::CImage*> eyes = {&st->imageLeft};
 		if (st->hasImageRight) eyes.push_back(&st->imageRight);
 		const auto out = run(eyes, names);
+		// The derived images are fresh Mats owned by `out`: share, don't copy.
 		auto d = CObservationStereoImages::Create();
 		d->timestamp = st->timestamp;
 		d->sensorLabel = st->sensorLabel + common.output_suffix;
@@ -101,9 +102,9 @@ mrpt::obs::CObservation::Ptr CObservationFilter::apply(const mrpt::obs::CObserva
 		d->leftCamera = st->leftCamera;
 		d->rightCamera = st->rightCamera;
 		d->rightCameraPose = st->rightCameraPose;
-		d->imageLeft = mrpt::img::CImage(out[0], mrpt::img::DEEP_COPY);
+		d->imageLeft = mrpt::img::CImage(out[0], mrpt::img::SHALLOW_COPY);
 		d->hasImageRight = st->hasImageRight;
-		if (st->hasImageRight) d->imageRight = mrpt::img::CImage(out[1], mrpt::img::DEEP_COPY);
+		if (st->hasImageRight) d->imageRight = mrpt::img::CImage(out[1], mrpt::img::SHALLOW_COPY);
 		d->hasImageDisparity = false;
 		return d;
 	}
@@ -116,7 +117,7 @@ mrpt::obs::CObservation::Ptr CObservationFilter::apply(const mrpt::obs::CObserva
 		d->sensorLabel = im->sensorLabel + common.output_suffix;
 		d->cameraPose = im->cameraPose;
 		d->cameraParams = im->cameraParams;
-		d->image = mrpt::img::CImage(out[0], mrpt::img::DEEP_COPY);
+		d->image = mrpt::img::CImage(out[0], mrpt::img::SHALLOW_COPY);
 		return d;
 	}
 	throw std::invalid_argument(
