@@ -31,7 +31,11 @@ Eigen::Isometry3d retractLeft(const Vector6d& xi, const Eigen::Isometry3d& T)
 {
 	const Eigen::Matrix3d dR = expSO3(xi.tail<3>());
 	Eigen::Isometry3d out = Eigen::Isometry3d::Identity();
-	out.linear() = dR * T.linear();
+	// Re-projected onto SO(3): a rotation that is orthonormal only to rounding
+	// would grow away from it when fed back as the next start (a motion
+	// prediction composed of earlier solutions), and Isometry3d::inverse()
+	// assumes an exact rotation.
+	out.linear() = Eigen::Quaterniond(dR * T.linear()).normalized().toRotationMatrix();
 	out.translation() = dR * T.translation() + xi.head<3>();
 	return out;
 }
@@ -135,6 +139,48 @@ TRansacResult ransacStereoPose(
 	Eigen::Isometry3d bestT = Eigen::Isometry3d::Identity();
 	int maxIt = o.max_iterations;
 	std::vector<Eigen::Vector3d> s(3), d(3);
+	// Score a hypothesis; a new best is locally optimised (Chum et al.,
+	// LO-RANSAC, DAGM 2003: a minimal 3D-3D set is noisy, far points' depths
+	// are poor) on the image residuals of its inliers (Gauss-Newton, or the
+	// two-view bundle adjustment with two_view_ba).
+	auto consider = [&](Eigen::Isometry3d T, int it) {
+		int k = countInliers(calib, c, T, o.inlier_threshold_px, nullptr);
+		if (k > best && k >= 6)
+		{
+			for (int lo = 0; lo < 2; lo++)
+			{
+				std::vector<uint8_t> f(c.size(), 0);
+				countInliers(calib, c, T, o.inlier_threshold_px, &f);
+				TPoseSolverOptions so;
+				so.max_iterations = 4;
+				so.sigma_px = 1.0;
+				const auto sol = o.two_view_ba ? solveStereoPoseTwoView(calib, c, f, T, so)
+												: solveStereoPose(calib, c, f, T, so);
+				if (!sol.ok) break;
+				const int k2 = countInliers(calib, c, sol.T_curr_ref, o.inlier_threshold_px, nullptr);
+				if (k2 <= k) break;
+				k = k2;
+				T = sol.T_curr_ref;
+			}
+		}
+		if (k <= best) return;
+		best = k;
+		bestT = T;
+		// Adaptive bound: iterations for `confidence` of one all-inlier sample.
+		const double w = double(k) / n;
+		const double p3 = w * w * w;
+		if (p3 > 1e-9 && p3 < 1.0)
+		{
+			const double need = std::log(1 - o.confidence) / std::log(1 - p3);
+			maxIt = std::min(o.max_iterations, static_cast<int>(std::ceil(need)) + 1);
+		}
+		else if (p3 >= 1.0)
+			maxIt = std::min(maxIt, it + 1);
+	};
+	// Given hypotheses first: along the viewing direction a far-field-only
+	// scene constrains the motion weakly, and random minimal sets of noisy
+	// far points can miss the right pose that a motion prediction starts near.
+	for (const auto& T : o.hypotheses) consider(T, 0);
 	for (int it = 0; it < maxIt; it++)
 	{
 		res.iterations = it + 1;
@@ -144,42 +190,7 @@ TRansacResult ransacStereoPose(
 		d = {c[i0].P_curr, c[i1].P_curr, c[i2].P_curr};
 		Eigen::Isometry3d T;
 		if (!rigidTransform3D(s, d, T)) continue;
-		int k = countInliers(calib, c, T, o.inlier_threshold_px, nullptr);
-		if (k > best && k >= 6)
-		{
-			// Local optimisation (Chum et al., LO-RANSAC, DAGM 2003): a minimal
-			// 3D-3D set is noisy (far points' depths are poor), so refit by
-			// Gauss-Newton on the image residuals of its inliers and recount.
-			for (int lo = 0; lo < 2; lo++)
-			{
-				std::vector<uint8_t> f(c.size(), 0);
-				countInliers(calib, c, T, o.inlier_threshold_px, &f);
-				TPoseSolverOptions so;
-				so.max_iterations = 4;
-				so.sigma_px = 1.0;
-				const auto sol = solveStereoPose(calib, c, f, T, so);
-				if (!sol.ok) break;
-				const int k2 = countInliers(calib, c, sol.T_curr_ref, o.inlier_threshold_px, nullptr);
-				if (k2 <= k) break;
-				k = k2;
-				T = sol.T_curr_ref;
-			}
-		}
-		if (k > best)
-		{
-			best = k;
-			bestT = T;
-			// Adaptive bound: iterations for `confidence` of one all-inlier sample.
-			const double w = double(k) / n;
-			const double p3 = w * w * w;
-			if (p3 > 1e-9 && p3 < 1.0)
-			{
-				const double need = std::log(1 - o.confidence) / std::log(1 - p3);
-				maxIt = std::min(o.max_iterations, static_cast<int>(std::ceil(need)) + 1);
-			}
-			else if (p3 >= 1.0)
-				maxIt = std::min(maxIt, it + 1);
-		}
+		consider(T, it);
 	}
 	if (best < 3) return res;
 	std::vector<uint8_t> flags(c.size(), 0);

@@ -112,6 +112,8 @@ void TStereoVOOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c
 	MRPT_LOAD_CONFIG_VAR(max_step_rotation_deg, double, c, s);
 	MRPT_LOAD_CONFIG_VAR(max_lost_frames, int, c, s);
 	MRPT_LOAD_CONFIG_VAR(constant_velocity, bool, c, s);
+	MRPT_LOAD_CONFIG_VAR(two_view_ba, bool, c, s);
+	MRPT_LOAD_CONFIG_VAR(ransac_prediction, bool, c, s);
 	try
 	{
 		validate();
@@ -147,7 +149,9 @@ void TStereoVOOptions::dumpToTextStream(std::ostream& o) const
 	  << "max_step_translation = " << max_step_translation << "   ; [m]\n"
 	  << "max_step_rotation_deg = " << max_step_rotation_deg << "   ; [deg]\n"
 	  << "max_lost_frames = " << max_lost_frames << "\n"
-	  << "constant_velocity = " << (constant_velocity ? "true" : "false") << "\n";
+	  << "constant_velocity = " << (constant_velocity ? "true" : "false") << "\n"
+	  << "two_view_ba = " << (two_view_ba ? "true" : "false") << "   ; solve by two-view bundle adjustment\n"
+	  << "ransac_prediction = " << (ransac_prediction ? "true" : "false") << "   ; the prediction is a RANSAC hypothesis\n";
 }
 
 void TStereoVOOptions::validate() const
@@ -390,6 +394,12 @@ TFrameResult StereoVO::process(
 	ro.inlier_threshold_px = o.ransac_threshold_px;
 	ro.max_iterations = o.ransac_iterations;
 	ro.seed = static_cast<uint32_t>(res.frame * 2654435761u + 1);
+	// The motion model's prediction competes with the random minimal sets:
+	// with only far landmarks (the invariant image outdoors) the inlier count
+	// hardly changes along the viewing direction and random sets of noisy
+	// far points can settle on a step twice too long (docs/vo.md).
+	if (o.ransac_prediction) ro.hypotheses.push_back(T_curr_kf_pred);
+	ro.two_view_ba = o.two_view_ba;
 	const auto rs = geometry::ransacStereoPose(calib, corr, ro);
 	res.inliers = rs.inliers;
 	res.ms.ransac = msSince(t0);
@@ -397,10 +407,11 @@ TFrameResult StereoVO::process(
 
 	// ---- non-linear solve ---------------------------------------------------------
 	t0 = Clock::now();
+	const auto solve = o.two_view_ba ? geometry::solveStereoPoseTwoView : geometry::solveStereoPose;
 	geometry::TPoseSolverOptions so;
 	so.sigma_px = o.sigma_px;
 	so.huber_k = o.huber_k;
-	auto sol = geometry::solveStereoPose(calib, corr, rs.inlier, rs.T_curr_ref, so);
+	auto sol = solve(calib, corr, rs.inlier, rs.T_curr_ref, so);
 	if (sol.ok)
 	{
 		// Re-select inliers at the refined pose (RANSAC's minimal-set pose is
@@ -416,7 +427,7 @@ TFrameResult StereoVO::process(
 		}
 		if (n >= o.min_inliers)
 		{
-			const auto sol2 = geometry::solveStereoPose(calib, corr, in, sol.T_curr_ref, so);
+			const auto sol2 = solve(calib, corr, in, sol.T_curr_ref, so);
 			if (sol2.ok)
 			{
 				sol = sol2;

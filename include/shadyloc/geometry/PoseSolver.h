@@ -62,6 +62,11 @@ struct TRansacOptions
 	double confidence = 0.999;	//!< stop when this probability of an all-inlier set is reached
 	double inlier_threshold_px = 2.0;  //!< max |r| (norm of (duL, dv, duR)) of an inlier [px]
 	uint32_t seed = 42;	 //!< fixed seed: runs are repeatable
+	/** Hypotheses of T_curr_ref scored (and locally optimised) before the
+	 * random minimal sets, e.g. the motion model's prediction. */
+	std::vector<Eigen::Isometry3d> hypotheses;
+	/** Local optimisation by two-view bundle adjustment (else with fixed landmarks). */
+	bool two_view_ba = false;
 };
 
 struct TRansacResult
@@ -98,8 +103,21 @@ struct TPoseSolution
 };
 
 /** Robust Gauss-Newton from T_init over the correspondences with use[i] != 0
- * (all if use is empty). */
+ * (all if use is empty). The reference landmarks are fixed; their covariance
+ * enters each residual's covariance (use_landmark_covariance). */
 TPoseSolution solveStereoPose(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c,
+	const std::vector<uint8_t>& use, const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o);
+
+/** Two-view bundle adjustment from T_init: the pose and every used landmark
+ * are unknowns; each landmark has its stereo measurement in the reference
+ * frame (recovered by projecting P_ref, which was triangulated from it) and
+ * z_curr in the current frame, both with sigma_px noise and a Huber kernel.
+ * Landmarks are eliminated by the Schur complement; Levenberg-Marquardt
+ * steps are accepted only when the cost decreases. cov_T_ref_curr is the
+ * inverse of the pose's marginal information. cov_ref and
+ * use_landmark_covariance are not used (the landmarks are estimated). */
+TPoseSolution solveStereoPoseTwoView(
 	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c,
 	const std::vector<uint8_t>& use, const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o);
 

@@ -116,6 +116,13 @@ struct TStereoVOOptions : public mrpt::config::CLoadableOptions
 	int ransac_iterations = 200;  //!< RANSAC upper bound
 	double sigma_px = 0.5;	//!< measurement noise for the solver [px]
 	double huber_k = 1.0;  //!< Huber threshold [sigmas]
+	/** Solve by two-view bundle adjustment (keyframe landmarks re-estimated,
+	 * geometry::solveStereoPoseTwoView) instead of with fixed landmarks whose
+	 * covariance is folded into the residuals (geometry::solveStereoPose). */
+	bool two_view_ba = true;
+	/** Score the motion model's prediction as a RANSAC hypothesis besides the
+	 * random minimal sets. */
+	bool ransac_prediction = true;
 	double kf_translation = 1.0;  //!< new keyframe beyond this distance from the keyframe [m]
 	double kf_rotation_deg = 10.0;	//!< ... or this rotation [deg]
 	double kf_min_tracked_fraction = 0.35;	//!< ... or when inliers / keyframe landmarks fall below this

@@ -1,0 +1,180 @@
+/* ShadyLoc — two-view stereo bundle adjustment of a relative pose.
+ *
+ * The one-view solve (solveStereoPose) keeps the reference landmarks fixed
+ * and folds their uncertainty into each residual's covariance, linearised at
+ * the current pose. For far landmarks (disparity of a few pixels) that
+ * linearisation is poor, and because the folded covariance grows as the pose
+ * moves towards the landmarks, the weighted cost can be lowered by moving
+ * forward: with only far landmarks (the invariant image of an outdoor scene)
+ * single steps came out up to twice too long. Here the landmarks are unknowns
+ * too: each has its stereo measurement in the reference frame and in the
+ * current one, both with pixel noise, and the landmarks are eliminated by the
+ * Schur complement (Triggs et al., "Bundle Adjustment — A Modern Synthesis",
+ * 2000; Hartley & Zisserman, 2nd ed., A6.3), so the cost is the exact
+ * reprojection error of both views, minimised by Levenberg-Marquardt.
+ */
+#include <shadyloc/geometry/PoseSolver.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/LU>
+
+#include <cmath>
+
+namespace shadyloc::geometry
+{
+namespace
+{
+struct TLandmarkBlock
+{
+	int idx;  //!< correspondence index
+	Eigen::Vector3d X;	//!< landmark in the reference frame [m]
+	Eigen::Vector3d z_ref;	//!< its stereo measurement in the reference frame [px]
+	Eigen::Matrix<double, 6, 3> Hpx;
+	Eigen::Matrix3d Hxx;
+	Eigen::Vector3d gx;
+};
+
+double huberCost(double e, double k) { return e <= k ? e * e : 2 * k * e - k * k; }
+double huberWeight(double e, double k) { return e <= k ? 1.0 : k / e; }
+}  // namespace
+
+TPoseSolution solveStereoPoseTwoView(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c,
+	const std::vector<uint8_t>& use, const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o)
+{
+	TPoseSolution sol;
+	const double s2inv = 1.0 / (o.sigma_px * o.sigma_px);
+	std::vector<TLandmarkBlock> L;
+	L.reserve(c.size());
+	for (size_t i = 0; i < c.size(); i++)
+	{
+		if (!use.empty() && !use[i]) continue;
+		if (!(c[i].P_ref.z() > 1e-3)) continue;
+		TLandmarkBlock b;
+		b.idx = static_cast<int>(i);
+		b.X = c[i].P_ref;
+		// P_ref was triangulated from the reference measurement: projecting it
+		// gives that measurement back exactly.
+		b.z_ref = calib.project(b.X);
+		L.push_back(b);
+	}
+	if (L.size() < 3) return sol;
+
+	// Robust cost of a pose and landmark set (whitened residual norms, Huber).
+	auto cost = [&](const Eigen::Isometry3d& T, const std::vector<Eigen::Vector3d>& X, double* sumSqCurr,
+					int* usedCurr) {
+		double f = 0, ss = 0;
+		int n = 0;
+		for (size_t k = 0; k < L.size(); k++)
+		{
+			if (!(X[k].z() > 1e-3)) return HUGE_VAL;
+			const Eigen::Vector3d rr = calib.project(X[k]) - L[k].z_ref;
+			f += huberCost(rr.norm() * std::sqrt(s2inv), o.huber_k);
+			Eigen::Vector3d r;
+			if (!stereoResidual(calib, T, X[k], c[L[k].idx].z_curr, r)) return HUGE_VAL;
+			f += huberCost(r.norm() * std::sqrt(s2inv), o.huber_k);
+			ss += r.squaredNorm();
+			n++;
+		}
+		if (sumSqCurr) *sumSqCurr = ss;
+		if (usedCurr) *usedCurr = n;
+		return f;
+	};
+
+	Eigen::Isometry3d T = T_init;
+	std::vector<Eigen::Vector3d> X(L.size()), Xnew(L.size());
+	for (size_t k = 0; k < L.size(); k++) X[k] = L[k].X;
+	double f = cost(T, X, nullptr, nullptr);
+	if (!std::isfinite(f)) return sol;
+	// Normal equations at (T, X) with IRLS weights; the landmark blocks are
+	// kept for the Schur complement.
+	Matrix6d Hpp;
+	Vector6d gp;
+	auto linearise = [&]() {
+		Hpp.setZero();
+		gp.setZero();
+		for (size_t k = 0; k < L.size(); k++)
+		{
+			auto& b = L[k];
+			Eigen::Matrix3d Jk;
+			const Eigen::Vector3d rk = calib.project(X[k], &Jk) - b.z_ref;
+			Eigen::Vector3d rc;
+			Matrix36d Jc;
+			stereoResidual(calib, T, X[k], c[b.idx].z_curr, rc, &Jc);
+			const Eigen::Matrix3d JcX = Jc.leftCols<3>() * T.linear();
+			const double wk = huberWeight(rk.norm() * std::sqrt(s2inv), o.huber_k) * s2inv;
+			const double wc = huberWeight(rc.norm() * std::sqrt(s2inv), o.huber_k) * s2inv;
+			Hpp += wc * Jc.transpose() * Jc;
+			gp += wc * Jc.transpose() * rc;
+			b.Hpx = wc * Jc.transpose() * JcX;
+			b.Hxx = wk * Jk.transpose() * Jk + wc * JcX.transpose() * JcX;
+			b.gx = wk * Jk.transpose() * rk + wc * JcX.transpose() * rc;
+		}
+	};
+	// Schur complement with Levenberg-Marquardt damping (1 + lambda) on the
+	// diagonals: eliminates every landmark (3x3 blocks).
+	std::vector<Eigen::Matrix3d> HxxInv(L.size());
+	auto reduce = [&](double lambda, Matrix6d& A, Vector6d& bvec) {
+		A = Hpp;
+		A.diagonal() *= 1 + lambda;
+		bvec = gp;
+		for (size_t k = 0; k < L.size(); k++)
+		{
+			Eigen::Matrix3d H = L[k].Hxx;
+			H.diagonal() *= 1 + lambda;
+			HxxInv[k] = H.inverse();
+			A -= L[k].Hpx * HxxInv[k] * L[k].Hpx.transpose();
+			bvec -= L[k].Hpx * HxxInv[k] * L[k].gx;
+		}
+	};
+
+	double lambda = 1e-4;
+	for (int it = 0; it < o.max_iterations; it++)
+	{
+		linearise();
+		bool accepted = false;
+		Vector6d dxi = Vector6d::Zero();
+		for (int tries = 0; tries < 10 && !accepted; tries++)
+		{
+			Matrix6d A;
+			Vector6d bvec;
+			reduce(lambda, A, bvec);
+			dxi = A.ldlt().solve(-bvec);
+			if (!dxi.allFinite()) return sol;
+			for (size_t k = 0; k < L.size(); k++)
+				Xnew[k] = X[k] + HxxInv[k] * (-L[k].gx - L[k].Hpx.transpose() * dxi);
+			const Eigen::Isometry3d Tn = retractLeft(dxi, T);
+			const double fn = cost(Tn, Xnew, nullptr, nullptr);
+			if (fn < f)
+			{
+				T = Tn;
+				X.swap(Xnew);
+				f = fn;
+				lambda = std::max(1e-7, lambda * 0.1);
+				accepted = true;
+			}
+			else
+				lambda *= 10;
+		}
+		sol.iterations = it + 1;
+		if (!accepted || dxi.norm() < o.convergence) break;
+	}
+	// Covariance of the pose: inverse of its marginal information (the
+	// undamped Schur complement at the solution).
+	linearise();
+	Matrix6d A;
+	Vector6d bvec;
+	reduce(0.0, A, bvec);
+	Eigen::FullPivLU<Matrix6d> lu(A);
+	if (!lu.isInvertible()) return sol;
+	double sumSq = 0;
+	int used = 0;
+	cost(T, X, &sumSq, &used);
+	sol.T_curr_ref = T;
+	sol.cov_T_ref_curr = invertCovariance(T, lu.inverse());
+	sol.rms_px = std::sqrt(sumSq / std::max(1, used) / 3.0);
+	sol.ok = sol.cov_T_ref_curr.allFinite();
+	return sol;
+}
+
+}  // namespace shadyloc::geometry
