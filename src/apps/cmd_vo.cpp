@@ -2,6 +2,8 @@
 #include "Command.h"
 
 #include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/filters/FilterPipeline.h>
+#include <shadyloc/filters/Filters.h>
 #include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/vo/Channel.h>
@@ -16,6 +18,7 @@
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 namespace
@@ -29,6 +32,19 @@ bool endsWith(const std::string& s, const std::string& suf)
 bool isDerivedLabel(const std::string& l)
 {
 	return endsWith(l, "_mono") || endsWith(l, "_inv") || endsWith(l, "_lin");
+}
+
+/** The invariant parameters `shadyloc filter` recorded at the head of a
+ * filtered rawlog, if it holds such a record with an invariant filter. */
+std::optional<image::InvariantParams> recordedInvariantParams(const std::string& path)
+{
+	const std::string rec = filters::readPipelineRecord(path);
+	if (rec.empty()) return std::nullopt;
+	mrpt::config::CConfigFileMemory cfg(rec);
+	const auto pipeline = filters::FilterPipeline::FromConfig(cfg, path + " (filter record)");
+	for (const auto& f : pipeline.filters)
+		if (const auto inv = std::dynamic_pointer_cast<CFilterInvariant>(f)) return inv->params();
+	return std::nullopt;
 }
 
 /** Label of an already-filtered stereo stream for this channel in the first
@@ -104,6 +120,22 @@ int run(int argc, char** argv)
 		vopt.dumpToTextStream(std::cout);
 		std::cout << "[features]\n";
 		fopt.dumpToTextStream(std::cout);
+	}
+	if (!filtered.empty() && conv.channel() == vo::Channel::Invariant)
+	{
+		// The images are used as they are; say which transform made them, and
+		// warn when the config describes another one (a map and a live run
+		// must use the same, or their invariant images are not comparable).
+		const auto rec = recordedInvariantParams(in.getValue());
+		if (!rec)
+			std::cerr << "warning: " << in.getValue()
+					  << ": no filter record; the parameters of its invariant images are unknown\n";
+		else if (!rec->sameImageAs(conv.invariantParams()))
+			std::cerr << "warning: " << in.getValue() << ": its invariant images were made with "
+					  << rec->asString() << " (filter record), not with the config's [invariant] "
+					  << conv.invariantParams().asString() << "; the recorded images are used\n";
+		else if (!quiet.getValue())
+			std::cout << "invariant images made with the config's parameters (filter record)\n";
 	}
 
 	io::RawlogReader rd(in.getValue());

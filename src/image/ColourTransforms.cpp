@@ -118,6 +118,14 @@ std::string InvariantParams::asString() const
 	return s.str();
 }
 
+bool InvariantParams::sameImageAs(const InvariantParams& o) const
+{
+	const auto eq = [](double a, double b) { return std::abs(a - b) <= 1e-9; };
+	return eq(alpha, o.alpha) && eq(beta, o.beta) && order == o.order && linearisation == o.linearisation &&
+		   (linearisation != Linearisation::Gamma || eq(gamma, o.gamma)) && eq(scale, o.scale) &&
+		   eq(offset, o.offset);
+}
+
 double linearise(int code, Linearisation lin, double gamma)
 {
 	const double v = (code <= 0 ? InvariantParams::kZeroCode : double(code)) / 255.0;

@@ -116,6 +116,22 @@ TEST(VOApp, UsesFilteredChannelWhenPresent)
 		<< out;
 	EXPECT_NE(out.find("filtered observations 'CAMERA_inv'"), std::string::npos) << out;
 	EXPECT_EQ(eval::readTum(dir + "/t.tum").size(), 8u);
+	// The filter record says which transform made the images: the same one as
+	// the (default) config here, so no warning ...
+	EXPECT_NE(out.find("invariant images made with the config's parameters"), std::string::npos) << out;
+	EXPECT_EQ(out.find("warning"), std::string::npos) << out;
+	// ... and a warning naming both when the config describes another one.
+	std::ofstream(dir + "/other.ini") << "[invariant]\nalpha = 0.40\nbeta = 0.60\n";
+	ASSERT_EQ(
+		test::runCommand(
+			test::appPath() + " vo -q -i " + filt + " --channel invariant -c " + dir + "/other.ini -o " + dir +
+				"/t2.tum",
+			&out),
+		0)
+		<< out;
+	EXPECT_NE(out.find("warning: " + filt + ": its invariant images were made with alpha=0.48"), std::string::npos)
+		<< out;
+	EXPECT_NE(out.find("alpha=0.4 beta=0.6"), std::string::npos) << out;
 }
 
 TEST(VOApp, BadInputFailsCleanly)

@@ -79,6 +79,9 @@ struct InvariantParams
 	void validate() const;
 
 	std::string asString() const;  //!< one line, "alpha=... beta=..."
+	/** Same image from the same input: every field that changes a pixel agrees
+	 * (gamma only with gamma linearisation; reals within 1e-9). */
+	bool sameImageAs(const InvariantParams& o) const;
 };
 
 /** Linear response in (0,1] of an 8-bit code value under a linearisation.
