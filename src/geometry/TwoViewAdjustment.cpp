@@ -49,7 +49,8 @@ TPoseSolution solveStereoPoseTwoView(
 	for (size_t i = 0; i < c.size(); i++)
 	{
 		if (!use.empty() && !use[i]) continue;
-		if (!(c[i].P_ref.z() > 1e-3)) continue;
+		// Behind either camera at the start: no projection to adjust.
+		if (!(c[i].P_ref.z() > 1e-3) || !((T_init * c[i].P_ref).z() > 1e-3)) continue;
 		TLandmarkBlock b;
 		b.idx = static_cast<int>(i);
 		b.X = c[i].P_ref;
