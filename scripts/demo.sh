@@ -34,20 +34,7 @@ fi
 
 echo
 echo "== 3. stereo VO, both channels, every traversal (config: ${vo_cfg#$here/})"
-summary="$out/vo_summary.txt"
-printf "%-18s %-10s %10s %14s %10s\n" traversal channel "trans_%" "rot_deg_per_m" "ATE_m" > "$summary"
-for rawlog in "$data"/*.rawlog; do
-  trav="$(basename "$rawlog" .rawlog)"
-  for ch in mono invariant; do
-    "$app" vo -q -i "$rawlog" --channel "$ch" -c "$vo_cfg" -o "$out/${trav}_$ch.tum" --stats "$out/${trav}_$ch.csv"
-    "$app" traj-error --gt "$data/$trav.tum" --est "$out/${trav}_$ch.tum" > "$out/${trav}_$ch.err"
-    awk -v t="$trav" -v c="$ch" '
-      /^ATE RMSE:/ {ate=$3}
-      /^KITTI-style average:/ {tr=$4; rot=$7}
-      END {printf "%-18s %-10s %10s %14s %10s\n", t, c, tr, rot, ate}' "$out/${trav}_$ch.err" >> "$summary"
-  done
-done
-cat "$summary"
+bash "$here/scripts/vo-table.sh" "$data" "$out" "$vo_cfg"
 
 echo
 echo "== 4. trajectories, rendered offscreen"
