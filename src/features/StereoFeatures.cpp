@@ -349,12 +349,25 @@ struct TRightWindowStats
 		{
 			s += colS[x + r];
 			q += colQ[x + r];
-			const int64_t v = n * q - s * s;  // n^2 var: exact
 			Sw[x] = static_cast<int32_t>(s);
-			Iw[x] = v > 0 ? static_cast<float>(std::sqrt(double(n) / double(v))) : 0.f;
+			Iw[x] = static_cast<float>(n * q - s * s);	// n^2 var: exact, < 2^31 for r <= 7
 			s -= colS[x - r];
 			q -= colQ[x - r];
 		}
+		// 1 / sqrt(var sum) = sqrt(n / (n^2 var)), 0 where flat.
+		const float nf = static_cast<float>(n);
+		int x = r;
+#ifdef __SSE2__
+		const __m128i z = _mm_setzero_si128();
+		for (; x + 4 <= W - r; x += 4)
+		{
+			const __m128 v = _mm_loadu_ps(Iw + x);
+			const __m128 pos = _mm_cmpgt_ps(v, _mm_castsi128_ps(z));
+			const __m128 inv = _mm_sqrt_ps(_mm_div_ps(_mm_set1_ps(nf), _mm_max_ps(v, _mm_set1_ps(1.f))));
+			_mm_storeu_ps(Iw + x, _mm_and_ps(pos, inv));
+		}
+#endif
+		for (; x < W - r; x++) Iw[x] = Iw[x] > 0 ? std::sqrt(nf / Iw[x]) : 0.f;
 	}
 };
 
@@ -362,9 +375,9 @@ struct TRightWindowStats
  * window on row y centred in [xmin, xmax] (all inside the image; xmax <=
  * W - r - 2, so the SSE2 loads stay inside the row). The right windows' sums
  * come from `R` (per row, cached), so each shift costs one (2r+1)^2 dot
- * product; shifts are the inner loop, and SSE2 forms two columns' products
- * per 32-bit lane (pmaddwd). Flat windows score -1. Same values as zncc() up
- * to float rounding. */
+ * product; SSE2 does 8 shifts at a time, two columns' products per 32-bit
+ * lane (pmaddwd). Flat windows score -1. Same values as zncc() up to float
+ * rounding. */
 void denseRowZncc(
 	const cv::Mat& left, int xl, int y, const cv::Mat& right, TRightWindowStats& R, int xmin,
 	int xmax, int r, std::vector<float>& out, std::vector<int32_t>& acc)
@@ -380,40 +393,60 @@ void denseRowZncc(
 	}
 	const double ll = sll - double(sl) * sl / n;  // n var(L)
 	if (ll < 1e-6) return;
-	// A = sum (L - m)(R - 128), m the rounded mean of L: each product fits in
-	// 16 bits (|L - m| <= 255, |R - 128| <= 128); the exact numerator follows below.
+	// A = sum (L - m) R, m the rounded mean of L (|L - m| <= 255 fits int16);
+	// the exact numerator follows below.
 	const int m16 = (sl + n / 2) / n;
 	acc.assign(m, 0);
 	int32_t* A = acc.data();
+	int k0 = 0;
 #ifdef __SSE2__
-	const __m128i zero = _mm_setzero_si128(), c128v = _mm_set1_epi16(128);
+	{
+		// Weights of column pairs (dx, dx + 1) per row, a zero past the window;
+		// each block of 8 shifts accumulates in registers over the whole window.
+		const int pairs = (w + 1) / 2;
+		__m128i wts[8 * 15];  // (2r+1) rows x pairs, r <= 7
+		for (int dy = 0; dy < w; dy++)
+		{
+			const uint8_t* pl = left.ptr<uint8_t>(y - r + dy) + xl - r;
+			for (int p = 0; p < pairs; p++)
+			{
+				const int dx = 2 * p;
+				const uint16_t la = static_cast<uint16_t>(pl[dx] - m16);
+				const uint16_t lb = dx + 1 < w ? static_cast<uint16_t>(pl[dx + 1] - m16) : 0;
+				wts[dy * pairs + p] = _mm_set1_epi32(static_cast<int32_t>(la | (uint32_t(lb) << 16)));
+			}
+		}
+		const __m128i zero = _mm_setzero_si128();
+		for (; k0 + 8 <= m; k0 += 8)
+		{
+			__m128i lo = zero, hi = zero;
+			for (int dy = 0; dy < w; dy++)
+			{
+				const uint8_t* q = right.ptr<uint8_t>(y - r + dy) + xmin - r + k0;
+				for (int p = 0; p < pairs; p++)
+				{
+					// pixels k..k+7 at columns dx and dx + 1, as int16; pmaddwd
+					// multiplies int16 x int16 into int32, so no product overflows
+					const __m128i v0 = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(q + 2 * p)), zero);
+					const __m128i v1 = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(q + 2 * p + 1)), zero);
+					const __m128i wt = wts[dy * pairs + p];
+					lo = _mm_add_epi32(lo, _mm_madd_epi16(_mm_unpacklo_epi16(v0, v1), wt));
+					hi = _mm_add_epi32(hi, _mm_madd_epi16(_mm_unpackhi_epi16(v0, v1), wt));
+				}
+			}
+			_mm_storeu_si128(reinterpret_cast<__m128i*>(A + k0), lo);
+			_mm_storeu_si128(reinterpret_cast<__m128i*>(A + k0 + 4), hi);
+		}
+	}
 #endif
-	for (int dy = -r; dy <= r; dy++)
+	for (int dy = -r; dy <= r; dy++)  // the remaining shifts (all without SSE2)
 	{
 		const uint8_t* pl = left.ptr<uint8_t>(y + dy) + xl - r;
 		const uint8_t* q = right.ptr<uint8_t>(y + dy) + xmin - r;
-		for (int dx = 0; dx < w; dx += 2)
+		for (int dx = 0; dx < w; dx++)
 		{
-			// Columns dx and dx + 1 together (a zero weight past the window).
-			const int16_t la = static_cast<int16_t>(pl[dx] - m16);
-			const int16_t lb = dx + 1 < w ? static_cast<int16_t>(pl[dx + 1] - m16) : int16_t(0);
-			const uint8_t* qa = q + dx;
-			int k = 0;
-#ifdef __SSE2__
-			const __m128i ab = _mm_set1_epi32(static_cast<int32_t>(
-				static_cast<uint32_t>(static_cast<uint16_t>(la)) |
-				(static_cast<uint32_t>(static_cast<uint16_t>(lb)) << 16)));
-			for (; k + 8 <= m; k += 8)
-			{
-				// 8 pixels each at k and k + 1, widened to int16 minus 128
-				const __m128i v0 = _mm_sub_epi16(_mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(qa + k)), zero), c128v);
-				const __m128i v1 = _mm_sub_epi16(_mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(qa + k + 1)), zero), c128v);
-				__m128i* out4 = reinterpret_cast<__m128i*>(A + k);
-				_mm_storeu_si128(out4, _mm_add_epi32(_mm_loadu_si128(out4), _mm_madd_epi16(_mm_unpacklo_epi16(v0, v1), ab)));
-				_mm_storeu_si128(out4 + 1, _mm_add_epi32(_mm_loadu_si128(out4 + 1), _mm_madd_epi16(_mm_unpackhi_epi16(v0, v1), ab)));
-			}
-#endif
-			for (; k < m; k++) A[k] += la * (qa[k] - 128) + lb * (qa[k + 1] - 128);
+			const int lz = pl[dx] - m16;
+			for (int k = k0; k < m; k++) A[k] += lz * q[dx + k];
 		}
 	}
 	const int32_t* S;
@@ -421,13 +454,11 @@ void denseRowZncc(
 	R.row(y, S, iN);
 	S += xmin;
 	iN += xmin;
-	// sum (L - mean L) R = A - (mean L - m) sum R + 128 sum (L - m)
-	const float e = static_cast<float>(double(sl) / n - m16),
-				c = static_cast<float>(128.0 * (sl - double(n) * m16)),
-				iL = static_cast<float>(1.0 / std::sqrt(ll));
+	// sum (L - mean L) R = A - (mean L - m) sum R
+	const float e = static_cast<float>(double(sl) / n - m16), iL = static_cast<float>(1.0 / std::sqrt(ll));
 	float* o = out.data();
 	for (int k = 0; k < m; k++)
-		o[k] = iN[k] > 0 ? (static_cast<float>(A[k]) - e * static_cast<float>(S[k]) + c) * iN[k] * iL : -1.f;
+		o[k] = iN[k] > 0 ? (static_cast<float>(A[k]) - e * static_cast<float>(S[k])) * iN[k] * iL : -1.f;
 }
 
 /** Index of the largest element (-1 when empty). */
