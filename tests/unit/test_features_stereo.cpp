@@ -7,6 +7,8 @@
 
 #include "../support/TestSupport.h"
 
+#include <mrpt/config/CConfigFileMemory.h>
+
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -416,4 +418,30 @@ TEST(FeaturesStereo, ShiftableWindowsRejectForegroundFattening)
 	// Every lattice corner sees both surfaces, so some right ones go too (18%
 	// here); 25% would mean it rejects beyond the depth edges.
 	EXPECT_GT(aOn, 0.75 * aOff);
+}
+
+TEST(FeaturesStereo, StereoCheckOptionsLoadAndValidate)
+{
+	// The new keys round-trip from an .ini section; a bad margin names itself.
+	features::TStereoFeatureOptions o;
+	mrpt::config::CConfigFileMemory c(
+		"[f]\ndense_check = false\nshifted_window_check = false\nshifted_window_margin = 0.25\n");
+	o.loadFromConfigFile(c, "f");
+	EXPECT_FALSE(o.dense_check);
+	EXPECT_FALSE(o.shifted_window_check);
+	EXPECT_DOUBLE_EQ(o.shifted_window_margin, 0.25);
+	std::ostringstream dump;
+	o.dumpToTextStream(dump);
+	EXPECT_NE(dump.str().find("shifted_window_margin = 0.25"), std::string::npos);
+	mrpt::config::CConfigFileMemory bad("[f]\nshifted_window_margin = -0.1\n");
+	try
+	{
+		o.loadFromConfigFile(bad, "f");
+		ADD_FAILURE() << "a negative shifted_window_margin was accepted";
+	}
+	catch (const std::invalid_argument& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("shifted_window_margin"), std::string::npos) << e.what();
+		EXPECT_NE(std::string(e.what()).find("[f]"), std::string::npos) << e.what();
+	}
 }
