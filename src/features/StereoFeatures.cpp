@@ -13,6 +13,10 @@
 #include <ostream>
 #include <stdexcept>
 
+#ifdef __SSE2__
+#include <emmintrin.h>
+#endif
+
 namespace shadyloc::features
 {
 namespace
@@ -47,6 +51,9 @@ void TStereoFeatureOptions::loadFromConfigFile(
 	MRPT_LOAD_CONFIG_VAR(max_depth, double, c, s);
 	MRPT_LOAD_CONFIG_VAR(presmooth_sigma, double, c, s);
 	MRPT_LOAD_CONFIG_VAR(subpixel_iterations, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(dense_check, bool, c, s);
+	MRPT_LOAD_CONFIG_VAR(shifted_window_check, bool, c, s);
+	MRPT_LOAD_CONFIG_VAR(shifted_window_margin, double, c, s);
 	try
 	{
 		validate();
@@ -77,7 +84,10 @@ void TStereoFeatureOptions::dumpToTextStream(std::ostream& o) const
 	  << "sigma_px = " << sigma_px << "   ; pixel noise for landmark covariance [px]\n"
 	  << "max_depth = " << max_depth << "   ; farthest landmark kept [m]\n"
 	  << "presmooth_sigma = " << presmooth_sigma << "   ; Gaussian pre-smoothing, 0 = off [px]\n"
-	  << "subpixel_iterations = " << subpixel_iterations << "   ; Gauss-Newton steps on uR, 0 = parabola only\n";
+	  << "subpixel_iterations = " << subpixel_iterations << "   ; Gauss-Newton steps on uR, 0 = parabola only\n"
+	  << "dense_check = " << dense_check << "   ; verify the match against every shift of the range\n"
+	  << "shifted_window_check = " << shifted_window_check << "   ; four corner-holding windows must agree (needs dense_check)\n"
+	  << "shifted_window_margin = " << shifted_window_margin << "   ; ZNCC a shifted window's other peak may exceed the match by\n";
 }
 
 void TStereoFeatureOptions::validate() const
@@ -95,6 +105,7 @@ void TStereoFeatureOptions::validate() const
 	if (!(max_depth > 0)) bad("max_depth must be > 0");
 	if (!(presmooth_sigma >= 0 && presmooth_sigma <= 5)) bad("presmooth_sigma must be in [0,5]");
 	if (subpixel_iterations < 0 || subpixel_iterations > 20) bad("subpixel_iterations must be in [0,20]");
+	if (!(shifted_window_margin >= 0 && shifted_window_margin <= 2)) bad("shifted_window_margin must be in [0,2]");
 }
 
 // ---- FAST on a grid -----------------------------------------------------------
@@ -292,6 +303,171 @@ double patchStd(const cv::Mat& a, int x, int y, int r)
 }
 }  // namespace
 
+namespace
+{
+/** Window sums of the right image for denseRowZncc, computed per row on
+ * first use (most rows are never needed) into buffers reused across frames. */
+struct TRightWindowStats
+{
+	const cv::Mat* img = nullptr;
+	int r = 0;
+	std::vector<uint8_t> done;	//!< per row: computed this frame
+	std::vector<int32_t> sum;  //!< per pixel: sum of the (2r+1)^2 window [grey levels]
+	std::vector<float> invNorm;	 //!< per pixel: 1 / sqrt(sum (R - mean R)^2), 0 where flat
+	std::vector<int32_t> colS, colQ;
+
+	void reset(const cv::Mat& image8, int radius)
+	{
+		img = &image8;
+		r = radius;
+		done.assign(image8.rows, 0);
+		const size_t N = size_t(image8.rows) * image8.cols;
+		if (sum.size() < N) sum.resize(N), invNorm.resize(N);
+		colS.resize(image8.cols);
+		colQ.resize(image8.cols);
+	}
+	/** Row y's sums (r <= y < H - r); valid for x in [r, W - r - 1]. */
+	void row(int y, const int32_t*& S, const float*& iN)
+	{
+		const int W = img->cols, w = 2 * r + 1, n = w * w;
+		S = sum.data() + size_t(y) * W;
+		iN = invNorm.data() + size_t(y) * W;
+		if (done[y]) return;
+		done[y] = 1;
+		std::fill(colS.begin(), colS.end(), 0);
+		std::fill(colQ.begin(), colQ.end(), 0);
+		for (int dy = -r; dy <= r; dy++)
+		{
+			const uint8_t* p = img->ptr<uint8_t>(y + dy);
+			for (int x = 0; x < W; x++) colS[x] += p[x], colQ[x] += p[x] * p[x];
+		}
+		int32_t* Sw = sum.data() + size_t(y) * W;
+		float* Iw = invNorm.data() + size_t(y) * W;
+		int64_t s = 0, q = 0;
+		for (int x = 0; x < w - 1; x++) s += colS[x], q += colQ[x];
+		for (int x = r; x < W - r; x++)
+		{
+			s += colS[x + r];
+			q += colQ[x + r];
+			Sw[x] = static_cast<int32_t>(s);
+			Iw[x] = static_cast<float>(n * q - s * s);	// n^2 var: exact, < 2^31 for r <= 7
+			s -= colS[x - r];
+			q -= colQ[x - r];
+		}
+		// 1 / sqrt(var sum) = sqrt(n / (n^2 var)), 0 where flat.
+		const float nf = static_cast<float>(n);
+		int x = r;
+#ifdef __SSE2__
+		const __m128i z = _mm_setzero_si128();
+		for (; x + 4 <= W - r; x += 4)
+		{
+			const __m128 v = _mm_loadu_ps(Iw + x);
+			const __m128 pos = _mm_cmpgt_ps(v, _mm_castsi128_ps(z));
+			const __m128 inv = _mm_sqrt_ps(_mm_div_ps(_mm_set1_ps(nf), _mm_max_ps(v, _mm_set1_ps(1.f))));
+			_mm_storeu_ps(Iw + x, _mm_and_ps(pos, inv));
+		}
+#endif
+		for (; x < W - r; x++) Iw[x] = Iw[x] > 0 ? std::sqrt(nf / Iw[x]) : 0.f;
+	}
+};
+
+/** Dense ZNCC of the left patch centred at (xl, y) against every right
+ * window on row y centred in [xmin, xmax] (all inside the image; xmax <=
+ * W - r - 2, so the SSE2 loads stay inside the row). The right windows' sums
+ * come from `R` (per row, cached), so each shift costs one (2r+1)^2 dot
+ * product; SSE2 does 8 shifts at a time, two columns' products per 32-bit
+ * lane (pmaddwd). Flat windows score -1. Same values as zncc() up to float
+ * rounding. */
+void denseRowZncc(
+	const cv::Mat& left, int xl, int y, const cv::Mat& right, TRightWindowStats& R, int xmin,
+	int xmax, int r, std::vector<float>& out, std::vector<int32_t>& acc)
+{
+	const int n = (2 * r + 1) * (2 * r + 1), w = 2 * r + 1, m = std::max(0, xmax - xmin + 1);
+	out.assign(m, -1.f);
+	if (m == 0) return;
+	int sl = 0, sll = 0;
+	for (int dy = -r; dy <= r; dy++)
+	{
+		const uint8_t* pl = left.ptr<uint8_t>(y + dy) + xl - r;
+		for (int dx = 0; dx < w; dx++) sl += pl[dx], sll += pl[dx] * pl[dx];
+	}
+	const double ll = sll - double(sl) * sl / n;  // n var(L)
+	if (ll < 1e-6) return;
+	// A = sum (L - m) R, m the rounded mean of L (|L - m| <= 255 fits int16);
+	// the exact numerator follows below.
+	const int m16 = (sl + n / 2) / n;
+	acc.assign(m, 0);
+	int32_t* A = acc.data();
+	int k0 = 0;
+#ifdef __SSE2__
+	{
+		// Weights of column pairs (dx, dx + 1) per row, a zero past the window;
+		// each block of 8 shifts accumulates in registers over the whole window.
+		const int pairs = (w + 1) / 2;
+		__m128i wts[8 * 15];  // (2r+1) rows x pairs, r <= 7
+		for (int dy = 0; dy < w; dy++)
+		{
+			const uint8_t* pl = left.ptr<uint8_t>(y - r + dy) + xl - r;
+			for (int p = 0; p < pairs; p++)
+			{
+				const int dx = 2 * p;
+				const uint16_t la = static_cast<uint16_t>(pl[dx] - m16);
+				const uint16_t lb = dx + 1 < w ? static_cast<uint16_t>(pl[dx + 1] - m16) : 0;
+				wts[dy * pairs + p] = _mm_set1_epi32(static_cast<int32_t>(la | (uint32_t(lb) << 16)));
+			}
+		}
+		const __m128i zero = _mm_setzero_si128();
+		for (; k0 + 8 <= m; k0 += 8)
+		{
+			__m128i lo = zero, hi = zero;
+			for (int dy = 0; dy < w; dy++)
+			{
+				const uint8_t* q = right.ptr<uint8_t>(y - r + dy) + xmin - r + k0;
+				for (int p = 0; p < pairs; p++)
+				{
+					// pixels k..k+7 at columns dx and dx + 1, as int16; pmaddwd
+					// multiplies int16 x int16 into int32, so no product overflows
+					const __m128i v0 = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(q + 2 * p)), zero);
+					const __m128i v1 = _mm_unpacklo_epi8(_mm_loadl_epi64(reinterpret_cast<const __m128i*>(q + 2 * p + 1)), zero);
+					const __m128i wt = wts[dy * pairs + p];
+					lo = _mm_add_epi32(lo, _mm_madd_epi16(_mm_unpacklo_epi16(v0, v1), wt));
+					hi = _mm_add_epi32(hi, _mm_madd_epi16(_mm_unpackhi_epi16(v0, v1), wt));
+				}
+			}
+			_mm_storeu_si128(reinterpret_cast<__m128i*>(A + k0), lo);
+			_mm_storeu_si128(reinterpret_cast<__m128i*>(A + k0 + 4), hi);
+		}
+	}
+#endif
+	for (int dy = -r; dy <= r; dy++)  // the remaining shifts (all without SSE2)
+	{
+		const uint8_t* pl = left.ptr<uint8_t>(y + dy) + xl - r;
+		const uint8_t* q = right.ptr<uint8_t>(y + dy) + xmin - r;
+		for (int dx = 0; dx < w; dx++)
+		{
+			const int lz = pl[dx] - m16;
+			for (int k = k0; k < m; k++) A[k] += lz * q[dx + k];
+		}
+	}
+	const int32_t* S;
+	const float* iN;
+	R.row(y, S, iN);
+	S += xmin;
+	iN += xmin;
+	// sum (L - mean L) R = A - (mean L - m) sum R
+	const float e = static_cast<float>(double(sl) / n - m16), iL = static_cast<float>(1.0 / std::sqrt(ll));
+	float* o = out.data();
+	for (int k = 0; k < m; k++)
+		o[k] = iN[k] > 0 ? (static_cast<float>(A[k]) - e * static_cast<float>(S[k])) * iN[k] * iL : -1.f;
+}
+
+/** Index of the largest element (-1 when empty). */
+int argMax(const std::vector<float>& v)
+{
+	return v.empty() ? -1 : static_cast<int>(std::max_element(v.begin(), v.end()) - v.begin());
+}
+}  // namespace
+
 // ---- stereo -------------------------------------------------------------------
 StereoFeatureExtractor::StereoFeatureExtractor(const TOptions& o)
 	: m_opts(o), m_brief(o.brief_patch_size, o.brief_seed)
@@ -380,6 +556,11 @@ void StereoFeatureExtractor::process(
 	rowsL.build(kl, left.rows);
 	const double doffs = calib.doffs();
 	const int W = left.cols;
+	// Scratch reused across frames (one per thread: the channels may run in parallel).
+	thread_local TRightWindowStats rightStats;
+	if (o.dense_check) rightStats.reset(right, r);
+	std::vector<float> dense;
+	std::vector<int32_t> denseAcc;
 	struct TPair
 	{
 		int kp;
@@ -453,6 +634,51 @@ void StereoFeatureExtractor::process(
 		const int xlmax = static_cast<int>(std::ceil(x - doffs + o.max_disparity));
 		const TBest back = bestOnRow(right, x, y, left, rowsL, o.row_tolerance, xlmin, xlmax, r);
 		if (back.x < 0 || std::abs(back.x - xl) > o.lr_tolerance_px) continue;
+		if (o.dense_check)
+		{
+			// Every integer shift of the range, not only the right corners: the
+			// dense maximum must be this match (+-1 px), and no other local
+			// maximum may pass the ambiguity bound. A right corner missing at the
+			// true position otherwise lets a look-alike win.
+			const int x0 = std::max(xmin, r + 1), x1 = std::min(xmax, W - r - 2);
+			denseRowZncc(left, xl, y, right, rightStats, x0, x1, r, dense, denseAcc);
+			const int bi = argMax(dense);
+			if (bi < 0 || std::abs(x0 + bi - x) > 1) continue;
+			float s2 = -1.f;
+			const int nd = static_cast<int>(dense.size());
+			for (int k = 0; k < nd; k++)
+				if (std::abs(k - bi) > 1 && (k == 0 || dense[k] >= dense[k - 1]) &&
+					(k + 1 == nd || dense[k] >= dense[k + 1]))
+					s2 = std::max(s2, dense[k]);
+			if ((1.0 - dense[bi]) > o.max_ambiguity * (1.0 - s2)) continue;
+			if (o.shifted_window_check)
+			{
+				// Shiftable windows (Fusiello et al. 1997; Hirschmueller et al.
+				// 2002): the four windows holding the corner pixel at one of
+				// their corners. At a depth edge one of them lies on the pixel's
+				// own surface; if any textured one prefers another shift, the
+				// pixel's disparity is in doubt (typically a background pixel
+				// whose centred window is dominated by a foreground edge).
+				const int ox[4] = {-r, r, -r, r}, oy[4] = {-r, -r, r, r};
+				bool ok = true;
+				for (int k = 0; k < 4 && ok; k++)
+				{
+					const int xa = xl + ox[k], ya = y + oy[k];
+					if (xa - r < 0 || xa + r >= W || ya - r < 0 || ya + r >= left.rows) continue;
+					if (patchStd(left, xa, ya, r) < 3.0) continue;  // no evidence either way
+					const int a0 = std::max(x0 + ox[k], r + 1), a1 = std::min(x1 + ox[k], W - r - 2);
+					if (x + ox[k] < a0 || x + ox[k] > a1) continue;
+					denseRowZncc(left, xa, ya, right, rightStats, a0, a1, r, dense, denseAcc);
+					const int b = argMax(dense), c = x + ox[k] - a0;
+					if (b < 0) continue;
+					float sm = dense[c];
+					if (c > 0) sm = std::max(sm, dense[c - 1]);
+					if (c + 1 < static_cast<int>(dense.size())) sm = std::max(sm, dense[c + 1]);
+					ok = std::abs(b - c) <= 1 || dense[b] <= sm + o.shifted_window_margin;
+				}
+				if (!ok) continue;
+			}
+		}
 		pairs.push_back({static_cast<int>(i), uR, c0});
 	}
 	out.timings.stereo_ms = msSince(t0);

@@ -113,11 +113,13 @@ struct TStereoFeatureOptions : public mrpt::config::CLoadableOptions
 	double min_zncc = 0.8;	//!< weakest accepted stereo correlation
 	double max_ambiguity = 0.6;	 //!< reject if (1-best)/(1-second best) exceeds this
 	double lr_tolerance_px = 1.0;  //!< left-right consistency: reverse match within this [px]
-/** Depth-discontinuity check: the four windows shifted by patch_radius
- * (left, right, up, down) must also correlate at the found disparity at
- * least this well; a corner on an object's silhouette fails it (its
- * background half lies at another disparity). -1 disables. */
-double min_zncc_shifted = 0.5;
+	/** Depth-discontinuity check: the four windows beside the patch (shifted
+	 * by 2 patch_radius + 1: left, right, up, down) must also correlate at the
+	 * found disparity at least this well; a corner on an object's silhouette
+	 * fails it (its background half lies at another disparity). -1 disables.
+	 * 0.3 with shifted_window_check (which catches silhouettes more
+	 * selectively), 0.5 without it (docs/vo.md, Middlebury). */
+	double min_zncc_shifted = 0.3;
 	int brief_patch_size = 32;	//!< BRIEF patch side S [px]
 	uint32_t brief_seed = 0x5ad710c;  //!< BRIEF test pattern seed (maps and live runs must agree)
 	double sigma_px = 0.5;	//!< pixel noise of uL, v, uR for landmark covariances [px]
@@ -130,6 +132,20 @@ double min_zncc_shifted = 0.5;
 	/** Gauss-Newton steps refining the stereo match's sub-pixel uR after the
 	 * parabola fit (refineRowShift); 0 = the parabola only. */
 	int subpixel_iterations = 5;
+	/** Verify each match by ZNCC at every integer shift of the disparity
+	 * range (not only at right-image corners): the dense maximum must be the
+	 * match (+-1 px) and no other local maximum may pass max_ambiguity. */
+	bool dense_check = true;
+	/** With dense_check: the four windows shifted by (+-patch_radius,
+	 * +-patch_radius), each holding the corner pixel at one of its corners,
+	 * must (when textured) also have their dense maximum at the match +-1 px;
+	 * rejects corners on depth edges whose centred window follows the other
+	 * surface (shiftable windows, Fusiello et al. 1997). */
+	bool shifted_window_check = true;
+	/** A shifted window's best shift elsewhere (> 1 px from the match) rejects
+	 * the match only when its ZNCC exceeds the window's own score at the match
+	 * (+-1 px) by more than this [ZNCC units]; 0 = any better shift rejects. */
+	double shifted_window_margin = 0.0;
 
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
