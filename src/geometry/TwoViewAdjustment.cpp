@@ -27,11 +27,11 @@ namespace
 struct TLandmarkBlock
 {
 	int idx;  //!< correspondence index
-	Eigen::Vector3d X;	//!< landmark in the reference frame [m]
-	Eigen::Vector3d z_ref;	//!< its stereo measurement in the reference frame [px]
-	Eigen::Matrix<double, 6, 3> Hpx;
-	Eigen::Matrix3d Hxx;
-	Eigen::Vector3d gx;
+	Eigen::Vector3d z_ref;	//!< the landmark's stereo measurement in the reference frame [px]
+	// Normal-equation blocks at the last linearisation:
+	Eigen::Matrix<double, 6, 3> Hpx = Eigen::Matrix<double, 6, 3>::Zero();  //!< pose-landmark
+	Eigen::Matrix3d Hxx = Eigen::Matrix3d::Zero();	//!< landmark-landmark
+	Eigen::Vector3d gx = Eigen::Vector3d::Zero();  //!< landmark gradient
 };
 
 double huberCost(double e, double k) { return e <= k ? e * e : 2 * k * e - k * k; }
@@ -43,7 +43,7 @@ TPoseSolution solveStereoPoseTwoView(
 	const std::vector<uint8_t>& use, const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o)
 {
 	TPoseSolution sol;
-	const double s2inv = 1.0 / (o.sigma_px * o.sigma_px);
+	const double sinv = 1.0 / o.sigma_px, s2inv = sinv * sinv;
 	std::vector<TLandmarkBlock> L;
 	L.reserve(c.size());
 	for (size_t i = 0; i < c.size(); i++)
@@ -53,10 +53,9 @@ TPoseSolution solveStereoPoseTwoView(
 		if (!(c[i].P_ref.z() > 1e-3) || !((T_init * c[i].P_ref).z() > 1e-3)) continue;
 		TLandmarkBlock b;
 		b.idx = static_cast<int>(i);
-		b.X = c[i].P_ref;
 		// P_ref was triangulated from the reference measurement: projecting it
 		// gives that measurement back exactly.
-		b.z_ref = calib.project(b.X);
+		b.z_ref = calib.project(c[i].P_ref);
 		L.push_back(b);
 	}
 	if (L.size() < 3) return sol;
@@ -70,10 +69,10 @@ TPoseSolution solveStereoPoseTwoView(
 		{
 			if (!(X[k].z() > 1e-3)) return HUGE_VAL;
 			const Eigen::Vector3d rr = calib.project(X[k]) - L[k].z_ref;
-			f += huberCost(rr.norm() * std::sqrt(s2inv), o.huber_k);
+			f += huberCost(rr.norm() * sinv, o.huber_k);
 			Eigen::Vector3d r;
 			if (!stereoResidual(calib, T, X[k], c[L[k].idx].z_curr, r)) return HUGE_VAL;
-			f += huberCost(r.norm() * std::sqrt(s2inv), o.huber_k);
+			f += huberCost(r.norm() * sinv, o.huber_k);
 			ss += r.squaredNorm();
 			n++;
 		}
@@ -84,7 +83,7 @@ TPoseSolution solveStereoPoseTwoView(
 
 	Eigen::Isometry3d T = T_init;
 	std::vector<Eigen::Vector3d> X(L.size()), Xnew(L.size());
-	for (size_t k = 0; k < L.size(); k++) X[k] = L[k].X;
+	for (size_t k = 0; k < L.size(); k++) X[k] = c[L[k].idx].P_ref;
 	double f = cost(T, X, nullptr, nullptr);
 	if (!std::isfinite(f)) return sol;
 	// Normal equations at (T, X) with IRLS weights; the landmark blocks are
@@ -103,8 +102,8 @@ TPoseSolution solveStereoPoseTwoView(
 			Matrix36d Jc;
 			stereoResidual(calib, T, X[k], c[b.idx].z_curr, rc, &Jc);
 			const Eigen::Matrix3d JcX = Jc.leftCols<3>() * T.linear();
-			const double wk = huberWeight(rk.norm() * std::sqrt(s2inv), o.huber_k) * s2inv;
-			const double wc = huberWeight(rc.norm() * std::sqrt(s2inv), o.huber_k) * s2inv;
+			const double wk = huberWeight(rk.norm() * sinv, o.huber_k) * s2inv;
+			const double wc = huberWeight(rc.norm() * sinv, o.huber_k) * s2inv;
 			Hpp += wc * Jc.transpose() * Jc;
 			gp += wc * Jc.transpose() * rc;
 			b.Hpx = wc * Jc.transpose() * JcX;
