@@ -136,6 +136,13 @@ TRansacResult ransacStereoPose(
 	std::mt19937 rng(o.seed);
 	std::uniform_int_distribution<int> pick(0, n - 1);
 	int best = -1;
+	// The score: inliers, less the prior's penalty when one is given.
+	double bestScore = -HUGE_VAL;
+	auto score = [&](const Eigen::Isometry3d& T, int k) {
+		if (!(o.prior_sigma_m > 0) || o.hypotheses.empty()) return double(k);
+		const double d = (T.translation() - o.hypotheses.front().translation()).norm() / o.prior_sigma_m;
+		return k - 0.5 * d * d;
+	};
 	Eigen::Isometry3d bestT = Eigen::Isometry3d::Identity();
 	int maxIt = o.max_iterations;
 	std::vector<Eigen::Vector3d> s(3), d(3);
@@ -145,7 +152,7 @@ TRansacResult ransacStereoPose(
 	// two-view bundle adjustment with two_view_ba).
 	auto consider = [&](Eigen::Isometry3d T, int it) {
 		int k = countInliers(calib, c, T, o.inlier_threshold_px, nullptr);
-		if (k > best && k >= 6)
+		if (score(T, k) > bestScore && k >= 6)
 		{
 			for (int lo = 0; lo < 2; lo++)
 			{
@@ -158,12 +165,13 @@ TRansacResult ransacStereoPose(
 												: solveStereoPose(calib, c, f, T, so);
 				if (!sol.ok) break;
 				const int k2 = countInliers(calib, c, sol.T_curr_ref, o.inlier_threshold_px, nullptr);
-				if (k2 <= k) break;
+				if (score(sol.T_curr_ref, k2) <= score(T, k)) break;
 				k = k2;
 				T = sol.T_curr_ref;
 			}
 		}
-		if (k <= best) return;
+		if (score(T, k) <= bestScore) return;
+		bestScore = score(T, k);
 		best = k;
 		bestT = T;
 		// Adaptive bound: iterations for `confidence` of one all-inlier sample.

@@ -114,6 +114,7 @@ void TStereoVOOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c
 	MRPT_LOAD_CONFIG_VAR(constant_velocity, bool, c, s);
 	MRPT_LOAD_CONFIG_VAR(two_view_ba, bool, c, s);
 	MRPT_LOAD_CONFIG_VAR(ransac_prediction, bool, c, s);
+	MRPT_LOAD_CONFIG_VAR(ransac_prior_sigma_m, double, c, s);
 	try
 	{
 		validate();
@@ -151,7 +152,8 @@ void TStereoVOOptions::dumpToTextStream(std::ostream& o) const
 	  << "max_lost_frames = " << max_lost_frames << "\n"
 	  << "constant_velocity = " << (constant_velocity ? "true" : "false") << "\n"
 	  << "two_view_ba = " << (two_view_ba ? "true" : "false") << "   ; solve by two-view bundle adjustment\n"
-	  << "ransac_prediction = " << (ransac_prediction ? "true" : "false") << "   ; the prediction is a RANSAC hypothesis\n";
+	  << "ransac_prediction = " << (ransac_prediction ? "true" : "false") << "   ; the prediction is a RANSAC hypothesis\n"
+	  << "ransac_prior_sigma_m = " << ransac_prior_sigma_m << "   ; preference for hypotheses near the prediction, 0 = off [m]\n";
 }
 
 void TStereoVOOptions::validate() const
@@ -171,6 +173,7 @@ void TStereoVOOptions::validate() const
 	if (!(kf_translation > 0) || !(kf_rotation_deg > 0)) bad("kf_translation/kf_rotation_deg must be > 0");
 	if (!(max_step_translation > 0) || !(max_step_rotation_deg > 0)) bad("max_step_* must be > 0");
 	if (max_lost_frames < 0) bad("max_lost_frames must be >= 0");
+	if (!(ransac_prior_sigma_m >= 0)) bad("ransac_prior_sigma_m must be >= 0 (0 = off)");
 }
 
 // ---- the pipeline -------------------------------------------------------------
@@ -398,7 +401,12 @@ TFrameResult StereoVO::process(
 	// with only far landmarks (the invariant image outdoors) the inlier count
 	// hardly changes along the viewing direction and random sets of noisy
 	// far points can settle on a step twice too long (docs/vo.md).
-	if (o.ransac_prediction) ro.hypotheses.push_back(T_curr_kf_pred);
+	if (o.ransac_prediction)
+	{
+		ro.hypotheses.push_back(T_curr_kf_pred);
+		// The prediction spans every frame since the last tracked one.
+		ro.prior_sigma_m = o.ransac_prior_sigma_m * (1 + m_lost);
+	}
 	ro.two_view_ba = o.two_view_ba;
 	const auto rs = geometry::ransacStereoPose(calib, corr, ro);
 	res.inliers = rs.inliers;

@@ -65,6 +65,12 @@ struct TRansacOptions
 	/** Hypotheses of T_curr_ref scored (and locally optimised) before the
 	 * random minimal sets, e.g. the motion model's prediction. */
 	std::vector<Eigen::Isometry3d> hypotheses;
+	/** With a first hypothesis (a motion prediction) and sigma > 0, a
+	 * hypothesis scores its inliers less 0.5 (|t - t_pred| / sigma)^2, t its
+	 * translation: between consensus sets of similar size the one nearer the
+	 * prediction wins (a repetitive structure matched one period off forms
+	 * a consistent wrong set); 0 = inliers only [m]. */
+	double prior_sigma_m = 0;
 	/** Local optimisation by two-view bundle adjustment (else with fixed landmarks). */
 	bool two_view_ba = false;
 };

@@ -123,6 +123,9 @@ struct TStereoVOOptions : public mrpt::config::CLoadableOptions
 	/** Score the motion model's prediction as a RANSAC hypothesis besides the
 	 * random minimal sets. */
 	bool ransac_prediction = true;
+	/** RANSAC's preference for hypotheses near the prediction
+	 * (geometry::TRansacOptions::prior_sigma_m), 0 = off [m per frame]. */
+	double ransac_prior_sigma_m = 0.15;
 	double kf_translation = 1.0;  //!< new keyframe beyond this distance from the keyframe [m]
 	double kf_rotation_deg = 10.0;	//!< ... or this rotation [deg]
 	double kf_min_tracked_fraction = 0.35;	//!< ... or when inliers / keyframe landmarks fall below this
