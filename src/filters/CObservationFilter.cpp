@@ -129,7 +129,15 @@ void CObservationFilter::serializeCommon(mrpt::serialization::CArchive& out) con
 {
 	out << common.output_suffix << common.sensor_labels;
 }
-void CObservationFilter::deserializeCommon(mrpt::serialization::CArchive& in)
+io::BoundedReader CObservationFilter::boundedReader(
+	mrpt::serialization::CArchive& in, uint8_t version) const
 {
-	in >> common.output_suffix >> common.sensor_labels;
+	return io::BoundedReader(
+		in, std::string(GetRuntimeClass()->className) + " (version " + std::to_string(version) + ")",
+		kMaxSerializedBytes);
+}
+void CObservationFilter::deserializeCommon(io::BoundedReader& in)
+{
+	in.readString(common.output_suffix, "output_suffix", kMaxOptionStringBytes);
+	in.readString(common.sensor_labels, "sensor_labels", kMaxOptionStringBytes);
 }

@@ -14,6 +14,16 @@ IMPLEMENTS_SERIALIZABLE(CFilterLinearise, CObservationFilter, shadyloc)
 
 namespace
 {
+/** An enum stored as a byte, checked against its last value. */
+template <class E>
+E readEnum(io::BoundedReader& in, const char* field, E last)
+{
+	const uint8_t v = in.read<uint8_t>(field);
+	if (v > static_cast<uint8_t>(last))
+		in.fail(field, "value " + std::to_string(v) + " out of range 0.." + std::to_string(static_cast<int>(last)));
+	return static_cast<E>(v);
+}
+
 void requireColour(const cv::Mat& in)
 {
 	if (in.channels() != 3)
@@ -51,10 +61,9 @@ void CFilterMonochrome::serializeFrom(mrpt::serialization::CArchive& in, uint8_t
 	{
 		case 0:
 		{
-			deserializeCommon(in);
-			uint8_t o;
-			in >> o;
-			order = static_cast<image::ChannelOrder>(o);
+			auto r = boundedReader(in, version);
+			deserializeCommon(r);
+			order = readEnum(r, "channel_order", image::ChannelOrder::RGB);
 		}
 		break;
 		default: MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
@@ -158,12 +167,26 @@ void CFilterInvariant::serializeFrom(mrpt::serialization::CArchive& in, uint8_t 
 	{
 		case 0:
 		{
-			deserializeCommon(in);
-			uint8_t o, l;
-			in >> m_params.alpha >> m_params.beta >> o >> l >> m_params.gamma >>
-				m_params.scale >> m_params.offset >> parallel_eyes;
-			m_params.order = static_cast<image::ChannelOrder>(o);
-			m_params.linearisation = static_cast<image::Linearisation>(l);
+			auto r = boundedReader(in, version);
+			deserializeCommon(r);
+			image::InvariantParams p;
+			r.read(p.alpha, "alpha");
+			r.read(p.beta, "beta");
+			p.order = readEnum(r, "channel_order", image::ChannelOrder::RGB);
+			p.linearisation = readEnum(r, "linearisation", image::Linearisation::Gamma);
+			r.read(p.gamma, "gamma");
+			r.read(p.scale, "scale");
+			r.read(p.offset, "offset");
+			r.read(parallel_eyes, "parallel_eyes");
+			try
+			{
+				p.validate();
+			}
+			catch (const std::exception& e)
+			{
+				r.fail("parameters", e.what());
+			}
+			m_params = p;
 			onOptionsChanged();
 		}
 		break;
@@ -205,10 +228,12 @@ void CFilterLinearise::serializeFrom(mrpt::serialization::CArchive& in, uint8_t 
 	{
 		case 0:
 		{
-			deserializeCommon(in);
-			uint8_t l;
-			in >> l >> gamma;
-			linearisation = static_cast<image::Linearisation>(l);
+			auto r = boundedReader(in, version);
+			deserializeCommon(r);
+			linearisation = readEnum(r, "linearisation", image::Linearisation::Gamma);
+			r.read(gamma, "gamma");
+			if (linearisation == image::Linearisation::Gamma && !(gamma > 0 && gamma < 10))
+				r.fail("gamma", std::to_string(gamma) + ": must be in (0,10)");
 		}
 		break;
 		default: MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);

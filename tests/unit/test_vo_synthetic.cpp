@@ -2,15 +2,12 @@
  * accuracy on both channels, keyframe chain, and robustness to a blank frame. */
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/vo/Channel.h>
-#include <shadyloc/vo/KeyframeIO.h>
 #include <shadyloc/vo/StereoVO.h>
 #include <shadyloc/vo/SyntheticCorridor.h>
 
 #include "../support/TestSupport.h"
 
 #include <mrpt/config/CConfigFileMemory.h>
-#include <mrpt/io/CMemoryStream.h>
-#include <mrpt/serialization/CArchive.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -281,44 +278,6 @@ TEST(VOSynthetic, MotionPriorReplacesConstantVelocity)
 	// Without the prior, fewer landmarks fall inside their window: at least
 	// half as many matches over the run, or lost frames.
 	EXPECT_TRUE(lostWithout > 0 || trackedWithout < 0.5 * trackedWith);
-}
-
-TEST(VOSynthetic, KeyframeRoundTripsThroughArchive)
-{
-	const TRun run = runVO(vo::Channel::Mono);
-	ASSERT_GE(run.keyframes.size(), 2u);
-	const vo::TKeyframe& kf = run.keyframes[1];
-	mrpt::io::CMemoryStream buf;
-	auto ar = mrpt::serialization::archiveFrom(buf);
-	vo::writeKeyframe(ar, kf);
-	buf.Seek(0);
-	vo::TKeyframe back;
-	vo::readKeyframe(ar, back);
-	EXPECT_EQ(back.id, kf.id);
-	EXPECT_EQ(back.frame, kf.frame);
-	EXPECT_EQ(back.timestamp, kf.timestamp);
-	EXPECT_EQ(back.chain_break, kf.chain_break);
-	EXPECT_EQ(back.T_prevkf_kf.matrix(), kf.T_prevkf_kf.matrix());
-	EXPECT_EQ(back.T_world_kf.matrix(), kf.T_world_kf.matrix());
-	EXPECT_EQ(back.cov, kf.cov);
-	ASSERT_EQ(back.meas.size(), kf.meas.size());
-	for (size_t i = 0; i < kf.meas.size(); i++)
-	{
-		const auto &a = kf.meas[i], &b = back.meas[i];
-		EXPECT_EQ(a.uL, b.uL);
-		EXPECT_EQ(a.uR, b.uR);
-		EXPECT_EQ(a.v, b.v);
-		EXPECT_TRUE(a.desc == b.desc);
-		EXPECT_EQ(a.patch, b.patch);
-		EXPECT_EQ(a.P, b.P);
-		EXPECT_EQ(a.cov, b.cov);
-	}
-	// A future version is refused, not misread.
-	mrpt::io::CMemoryStream bad;
-	auto ab = mrpt::serialization::archiveFrom(bad);
-	ab << static_cast<uint8_t>(vo::kKeyframeFormatVersion + 1);
-	bad.Seek(0);
-	EXPECT_THROW(vo::readKeyframe(ab, back), std::runtime_error);
 }
 
 TEST(VOSynthetic, LongerRunAtBumblebeeResolution)

@@ -9,6 +9,8 @@
  */
 #pragma once
 
+#include <shadyloc/io/BoundedReader.h>
+
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/config/CLoadableOptions.h>
 #include <mrpt/obs/CObservation.h>
@@ -67,8 +69,16 @@ class CObservationFilter : public mrpt::serialization::CSerializable
 	/** Called after options change (to rebuild tables and the like). */
 	virtual void onOptionsChanged() {}
 
+	/** Largest serialised filter a reader accepts [bytes]: its data are a
+	 * few options (io::BoundedReader; a corrupt length fails, not allocates). */
+	static constexpr uint64_t kMaxSerializedBytes = 64 * 1024;
+	/** Longest option string (suffix, sensor label list) a reader accepts [bytes]. */
+	static constexpr size_t kMaxOptionStringBytes = 4096;
+	/** A bounded reader over serializeFrom()'s archive, naming this class and version. */
+	io::BoundedReader boundedReader(mrpt::serialization::CArchive& in, uint8_t version) const;
+
 	void serializeCommon(mrpt::serialization::CArchive& out) const;
-	void deserializeCommon(mrpt::serialization::CArchive& in);
+	void deserializeCommon(io::BoundedReader& in);
 };
 
 }  // namespace shadyloc

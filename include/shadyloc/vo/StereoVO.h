@@ -17,6 +17,7 @@
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/geometry/PoseSolver.h>
 #include <shadyloc/geometry/StereoCamera.h>
+#include <shadyloc/map/Keyframe.h>
 
 #include <mrpt/config/CLoadableOptions.h>
 #include <mrpt/system/COutputLogger.h>
@@ -47,25 +48,8 @@ inline bool isTracked(FrameStatus s)
 	return s == FrameStatus::Ok || s == FrameStatus::First || s == FrameStatus::Reinit;
 }
 
-/** A keyframe: what the survey map stores. */
-struct TKeyframe
-{
-	uint32_t id = 0;  //!< 0, 1, 2, ... in creation order
-	size_t frame = 0;  //!< index of the frame it was made from
-	double timestamp = 0;  //!< [s]
-	/** Pose of this keyframe's left camera in the previous keyframe's left camera
-	 * (identity for the first). */
-	Eigen::Isometry3d T_prevkf_kf = Eigen::Isometry3d::Identity();
-	/** Covariance of T_prevkf_kf, left perturbation (translation, rotation)
-	 * [m^2, rad^2] (geometry/PoseSolver.h). */
-	geometry::Matrix6d cov = geometry::Matrix6d::Zero();
-	/** True if T_prevkf_kf is a prediction across a tracking gap (Reinit), not a
-	 * measurement: the chain is broken here and cov is large. */
-	bool chain_break = false;
-	/** Pose in the first keyframe's frame (the product of the chain), for convenience. */
-	Eigen::Isometry3d T_world_kf = Eigen::Isometry3d::Identity();
-	std::vector<features::TStereoMeasurement> meas;	 //!< landmarks in this keyframe's frame
-};
+/** The VO's keyframes are the map's keyframe type (map/Keyframe.h). */
+using TKeyframe = map::TKeyframe;
 
 /** Stage times of one frame [ms]. */
 struct TVOTimings
