@@ -9,7 +9,7 @@ namespace shadyloc::io
 {
 BoundedReader::BoundedReader(
 	mrpt::serialization::CArchive& in, std::string what, uint64_t budgetBytes, uint64_t baseOffset)
-	: m_in(in), m_what(std::move(what)), m_budget(budgetBytes), m_base(baseOffset)
+	: m_in(in), m_what(std::move(what)), m_budget(budgetBytes), m_base(baseOffset), m_fieldStart(baseOffset)
 {
 }
 
@@ -36,23 +36,29 @@ uint64_t BoundedReader::positionOf(const mrpt::io::CStream& s)
 	return knowsItsSize(s) ? s.getPosition() : 0;
 }
 
-void BoundedReader::need(uint64_t n, const char* field) const
+void BoundedReader::start(uint64_t n, const char* field)
 {
+	m_fieldStart = offset();
 	if (n > remaining())
 		fail(
 			field, "needs " + std::to_string(n) + " bytes, only " + std::to_string(remaining()) +
 					   " can remain (truncated or corrupt)");
 }
 
+void BoundedReader::finish(size_t got, size_t want, const char* field)
+{
+	if (got != want)
+		fail(field, "truncated: " + std::to_string(got) + " of " + std::to_string(want) + " bytes");
+	m_used += want;
+}
+
 void BoundedReader::readBytes(void* dst, size_t n, const char* field)
 {
-	need(n, field);
+	start(n, field);
 	if (n == 0) return;
 	size_t got = 0;
 	guarded(field, [&] { got = m_in.ReadBuffer(dst, n); });
-	if (got != n)
-		fail(field, "truncated: " + std::to_string(got) + " of " + std::to_string(n) + " bytes");
-	m_used += n;
+	finish(got, n, field);
 }
 
 size_t BoundedReader::readCount(const char* field, size_t minItemBytes, size_t maxCount)
@@ -80,7 +86,8 @@ void BoundedReader::readString(std::string& s, const char* field, size_t maxLeng
 
 void BoundedReader::fail(const char* field, const std::string& message) const
 {
-	throw CorruptDataError(m_what + ": byte " + std::to_string(offset()) + ": " + field + ": " + message);
+	throw CorruptDataError(
+		m_what + ": byte " + std::to_string(m_fieldStart) + ": " + field + ": " + message);
 }
 
 std::string BoundedReader::firstLine(const std::string& s)

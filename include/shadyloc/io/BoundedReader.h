@@ -61,10 +61,20 @@ class BoundedReader
 	void read(T& v, const char* field)
 	{
 		static_assert(std::is_arithmetic_v<T>, "read(): arithmetic types only");
-		constexpr size_t n = std::is_same_v<T, bool> ? 1 : sizeof(T);
-		need(n, field);
-		guarded(field, [&] { m_in >> v; });
-		m_used += n;
+		if constexpr (std::is_same_v<T, bool>)
+		{
+			uint8_t b = 0;
+			read(b, field);
+			v = b != 0;
+		}
+		else
+		{
+			// Not `m_in >> v`: MRPT accepts a short read there silently.
+			start(sizeof(T), field);
+			size_t got = 0;
+			guarded(field, [&] { got = m_in.ReadBufferFixEndianness(&v, 1); });
+			finish(got, sizeof(T), field);
+		}
 	}
 	template <class T>
 	T read(const char* field)
@@ -79,7 +89,7 @@ class BoundedReader
 	void readMatrix(Eigen::MatrixBase<Derived>& M, const char* field)
 	{
 		using S = typename Derived::Scalar;
-		need(sizeof(S) * static_cast<uint64_t>(M.size()), field);
+		start(sizeof(S) * static_cast<uint64_t>(M.size()), field);
 		for (Eigen::Index i = 0; i < M.rows(); i++)
 			for (Eigen::Index j = 0; j < M.cols(); j++) read(M(i, j), field);
 	}
@@ -96,7 +106,8 @@ class BoundedReader
 	 * `CArchive << std::string` writes), at most `maxLength` bytes. */
 	void readString(std::string& s, const char* field, size_t maxLength);
 
-	/** Throws CorruptDataError "<what>: byte <offset>: <field>: <message>". */
+	/** Throws CorruptDataError "<what>: byte <offset>: <field>: <message>",
+	 * offset being where the field being read (or last read) starts. */
 	[[noreturn]] void fail(const char* field, const std::string& message) const;
 
 	uint64_t offset() const { return m_base + m_used; }	 //!< of the next byte to read
@@ -106,8 +117,10 @@ class BoundedReader
 	mrpt::serialization::CArchive& archive() { return m_in; }
 
    private:
-	/** Throws unless n more bytes fit in the budget. */
-	void need(uint64_t n, const char* field) const;
+	/** Marks the start of a field of n bytes; throws unless they fit in the budget. */
+	void start(uint64_t n, const char* field);
+	/** Counts a read of `want` bytes that returned `got`; throws if short. */
+	void finish(size_t got, size_t want, const char* field);
 	/** Runs a read, turning the stream's own errors (end of file) into ours. */
 	template <class F>
 	void guarded(const char* field, F&& f)
@@ -126,6 +139,7 @@ class BoundedReader
 	mrpt::serialization::CArchive& m_in;
 	std::string m_what;
 	uint64_t m_budget, m_base, m_used = 0;
+	uint64_t m_fieldStart = 0;	//!< offset() where the current field started
 };
 
 }  // namespace shadyloc::io

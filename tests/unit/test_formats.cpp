@@ -1,0 +1,587 @@
+/* Persistent formats: every registered shadyloc:: class round-trips through
+ * MRPT serialisation to identical bytes; golden files pin the byte layout of
+ * each format (classes, keyframes, the filter record); reads are bounded.
+ *
+ * Golden files live in tests/golden/. After a deliberate format change (with
+ * its version bump), regenerate them with
+ *   SHADYLOC_UPDATE_GOLDEN=1 build/tests/shadyloc_tests --gtest_filter='FormatsGolden.*'
+ * (the run rewrites the files and fails on purpose), then review
+ * `git diff tests/golden` and commit. */
+#include <shadyloc/core/Registration.h>
+#include <shadyloc/filters/FilterPipeline.h>
+#include <shadyloc/filters/Filters.h>
+#include <shadyloc/io/BoundedReader.h>
+#include <shadyloc/io/Rawlog.h>
+#include <shadyloc/map/KeyframeIO.h>
+
+#include "../support/TestSupport.h"
+
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/obs/CObservationComment.h>
+#include <mrpt/rtti/CObject.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <set>
+#include <sstream>
+
+using namespace shadyloc;
+using Bytes = std::vector<uint8_t>;
+
+namespace
+{
+const std::string kGoldenDir = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden";
+
+bool updatingGolden()
+{
+	const char* e = std::getenv("SHADYLOC_UPDATE_GOLDEN");
+	return e && *e && std::string(e) != "0";
+}
+
+Bytes readFile(const std::string& path)
+{
+	std::ifstream f(path, std::ios::binary);
+	return Bytes(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+}
+void writeFile(const std::string& path, const Bytes& b)
+{
+	std::ofstream f(path, std::ios::binary | std::ios::trunc);
+	f.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+	if (!f) throw std::runtime_error("cannot write '" + path + "'");
+}
+Bytes asBytes(const std::string& s) { return Bytes(s.begin(), s.end()); }
+
+Bytes bytesOf(const mrpt::io::CMemoryStream& m)
+{
+	const auto* p = static_cast<const uint8_t*>(m.getRawBufferData());
+	return Bytes(p, p + m.getTotalBytesCount());
+}
+
+/** The object as MRPT stores it in a rawlog (class name, version, data). */
+Bytes serialise(const mrpt::serialization::CSerializable& o)
+{
+	mrpt::io::CMemoryStream m;
+	auto ar = mrpt::serialization::archiveFrom(m);
+	ar << o;
+	return bytesOf(m);
+}
+mrpt::serialization::CSerializable::Ptr deserialise(const Bytes& b)
+{
+	mrpt::io::CMemoryStream m;
+	m.assignMemoryNotOwn(b.data(), b.size());
+	auto ar = mrpt::serialization::archiveFrom(m);
+	auto o = ar.ReadObject();
+	EXPECT_EQ(m.getPosition(), b.size()) << "the reader left bytes unread";
+	return o;
+}
+
+// ---- fixed, populated objects: every field non-default and distinct --------
+// Distinct values make a swap of two fields in serializeTo change the bytes.
+
+void populateCommon(CObservationFilter& f, const char* suffix, const char* labels)
+{
+	f.common.output_suffix = suffix;
+	f.common.sensor_labels = labels;
+}
+CFilterMonochrome::Ptr populatedMonochrome()
+{
+	auto f = CFilterMonochrome::Create();
+	populateCommon(*f, "_m0n", "CAM_A, CAM_B");
+	f->order = image::ChannelOrder::RGB;
+	return f;
+}
+CFilterInvariant::Ptr populatedInvariant()
+{
+	auto f = CFilterInvariant::Create();
+	populateCommon(*f, "_inv9", "STEREO");
+	image::InvariantParams p;
+	p.alpha = 0.41;
+	p.beta = 0.62;
+	p.order = image::ChannelOrder::RGB;
+	p.linearisation = image::Linearisation::Gamma;
+	p.gamma = 1.9;
+	p.scale = 203.5;
+	p.offset = 0.37;
+	f->setParams(p);
+	f->parallel_eyes = false;
+	return f;
+}
+CFilterLinearise::Ptr populatedLinearise()
+{
+	auto f = CFilterLinearise::Create();
+	populateCommon(*f, "_lin7", "LEFTCAM");
+	f->linearisation = image::Linearisation::Gamma;
+	f->gamma = 2.45;
+	return f;
+}
+
+void expectSameCommon(const CObservationFilter& a, const CObservationFilter& b)
+{
+	EXPECT_EQ(a.common.output_suffix, b.common.output_suffix);
+	EXPECT_EQ(a.common.sensor_labels, b.common.sensor_labels);
+}
+void expectSameMonochrome(const CFilterMonochrome& a, const CFilterMonochrome& b)
+{
+	expectSameCommon(a, b);
+	EXPECT_EQ(a.order, b.order);
+}
+void expectSameInvariant(const CFilterInvariant& a, const CFilterInvariant& b)
+{
+	expectSameCommon(a, b);
+	const auto &p = a.params(), &q = b.params();
+	EXPECT_EQ(p.alpha, q.alpha);
+	EXPECT_EQ(p.beta, q.beta);
+	EXPECT_EQ(p.order, q.order);
+	EXPECT_EQ(p.linearisation, q.linearisation);
+	EXPECT_EQ(p.gamma, q.gamma);
+	EXPECT_EQ(p.scale, q.scale);
+	EXPECT_EQ(p.offset, q.offset);
+	EXPECT_EQ(a.parallel_eyes, b.parallel_eyes);
+}
+void expectSameLinearise(const CFilterLinearise& a, const CFilterLinearise& b)
+{
+	expectSameCommon(a, b);
+	EXPECT_EQ(a.linearisation, b.linearisation);
+	EXPECT_EQ(a.gamma, b.gamma);
+}
+
+/** Every shadyloc:: class the registry must hold, and how to test it. A class
+ * registered but missing here (or listed but not registered) fails
+ * FormatsRegistry.EveryClassIsListedAndRoundTrips: a new class needs its
+ * populated instance, its field comparison and a golden file. */
+struct TClassCase
+{
+	bool abstract = false;
+	std::function<mrpt::serialization::CSerializable::Ptr()> populated;
+	std::function<void(const mrpt::serialization::CSerializable&, const mrpt::serialization::CSerializable&)> expectSame;
+};
+
+template <class T>
+TClassCase concrete(std::function<typename T::Ptr()> make, void (*same)(const T&, const T&))
+{
+	TClassCase c;
+	c.populated = [make] { return make(); };
+	c.expectSame = [same](const mrpt::serialization::CSerializable& a, const mrpt::serialization::CSerializable& b) {
+		const auto* x = dynamic_cast<const T*>(&a);
+		const auto* y = dynamic_cast<const T*>(&b);
+		ASSERT_TRUE(x && y) << "wrong class read back";
+		same(*x, *y);
+	};
+	return c;
+}
+
+const std::map<std::string, TClassCase>& classCases()
+{
+	static const std::map<std::string, TClassCase> cases = [] {
+		std::map<std::string, TClassCase> m;
+		m["shadyloc::CObservationFilter"].abstract = true;
+		m["shadyloc::CFilterMonochrome"] = concrete<CFilterMonochrome>(populatedMonochrome, expectSameMonochrome);
+		m["shadyloc::CFilterInvariant"] = concrete<CFilterInvariant>(populatedInvariant, expectSameInvariant);
+		m["shadyloc::CFilterLinearise"] = concrete<CFilterLinearise>(populatedLinearise, expectSameLinearise);
+		return m;
+	}();
+	return cases;
+}
+
+std::set<std::string> registeredShadylocClasses()
+{
+	registerAllClasses();
+	std::set<std::string> out;
+	for (const auto* c : mrpt::rtti::getAllRegisteredClasses())
+		if (std::string(c->className).rfind("shadyloc::", 0) == 0) out.insert(c->className);
+	return out;
+}
+
+std::string goldenName(const std::string& className)
+{
+	return className.substr(std::string("shadyloc::").size()) + ".bin";
+}
+
+/** A keyframe with every field non-default and distinct (3 measurements). */
+map::TKeyframe populatedKeyframe()
+{
+	map::TKeyframe kf;
+	kf.id = 7;
+	kf.frame = 1234;
+	kf.timestamp = 1400000000.25;
+	kf.chain_break = true;
+	const Eigen::AngleAxisd r1(0.3, Eigen::Vector3d(1, 2, 3).normalized());
+	const Eigen::AngleAxisd r2(-1.1, Eigen::Vector3d(-2, 0.5, 1).normalized());
+	kf.T_prevkf_kf = Eigen::Translation3d(0.1, -0.2, 1.3) * r1;
+	kf.T_world_kf = Eigen::Translation3d(-5.5, 2.25, 40.75) * r2;
+	for (int i = 0; i < 6; i++)
+		for (int j = 0; j < 6; j++) kf.cov(i, j) = 1e-4 * (1 + i * 6 + j);
+	for (int k = 0; k < 3; k++)
+	{
+		features::TStereoMeasurement m;
+		m.uL = 100.5f + k;
+		m.v = 50.25f + 2 * k;
+		m.uR = 90.75f + 3 * k;
+		m.response = 33.0f + k;
+		m.zncc = 0.875f - 0.01f * k;
+		for (size_t w = 0; w < m.desc.w.size(); w++)
+			m.desc.w[w] = 0x0123456789abcdefull * (w + 1) + static_cast<uint64_t>(k);
+		for (size_t p = 0; p < m.patch.size(); p++) m.patch[p] = static_cast<uint8_t>(3 * p + 11 * k);
+		m.P = Eigen::Vector3d(0.5 + k, -0.25 - k, 7.5 + 2 * k);
+		for (int i = 0; i < 3; i++)
+			for (int j = 0; j < 3; j++) m.cov(i, j) = 1e-3 * (1 + i * 3 + j) + 1e-5 * k;
+		kf.meas.push_back(m);
+	}
+	return kf;
+}
+
+void expectSameKeyframe(const map::TKeyframe& a, const map::TKeyframe& b)
+{
+	EXPECT_EQ(a.id, b.id);
+	EXPECT_EQ(a.frame, b.frame);
+	EXPECT_EQ(a.timestamp, b.timestamp);
+	EXPECT_EQ(a.chain_break, b.chain_break);
+	EXPECT_EQ(a.T_prevkf_kf.matrix(), b.T_prevkf_kf.matrix());
+	EXPECT_EQ(a.T_world_kf.matrix(), b.T_world_kf.matrix());
+	EXPECT_EQ(a.cov, b.cov);
+	ASSERT_EQ(a.meas.size(), b.meas.size());
+	for (size_t i = 0; i < a.meas.size(); i++)
+	{
+		const auto &x = a.meas[i], &y = b.meas[i];
+		EXPECT_EQ(x.uL, y.uL) << i;
+		EXPECT_EQ(x.v, y.v) << i;
+		EXPECT_EQ(x.uR, y.uR) << i;
+		EXPECT_EQ(x.response, y.response) << i;
+		EXPECT_EQ(x.zncc, y.zncc) << i;
+		EXPECT_TRUE(x.desc == y.desc) << i;
+		EXPECT_EQ(x.patch, y.patch) << i;
+		EXPECT_EQ(x.P, y.P) << i;
+		EXPECT_EQ(x.cov, y.cov) << i;
+	}
+}
+
+Bytes keyframeBytes(const map::TKeyframe& kf)
+{
+	mrpt::io::CMemoryStream m;
+	auto ar = mrpt::serialization::archiveFrom(m);
+	map::writeKeyframe(ar, kf);
+	return bytesOf(m);
+}
+map::TKeyframe keyframeFrom(const Bytes& b)
+{
+	mrpt::io::CMemoryStream m;
+	m.assignMemoryNotOwn(b.data(), b.size());
+	map::TKeyframe kf;
+	map::readKeyframe(m, kf);
+	EXPECT_EQ(m.getPosition(), b.size()) << "the reader left bytes unread";
+	return kf;
+}
+
+/** The three populated filters as the pipeline the filter record is made of. */
+filters::FilterPipeline populatedPipeline()
+{
+	filters::FilterPipeline p;
+	p.filters = {populatedMonochrome(), populatedInvariant(), populatedLinearise()};
+	return p;
+}
+
+/** The record `shadyloc filter` writes as the first object of its output, for
+ * the populated pipeline, taken from a real run of the processor. */
+std::string filterRecordText(mrpt::obs::CObservationComment::Ptr* recordOut = nullptr)
+{
+	const std::string dir = test::tempDir("formats_record");
+	test::writeSyntheticRawlog(dir + "/in.rawlog", 1, false);
+	filters::RawlogFilterProcessor proc;
+	proc.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+	// The populated filters apply to named sensors the synthetic frame is not
+	// from: the record is all this test wants.
+	proc.run(dir + "/in.rawlog", dir + "/out.rawlog", populatedPipeline());
+	io::RawlogReader r(dir + "/out.rawlog");
+	auto first = r.next();
+	const auto obs = io::observationsIn(first);
+	EXPECT_EQ(obs.size(), 1u);
+	auto c = obs.empty() ? nullptr : std::dynamic_pointer_cast<mrpt::obs::CObservationComment>(obs[0]);
+	if (!c) throw std::runtime_error("the filter output does not start with its record");
+	if (recordOut) *recordOut = c;
+	return c->text;
+}
+
+/** Compares `actual` with the golden file, or rewrites it when asked. */
+void checkGolden(const std::string& name, const Bytes& actual)
+{
+	const std::string path = kGoldenDir + "/" + name;
+	if (updatingGolden())
+	{
+		writeFile(path, actual);
+		ADD_FAILURE() << "rewrote " << path
+					  << " (SHADYLOC_UPDATE_GOLDEN is set): review `git diff tests/golden`, "
+						 "then run again without it";
+		return;
+	}
+	const Bytes golden = readFile(path);
+	ASSERT_FALSE(golden.empty()) << "golden file " << path << " is missing or empty";
+	if (golden == actual) return;
+	size_t at = 0;
+	while (at < golden.size() && at < actual.size() && golden[at] == actual[at]) at++;
+	ADD_FAILURE() << name << ": bytes differ from the golden file from byte " << at << " (golden "
+				  << golden.size() << " bytes, now " << actual.size()
+				  << "). A field added, removed or reordered in the writer: bump the format "
+					 "version, keep reading the old one where files exist, and regenerate "
+					 "(see the top of tests/unit/test_formats.cpp).";
+}
+}  // namespace
+
+// ---- the registry: every class listed, each round-trips to identical bytes --
+
+TEST(FormatsRegistry, EveryClassIsListedAndRoundTrips)
+{
+	const auto registered = registeredShadylocClasses();
+	ASSERT_FALSE(registered.empty()) << "no shadyloc:: class registered";
+	for (const auto& name : registered)
+		EXPECT_TRUE(classCases().count(name))
+			<< name << " is registered but not covered: add it to classCases() in " << __FILE__
+			<< " (a populated instance, a field comparison) and a golden file";
+	for (const auto& [name, c] : classCases())
+		EXPECT_TRUE(registered.count(name)) << name << " is listed but not registered (src/core/Registration.cpp)";
+
+	for (const auto& name : registered)
+	{
+		if (!classCases().count(name)) continue;
+		SCOPED_TRACE(name);
+		const auto& c = classCases().at(name);
+		const auto* id = mrpt::rtti::findRegisteredClass(name);
+		ASSERT_NE(id, nullptr);
+		if (c.abstract)
+		{
+			EXPECT_EQ(id->createObject(), nullptr) << "listed as abstract but creatable";
+			continue;
+		}
+		// Creatable by name, as a reader of a file does it.
+		const auto fresh = std::dynamic_pointer_cast<mrpt::serialization::CSerializable>(
+			mrpt::rtti::classFactory(name));
+		ASSERT_TRUE(fresh) << "not creatable by name";
+		const auto obj = c.populated();
+		ASSERT_EQ(std::string(obj->GetRuntimeClass()->className), name);
+		const Bytes first = serialise(*obj);
+		EXPECT_NE(first, serialise(*fresh)) << "the populated instance serialises like a default one";
+		const auto back = deserialise(first);
+		ASSERT_TRUE(back);
+		EXPECT_EQ(std::string(back->GetRuntimeClass()->className), name);
+		c.expectSame(*obj, *back);
+		EXPECT_EQ(serialise(*back), first) << "write -> read -> write changed the bytes";
+		// A default-constructed instance round-trips too.
+		EXPECT_EQ(serialise(*deserialise(serialise(*fresh))), serialise(*fresh));
+	}
+}
+
+TEST(FormatsRegistry, KeyframeRoundTripsToIdenticalBytes)
+{
+	const auto kf = populatedKeyframe();
+	const Bytes b = keyframeBytes(kf);
+	EXPECT_EQ(b.size(), 3 + 4 + 8 + 8 + 1 + 2 * 12 * 8 + 36 * 8 + 4 + kf.meas.size() * map::kMeasurementBytes);
+	const auto back = keyframeFrom(b);
+	expectSameKeyframe(kf, back);
+	EXPECT_EQ(keyframeBytes(back), b);
+	// An empty keyframe (the first of a run before landmarks) too.
+	map::TKeyframe empty;
+	EXPECT_EQ(keyframeBytes(keyframeFrom(keyframeBytes(empty))), keyframeBytes(empty));
+}
+
+// ---- golden files ----------------------------------------------------------
+
+TEST(FormatsGolden, RegisteredClassesMatchTheirGoldenFiles)
+{
+	for (const auto& [name, c] : classCases())
+	{
+		if (c.abstract) continue;
+		SCOPED_TRACE(name);
+		const auto obj = c.populated();
+		checkGolden(goldenName(name), serialise(*obj));
+		if (updatingGolden()) continue;
+		// The golden bytes load into the same fields.
+		const auto back = deserialise(readFile(kGoldenDir + "/" + goldenName(name)));
+		ASSERT_TRUE(back);
+		c.expectSame(*obj, *back);
+	}
+}
+
+TEST(FormatsGolden, KeyframeMatchesItsGoldenFile)
+{
+	const auto kf = populatedKeyframe();
+	checkGolden("keyframe.bin", keyframeBytes(kf));
+	if (updatingGolden()) return;
+	expectSameKeyframe(kf, keyframeFrom(readFile(kGoldenDir + "/keyframe.bin")));
+}
+
+TEST(FormatsGolden, FilterRecordMatchesItsGoldenFile)
+{
+	mrpt::obs::CObservationComment::Ptr record;
+	const std::string text = filterRecordText(&record);
+	EXPECT_EQ(text.rfind(filters::kRecordHeader, 0), 0u) << text;
+	checkGolden("filter_record.txt", asBytes(text));
+	if (updatingGolden()) return;
+	// The golden record builds the same filters.
+	const Bytes g = readFile(kGoldenDir + "/filter_record.txt");
+	const std::string golden(g.begin(), g.end());
+	mrpt::config::CConfigFileMemory cfg(golden.substr(std::string(filters::kRecordHeader).size() + 1));
+	const auto p = filters::FilterPipeline::FromConfig(cfg, "tests/golden/filter_record.txt");
+	const auto want = populatedPipeline();
+	ASSERT_EQ(p.filters.size(), want.filters.size());
+	for (size_t i = 0; i < p.filters.size(); i++)
+	{
+		const std::string name = want.filters[i]->GetRuntimeClass()->className;
+		SCOPED_TRACE(name);
+		ASSERT_EQ(std::string(p.filters[i]->GetRuntimeClass()->className), name);
+		classCases().at(name).expectSame(*want.filters[i], *p.filters[i]);
+	}
+}
+
+// ---- bounded reads ---------------------------------------------------------
+
+namespace
+{
+std::string errorOf(const std::function<void()>& f)
+{
+	try
+	{
+		f();
+	}
+	catch (const std::exception& e)
+	{
+		return e.what();
+	}
+	return "";
+}
+bool has(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
+
+void putU32(Bytes& b, size_t at, uint32_t v) { std::memcpy(b.data() + at, &v, 4); }
+
+// Offsets in the keyframe layout (docs/architecture.md).
+constexpr size_t kCountOffset = 3 + 4 + 8 + 8 + 1 + 2 * 12 * 8 + 36 * 8;
+}  // namespace
+
+TEST(FormatsBoundedRead, HugeMeasurementCountNamesObjectAndOffset)
+{
+	Bytes b = keyframeBytes(populatedKeyframe());
+	putU32(b, kCountOffset, 0xFFFFFFFFu);
+	// From a memory stream (remaining size known) and through a bare archive
+	// (a caller's budget): an error before any allocation, never bad_alloc.
+	const std::string e1 = errorOf([&] { keyframeFrom(b); });
+	EXPECT_TRUE(has(e1, "keyframe: byte " + std::to_string(kCountOffset) + ": measurement count: count 4294967295"))
+		<< e1;
+	EXPECT_TRUE(has(e1, "can remain")) << e1;
+	const std::string e2 = errorOf([&] {
+		mrpt::io::CMemoryStream m;
+		m.assignMemoryNotOwn(b.data(), b.size());
+		auto ar = mrpt::serialization::archiveFrom(m);
+		map::TKeyframe kf;
+		map::readKeyframe(ar, kf, map::kMaxKeyframeBytes, "keyframe 12");
+	});
+	EXPECT_TRUE(has(e2, "keyframe 12: byte " + std::to_string(kCountOffset) + ": measurement count")) << e2;
+}
+
+TEST(FormatsBoundedRead, OffsetsAreStreamPositions)
+{
+	// Two keyframes back to back: an error in the second names its file offset.
+	Bytes one = keyframeBytes(populatedKeyframe());
+	Bytes b = one;
+	b.insert(b.end(), one.begin(), one.end());
+	putU32(b, one.size() + kCountOffset, 1000000u);
+	mrpt::io::CMemoryStream m;
+	m.assignMemoryNotOwn(b.data(), b.size());
+	map::TKeyframe kf;
+	map::readKeyframe(m, kf);
+	const std::string e = errorOf([&] { map::readKeyframe(m, kf); });
+	EXPECT_TRUE(has(e, "byte " + std::to_string(one.size() + kCountOffset))) << e;
+	EXPECT_EQ(kf.id, 7u) << "a failed read must leave the keyframe untouched";
+}
+
+TEST(FormatsBoundedRead, EveryTruncationIsAnErrorNamingTheOffset)
+{
+	const Bytes full = keyframeBytes(populatedKeyframe());
+	for (size_t n = 0; n < full.size(); n++)
+	{
+		const Bytes cut(full.begin(), full.begin() + static_cast<long>(n));
+		// Remaining size known: the budget catches it first.
+		const std::string e1 = errorOf([&] { keyframeFrom(cut); });
+		EXPECT_TRUE(has(e1, "keyframe: byte ")) << "cut at " << n << ": " << e1;
+		// Remaining size unknown (a generous budget): the stream's end of file,
+		// turned into our error.
+		const std::string e2 = errorOf([&] {
+			mrpt::io::CMemoryStream m;
+			m.assignMemoryNotOwn(cut.data(), cut.size());
+			auto ar = mrpt::serialization::archiveFrom(m);
+			map::TKeyframe kf;
+			map::readKeyframe(ar, kf);
+		});
+		EXPECT_TRUE(has(e2, "keyframe: byte ")) << "cut at " << n << ": " << e2;
+	}
+}
+
+TEST(FormatsBoundedRead, GzStreamUsesTheCallersBudget)
+{
+	const std::string dir = test::tempDir("formats_gz");
+	const auto kf = populatedKeyframe();
+	{
+		mrpt::io::CFileGZOutputStream f(dir + "/kf.gz");
+		auto ar = mrpt::serialization::archiveFrom(f);
+		map::writeKeyframe(ar, kf);
+	}
+	{
+		mrpt::io::CFileGZInputStream f(dir + "/kf.gz");
+		map::TKeyframe back;
+		map::readKeyframe(f, back);
+		expectSameKeyframe(kf, back);
+	}
+	// A budget smaller than the keyframe: refused, naming the count.
+	mrpt::io::CFileGZInputStream f(dir + "/kf.gz");
+	map::TKeyframe back;
+	const std::string e = errorOf([&] { map::readKeyframe(f, back, kCountOffset + 4 + 100); });
+	EXPECT_TRUE(has(e, "measurement count: count 3 needs at least")) << e;
+}
+
+TEST(FormatsBoundedRead, WrongVersionAndHeaderAreRefused)
+{
+	Bytes b = keyframeBytes(populatedKeyframe());
+	Bytes v = b;
+	v[0] = map::kKeyframeFormatVersion + 1;
+	EXPECT_TRUE(has(errorOf([&] { keyframeFrom(v); }), "byte 0: format version: unknown keyframe format version"));
+	v = b;
+	v[0] = 0;
+	EXPECT_TRUE(has(errorOf([&] { keyframeFrom(v); }), "unknown keyframe format version 0"));
+	v = b;
+	v[1] = 11;
+	EXPECT_TRUE(has(errorOf([&] { keyframeFrom(v); }), "byte 1: patch side: measurements carry 11x11 patches"));
+	v = b;
+	v[2] = 8;
+	EXPECT_TRUE(has(errorOf([&] { keyframeFrom(v); }), "byte 2: descriptor words: 512-bit descriptors"));
+}
+
+TEST(FormatsBoundedRead, FilterStringLengthAndEnumsAreChecked)
+{
+	// The first string length of the object data follows the class name and
+	// version byte; find it as the length of the known suffix.
+	const auto f = populatedMonochrome();
+	const Bytes good = serialise(*f);
+	const uint32_t len = static_cast<uint32_t>(f->common.output_suffix.size());
+	size_t at = 0;
+	for (; at + 8 < good.size(); at++)
+		if (std::memcmp(good.data() + at, &len, 4) == 0 &&
+			std::memcmp(good.data() + at + 4, f->common.output_suffix.data(), len) == 0)
+			break;
+	ASSERT_LT(at + 8, good.size());
+	Bytes bad = good;
+	putU32(bad, at, 0xFFFFFFF0u);
+	const std::string e = errorOf([&] { deserialise(bad); });
+	EXPECT_TRUE(has(e, "shadyloc::CFilterMonochrome (version 0): byte 0: output_suffix: count 4294967280 exceeds"))
+		<< e;
+	// The channel order is the last data byte before MRPT's end marker.
+	bad = good;
+	const size_t orderAt = at + 4 + len + 4 + f->common.sensor_labels.size();
+	ASSERT_EQ(bad[orderAt], static_cast<uint8_t>(image::ChannelOrder::RGB));
+	bad[orderAt] = 9;
+	const std::string e2 = errorOf([&] { deserialise(bad); });
+	EXPECT_TRUE(has(e2, "channel_order: value 9 out of range")) << e2;
+}
