@@ -4,6 +4,7 @@
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/vo/SyntheticCorridor.h>
 
+#include "../support/Sequences.h"
 #include "../support/TestSupport.h"
 
 #include <mrpt/obs/CObservationStereoImages.h>
@@ -20,16 +21,15 @@ namespace
 /** A colour stereo rawlog of the corridor, and its ground truth (TUM). */
 void writeCorridorRawlog(const std::string& rawlog, const std::string& gtTum, int n)
 {
-	vo::SyntheticCorridor corridor;
-	const auto c = corridor.calib();
+	const auto& seq = test::corridorSequence(50, 0.1);	// the ctest fixture's frames
+	const auto& c = seq.calib;
 	io::RawlogWriter w(rawlog);
 	eval::Trajectory gt;
 	const Eigen::Isometry3d T0inv = vo::SyntheticCorridor::examplePose(0).inverse();
 	for (int k = 0; k < n; k++)
 	{
 		const Eigen::Isometry3d T = vo::SyntheticCorridor::examplePose(k);
-		cv::Mat l, r;
-		corridor.render(T, l, r, k);
+		const cv::Mat &l = seq.left.at(k), &r = seq.right.at(k);
 		mrpt::obs::CObservationStereoImages obs;
 		obs.sensorLabel = "CAMERA";
 		const double t = 1000.0 + 0.1 * k;

@@ -9,6 +9,7 @@
 #include <shadyloc/vo/StereoVO.h>
 #include <shadyloc/vo/SyntheticCorridor.h>
 
+#include "../support/Sequences.h"
 #include "../support/TestSupport.h"
 
 #include <mrpt/obs/CObservationStereoImages.h>
@@ -33,19 +34,15 @@ struct TFrames
 	std::vector<cv::Mat> left, right;  // colour, BGR
 };
 
+/** Read from the ctest fixture (tests/support/Sequences.h), or rendered here. */
 const TFrames& frames()
 {
 	static const TFrames f = [] {
+		const auto& seq = test::corridorSequence(kFrames, kSpeed);
 		TFrames s;
-		vo::SyntheticCorridor corridor;
-		s.calib = corridor.calib();
-		for (int k = 0; k < kFrames; k++)
-		{
-			cv::Mat l, r;
-			corridor.render(vo::SyntheticCorridor::examplePose(k, kSpeed), l, r, static_cast<uint32_t>(k));
-			s.left.push_back(l);
-			s.right.push_back(r);
-		}
+		s.calib = seq.calib;
+		s.left = seq.left;
+		s.right = seq.right;
 		return s;
 	}();
 	return f;

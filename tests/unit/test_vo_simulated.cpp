@@ -8,6 +8,7 @@
 #include <shadyloc/vo/Channel.h>
 #include <shadyloc/vo/StereoVO.h>
 
+#include "../support/Sequences.h"
 #include "../support/TestSupport.h"
 
 #include <mrpt/config/CConfigFile.h>
@@ -25,28 +26,16 @@ struct TSimSequence
 	eval::Trajectory gt;  // left camera in the world
 };
 
-/** Renders `frames` frames of one traversal at w x h (the default scene). */
-TSimSequence render(const std::string& traversal, int w, int h, int frames)
+/** The first frames of one traversal at the simulator's default 512x384, from
+ * the ctest fixture (tests/support/Sequences.h) or rendered here. */
+TSimSequence render(const std::string& traversal)
 {
-	auto o = sim::TSimOptions::FromFile(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
-	o.camera.width = w;
-	o.camera.height = h;
-	o.traversals = {o.traversal(traversal)};
-	sim::CStereoSimulator s(o);
-	s.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+	const auto& f = test::simSequence(traversal);
 	TSimSequence seq;
-	for (int i = 0; i < frames; i++)
-	{
-		const sim::TSimFrame f = s.renderFrame(i);
-		if (i == 0) seq.calib = geometry::TStereoCalib::FromObservation(*s.makeObservation(f));
-		seq.left.push_back(f.left);
-		seq.right.push_back(f.right);
-		const auto M = f.T_world_left.getHomogeneousMatrixVal<mrpt::math::CMatrixDouble44>();
-		eval::TStampedPose p;
-		p.t = f.timestamp;
-		p.T.matrix() = M.asEigen();
-		seq.gt.push_back(p);
-	}
+	seq.calib = f.calib;
+	seq.left = f.left;
+	seq.right = f.right;
+	for (size_t i = 0; i < f.left.size(); i++) seq.gt.push_back({f.t[i], f.T_world_left[i]});
 	return seq;
 }
 
@@ -83,27 +72,33 @@ eval::TTrajectoryErrors runVO(const TSimSequence& seq, vo::Channel ch, size_t* t
 // by VODeterminism), so the bounds fail on a regression, not on noise: the
 // solver before the two-view adjustment and the prediction hypothesis gave
 // invariant 4.0-4.9 % and, without the prediction hypothesis, 7-15 %.
-TEST(VOSimulated, ShortTraversalDriftBothChannels)
+class VOSimulated : public ::testing::TestWithParam<const char*>
 {
-	for (const char* trav : {"noon", "overcast"})
-	{
-		const auto seq = render(trav, 512, 384, 30);
-		size_t trMono = 0, trInv = 0;
-		const auto em = runVO(seq, vo::Channel::Mono, &trMono);
-		const auto ei = runVO(seq, vo::Channel::Invariant, &trInv);
-		std::printf(
-			"[ sim VO ] %s 512x384, %.1f m: mono %.2f %% %.4f deg/m (%zu tracked), invariant %.2f %% "
-			"%.4f deg/m (%zu tracked)\n",
-			trav, em.path_length, em.kitti_trans_pct, em.kitti_rot_deg_per_m, trMono, ei.kitti_trans_pct,
-			ei.kitti_rot_deg_per_m, trInv);
-		EXPECT_GT(em.path_length, 15.0) << trav;  // the simulator really moved ~0.8 m per frame
-		// Mono: every frame tracked, drift below the 1 % goal.
-		EXPECT_EQ(trMono, seq.left.size()) << trav;
-		EXPECT_LT(em.kitti_trans_pct, 1.0) << trav;
-		EXPECT_LT(em.kitti_rot_deg_per_m, 0.1) << trav;
-		// Invariant: lower contrast, noisier; at most a couple of untracked frames, drift < 3 %.
-		EXPECT_GE(trInv + 2, seq.left.size()) << trav;
-		EXPECT_LT(ei.kitti_trans_pct, 3.0) << trav;
-		EXPECT_LT(ei.kitti_rot_deg_per_m, 0.2) << trav;
-	}
+};
+
+TEST_P(VOSimulated, ShortTraversalDriftBothChannels)
+{
+	const std::string trav = GetParam();
+	const auto seq = render(trav);
+	size_t trMono = 0, trInv = 0;
+	const auto em = runVO(seq, vo::Channel::Mono, &trMono);
+	const auto ei = runVO(seq, vo::Channel::Invariant, &trInv);
+	std::printf(
+		"[ sim VO ] %s 512x384, %.1f m: mono %.2f %% %.4f deg/m (%zu tracked), invariant %.2f %% "
+		"%.4f deg/m (%zu tracked)\n",
+		trav.c_str(), em.path_length, em.kitti_trans_pct, em.kitti_rot_deg_per_m, trMono, ei.kitti_trans_pct,
+		ei.kitti_rot_deg_per_m, trInv);
+	EXPECT_GT(em.path_length, 15.0) << trav;  // the simulator really moved ~0.8 m per frame
+	// Mono: every frame tracked, drift below the 1 % goal.
+	EXPECT_EQ(trMono, seq.left.size()) << trav;
+	EXPECT_LT(em.kitti_trans_pct, 1.0) << trav;
+	EXPECT_LT(em.kitti_rot_deg_per_m, 0.1) << trav;
+	// Invariant: lower contrast, noisier; at most a couple of untracked frames, drift < 3 %.
+	EXPECT_GE(trInv + 2, seq.left.size()) << trav;
+	EXPECT_LT(ei.kitti_trans_pct, 3.0) << trav;
+	EXPECT_LT(ei.kitti_rot_deg_per_m, 0.2) << trav;
 }
+
+INSTANTIATE_TEST_SUITE_P(
+	Traversals, VOSimulated, ::testing::Values("noon", "overcast"),
+	[](const ::testing::TestParamInfo<const char*>& i) { return std::string(i.param); });

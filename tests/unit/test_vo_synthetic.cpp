@@ -5,6 +5,7 @@
 #include <shadyloc/vo/StereoVO.h>
 #include <shadyloc/vo/SyntheticCorridor.h>
 
+#include "../support/Sequences.h"
 #include "../support/TestSupport.h"
 
 #include <mrpt/config/CConfigFileMemory.h>
@@ -27,23 +28,18 @@ struct TSequence
 	eval::Trajectory gt;  // left camera in the first frame
 };
 
-/** Rendered once per test binary (about a second). */
+/** Read from the ctest fixture (tests/support/Sequences.h), or rendered once
+ * per test binary (about a second). */
 const TSequence& sequence()
 {
 	static const TSequence seq = [] {
+		const auto& f = test::corridorSequence(kFrames, kSpeed);
 		TSequence s;
-		vo::SyntheticCorridor corridor;
-		s.calib = corridor.calib();
-		const Eigen::Isometry3d T0inv = vo::SyntheticCorridor::examplePose(0, kSpeed).inverse();
-		for (int k = 0; k < kFrames; k++)
-		{
-			const Eigen::Isometry3d T = vo::SyntheticCorridor::examplePose(k, kSpeed);
-			cv::Mat l, r;
-			corridor.render(T, l, r, static_cast<uint32_t>(k));
-			s.left.push_back(l);
-			s.right.push_back(r);
-			s.gt.push_back({0.1 * k, T0inv * T});
-		}
+		s.calib = f.calib;
+		s.left = f.left;
+		s.right = f.right;
+		const Eigen::Isometry3d T0inv = f.T_world_left[0].inverse();
+		for (int k = 0; k < kFrames; k++) s.gt.push_back({f.t[k], T0inv * f.T_world_left[k]});
 		return s;
 	}();
 	return seq;

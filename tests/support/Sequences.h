@@ -1,0 +1,46 @@
+/* ShadyLoc tests: rendered stereo sequences shared between test processes.
+ *
+ * ctest runs every test in its own process; a sequence several tests need is
+ * rendered once by a ctest fixture (FIXTURES_SETUP in tests/CMakeLists.txt)
+ * into the build tree, and the tests that require the fixture read it
+ * (ctest sets SHADYLOC_FIXTURE_DIR for them). Run outside ctest (the test
+ * binary directly), the same functions render in-process instead, once per
+ * process; the frames are the same bytes either way. */
+#pragma once
+
+#include <shadyloc/geometry/StereoCamera.h>
+
+#include <Eigen/Geometry>
+#include <opencv2/core/mat.hpp>
+
+#include <string>
+#include <vector>
+
+namespace shadyloc::test
+{
+/** Rectified colour stereo frames (CV_8UC3, BGR) with their calibration. */
+struct TStereoSequence
+{
+	geometry::TStereoCalib calib;
+	std::vector<cv::Mat> left, right;
+	std::vector<double> t;	//!< timestamps [s]
+	std::vector<Eigen::Isometry3d> T_world_left;  //!< ground truth: left camera in the world
+};
+
+/** SHADYLOC_FIXTURE_DIR, or "" outside ctest. */
+std::string fixtureDir();
+
+/** The synthetic corridor (vo::SyntheticCorridor, default options) along
+ * examplePose(k, speed), k < frames, pixel noise seeded by k. t[k] = 0.1 k. */
+const TStereoSequence& corridorSequence(int frames, double speed);
+/** Writes the corridor sequences the fixture provides into `dir` (the
+ * fixture's setup test, TestFixtures.WriteCorridorSequences). */
+void writeCorridorFixtures(const std::string& dir);
+
+/** The first 30 frames of a traversal of config/sim.ini (512x384) as
+ * `shadyloc sim --frames 30` renders them; the ctest fixture renders noon and
+ * overcast. Ground truth from the TUM file (9 decimals). */
+const TStereoSequence& simSequence(const std::string& traversal);
+constexpr int kSimFixtureFrames = 30;
+
+}  // namespace shadyloc::test
