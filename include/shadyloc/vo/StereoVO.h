@@ -2,15 +2,19 @@
  * Section II-A), one class for both image channels: it sees only a grey
  * CV_8UC1 stereo pair, monochrome or illumination-invariant.
  *
- * Per frame: stereo measurements (features::StereoFeatureExtractor); the
- * previous keyframe's landmarks are projected with the pose predicted from
- * the last motion (constant velocity) and matched by BRIEF inside a window
- * around each projection; matches are refined to sub-pixel by correlating the
- * keyframe's stored pixel patch; 3-point RANSAC removes outliers; a robust
- * Gauss-Newton on the stereo reprojection error gives T_kf_curr and its
- * covariance. A frame becomes a keyframe when motion or loss of overlap call
- * for it. Frames that cannot be tracked are reported (status), get the
- * predicted pose, and tracking resumes at the next good frame.
+ * StereoVO composes stages that the localisers reuse:
+ *   features::StereoFeatureExtractor  stereo measurements of the frame;
+ *   CKeyframeMatcher (vo/KeyframeMatcher.h)  the keyframe's landmarks
+ *       projected with the pose predicted by the motion model (constant
+ *       velocity, or the caller's prior), BRIEF in a region around each,
+ *       sub-pixel patch refinement;
+ *   CRelativePoseEstimator (vo/RelativePoseEstimator.h)  RANSAC with the
+ *       prediction as a hypothesis, robust solve, re-selection, covariance;
+ *   CKeyframePolicy (vo/KeyframePolicy.h)  whether a tracked frame becomes a
+ *       keyframe; the caller may override it (track() + commit()).
+ * StereoVO itself keeps the state: keyframes, the motion model, the count of
+ * untracked frames. Frames that cannot be tracked are reported (status), get
+ * the predicted pose, and tracking resumes at the next good frame.
  */
 #pragma once
 
@@ -18,12 +22,16 @@
 #include <shadyloc/geometry/PoseSolver.h>
 #include <shadyloc/geometry/StereoCamera.h>
 #include <shadyloc/map/Keyframe.h>
+#include <shadyloc/vo/KeyframeMatcher.h>
+#include <shadyloc/vo/KeyframePolicy.h>
+#include <shadyloc/vo/RelativePoseEstimator.h>
 
 #include <mrpt/config/CLoadableOptions.h>
 #include <mrpt/system/COutputLogger.h>
 
 #include <Eigen/Geometry>
 
+#include <chrono>
 #include <string>
 #include <vector>
 
@@ -64,6 +72,9 @@ struct TFrameResult
 	double timestamp = 0;  //!< [s]
 	FrameStatus status = FrameStatus::Ok;
 	bool keyframe = false;	//!< this frame became a keyframe
+	/** The keyframe policy's proposal for this tracked frame (Ok frames only;
+	 * what commit(KeyframeDecision::Policy) follows). */
+	bool keyframe_wanted = false;
 	size_t features = 0;  //!< FAST corners kept in the left image
 	size_t stereo = 0;	//!< stereo measurements (with landmark)
 	size_t tracked = 0;	 //!< BRIEF matches to the keyframe (after refinement)
@@ -124,34 +135,76 @@ struct TStereoVOOptions : public mrpt::config::CLoadableOptions
 	void validate() const;	//!< throws std::invalid_argument naming the option
 };
 
+/** The stages' options from the VO's ([vo] in config/vo.ini). */
+TKeyframeMatcherOptions matcherOptionsFrom(const TStereoVOOptions& o);
+TRelativePoseOptions poseEstimatorOptionsFrom(const TStereoVOOptions& o);
+TMotionKeyframePolicyOptions keyframePolicyOptionsFrom(const TStereoVOOptions& o);
+
 class StereoVO : public mrpt::system::COutputLogger
 {
    public:
 	using TOptions = TStereoVOOptions;
+	/** With the policy CMotionKeyframePolicy(keyframePolicyOptionsFrom(o)). */
 	StereoVO(const TOptions& o = TOptions(), const features::TStereoFeatureOptions& fo = {});
 
-	/** One rectified grey stereo pair (CV_8UC1, equal sizes). prior_T_prev_curr,
-	 * if given, replaces the constant-velocity prediction (e.g. the baseline
-	 * channel's VO predicting for the invariant one). */
+	/** One rectified grey stereo pair (CV_8UC1, equal sizes): track() then
+	 * commit() as the policy wants. prior_T_prev_curr, if given, replaces the
+	 * constant-velocity prediction (e.g. the baseline channel's VO predicting
+	 * for the invariant one). */
 	TFrameResult process(
 		const cv::Mat& left8, const cv::Mat& right8, const geometry::TStereoCalib& calib,
 		double timestamp, const Eigen::Isometry3d* prior_T_prev_curr = nullptr);
 
+	/** The first half of process(): the frame is tracked and the result is
+	 * final except whether a tracked frame becomes a keyframe
+	 * (keyframe_wanted says what the policy wants). commit() must follow
+	 * before the next track(). */
+	TFrameResult track(
+		const cv::Mat& left8, const cv::Mat& right8, const geometry::TStereoCalib& calib,
+		double timestamp, const Eigen::Isometry3d* prior_T_prev_curr = nullptr);
+	/** The second half: a tracked (Ok) frame becomes a keyframe as decided;
+	 * other frames ignore the decision (First and Reinit frames are keyframes
+	 * anyway, untracked ones cannot be). Returns the final result. */
+	TFrameResult commit(KeyframeDecision d = KeyframeDecision::Policy);
+
+	/** Replaces the keyframe policy (shared: a policy is stateless). */
+	void setKeyframePolicy(CKeyframePolicy::Ptr p);
+	const CKeyframePolicy& keyframePolicy() const { return *m_policy; }
+
 	const std::vector<TKeyframe>& keyframes() const { return m_keyframes; }
 	const TOptions& options() const { return m_opts; }
 	const features::StereoFeatureExtractor& extractor() const { return m_extractor; }
+	const CKeyframeMatcher& matcher() const { return m_matcher; }
+	const CRelativePoseEstimator& poseEstimator() const { return m_poseEstimator; }
 	/** Last frame-to-frame motion estimate (the constant-velocity model). */
 	const Eigen::Isometry3d& lastMotion() const { return m_velocity; }
 	void reset();
 
    private:
+	void addKeyframe(
+		size_t frame, double timestamp, const Eigen::Isometry3d& T_world_kf, const geometry::Matrix6d& cov,
+		bool chainBreak, std::vector<features::TStereoMeasurement>&& meas);
+
 	TOptions m_opts;
 	features::StereoFeatureExtractor m_extractor;
+	CKeyframeMatcher m_matcher;
+	CRelativePoseEstimator m_poseEstimator;
+	CKeyframePolicy::Ptr m_policy;
 	std::vector<TKeyframe> m_keyframes;
 	size_t m_frame = 0;
 	int m_lost = 0;	 //!< untracked frames in a row
 	Eigen::Isometry3d m_T_world_prev = Eigen::Isometry3d::Identity();
 	Eigen::Isometry3d m_velocity = Eigen::Isometry3d::Identity();  //!< T_prev_curr of the last tracked step
+
+	/** A tracked frame between track() and commit(). */
+	struct TPending
+	{
+		bool active = false;  //!< track() ran, commit() not yet
+		bool candidate = false;	 //!< a tracked frame that may become a keyframe
+		TFrameResult res;
+		std::vector<features::TStereoMeasurement> meas;
+		std::chrono::steady_clock::time_point start;
+	} m_pending;
 };
 
 }  // namespace shadyloc::vo

@@ -1,0 +1,137 @@
+/* ShadyLoc — the keyframe matcher: a stage of the stereo VO that the
+ * localisers reuse. Given a keyframe's landmarks, a predicted pose of the
+ * current frame and the current frame's stereo measurements, it finds which
+ * measurement belongs to which landmark:
+ *   1. project each landmark with the predicted pose;
+ *   2. search a region around the projection: a fixed circle (the VO; a wider
+ *      circle when the first try finds too few), or the gate of the
+ *      prediction's covariance ("active search", McManus et al. 2014,
+ *      Section II-B; Davison, "Real-Time Simultaneous Localisation and
+ *      Mapping with a Single Camera", ICCV 2003);
+ *   3. BRIEF: the smallest Hamming distance in the region, a ratio test
+ *      against the second smallest, one landmark per measurement;
+ *   4. sub-pixel: the keyframe's stored patch correlated (ZNCC) in the
+ *      current left image, climbing to the peak, parabola then Gauss-Newton
+ *      (features::refinePatch2D).
+ * The output is a set of geometry::TStereoCorrespondence for the
+ * relative-pose estimator (vo/RelativePoseEstimator.h).
+ */
+#pragma once
+
+#include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/geometry/PoseSolver.h>
+#include <shadyloc/geometry/StereoCamera.h>
+
+#include <Eigen/Geometry>
+
+#include <vector>
+
+namespace shadyloc::vo
+{
+/** How the search region around each projected landmark is chosen. */
+enum class SearchRegion
+{
+	Circle,	 //!< a fixed radius (search_radius_px, then search_radius_lost_px)
+	Gate  //!< the chi-square gate of the predicted measurement's covariance
+};
+
+/** Options of CKeyframeMatcher (the VO fills them from TStereoVOOptions,
+ * see matcherOptionsFrom()). */
+struct TKeyframeMatcherOptions
+{
+	SearchRegion region = SearchRegion::Circle;
+	double search_radius_px = 40;  //!< Circle: radius around each projection [px]
+	double search_radius_lost_px = 80;	//!< Circle: radius after a failure, or when the first try finds < min_matches [px]
+	int min_matches = 12;  //!< Circle: fewer BRIEF matches than this trigger the wide retry
+	/** Gate: a measurement z is a candidate when (z - z_pred)^T S^-1 (z - z_pred)
+	 * <= gate_chi2 over (uL, v, uR); 11.34 is the 99 % quantile of chi^2 with
+	 * 3 degrees of freedom. */
+	double gate_chi2 = 11.34;
+	/** Gate: every axis of the gate ellipsoid is at least this long (corners
+	 * are integer pixels; a tiny covariance must not exclude them) [px]. */
+	double gate_min_px = 3.0;
+	double gate_max_px = 80.0;	//!< Gate: ... and at most this long (bounds the search) [px]
+	double sigma_px = 0.5;	//!< Gate: measurement noise per pixel coordinate [px]
+	int max_hamming = 90;  //!< largest BRIEF distance of a match [bits of 256]
+	double match_ratio = 0.95;	//!< best must be < ratio * second best distance in the region
+	double refine_min_zncc = 0.5;  //!< the refined patch must correlate this well, or the match is dropped
+	int refine_radius = 2;	//!< refinement climbs at most this far from the BRIEF match [px]
+	int refine_iterations = 5;	//!< Gauss-Newton steps after the parabola (features::refinePatch2D)
+	/** Keep only landmarks of true disparity >= this when at least
+	 * near_min_matches remain (0 = off) [px] (TStereoVOOptions::near_min_disparity). */
+	double near_min_disparity = 0.0;
+	int near_min_matches = 40;
+};
+
+/** Input of one matching: the keyframe, the current frame and the prediction. */
+struct TKeyframeMatchInput
+{
+	/** The keyframe's stereo measurements: landmarks P in the keyframe's left
+	 * camera, descriptors, patches (TKeyframe::meas). */
+	const std::vector<features::TStereoMeasurement>* landmarks = nullptr;
+	/** The current frame's measurements and left image (the one its patches
+	 * were cut from: StereoFeatureExtractor's output). */
+	const features::TStereoFrame* frame = nullptr;
+	geometry::TStereoCalib calib;  //!< the current frame's calibration
+	Eigen::Isometry3d T_curr_kf_pred = Eigen::Isometry3d::Identity();  //!< predicted keyframe in current camera
+	/** Covariance of T_curr_kf_pred (left perturbation, translation first
+	 * [m^2, rad^2]); used by the Gate region only. */
+	geometry::Matrix6d cov_T_curr_kf_pred = geometry::Matrix6d::Zero();
+	/** Circle: start with search_radius_lost_px and do not retry (the VO sets
+	 * it after an untracked frame). */
+	bool wide = false;
+};
+
+/** A landmark's predicted stereo measurement and its covariance. */
+struct TPredictedMeasurement
+{
+	bool ok = false;  //!< false if the landmark is behind (or within 0.1 m of) the camera
+	Eigen::Vector3d z = Eigen::Vector3d::Zero();  //!< predicted (uL, v, uR) [px]
+	/** Cov(z) = J_P Cov(P) J_P^T + J_xi Cov(T) J_xi^T + sigma^2 I [px^2]. */
+	Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+};
+
+/** Output of one matching. */
+struct TKeyframeMatchOutput
+{
+	std::vector<geometry::TStereoCorrespondence> corr;	//!< refined correspondences, in landmark order
+	std::vector<int> landmark;	//!< per correspondence: index into the input landmarks
+	std::vector<int> measurement;  //!< per correspondence: index into frame->meas (the BRIEF match)
+	int descriptor_matches = 0;	 //!< BRIEF matches of the last search (before refinement)
+	bool widened = false;  //!< Circle: the wide retry ran
+	bool near_only = false;	 //!< far landmarks were left out (near_min_disparity)
+};
+
+/** The keyframe matcher (see the file comment). Stateless: one instance can
+ * serve several threads. */
+class CKeyframeMatcher
+{
+   public:
+	using TOptions = TKeyframeMatcherOptions;
+	explicit CKeyframeMatcher(const TOptions& o = TOptions());
+
+	/** All four steps. */
+	void match(const TKeyframeMatchInput& in, TKeyframeMatchOutput& out) const;
+
+	/** Steps 1-3 with a given region: matchOf[j] = index of the measurement
+	 * matched to landmark j, or -1; returns the number of matches. For the
+	 * Circle region, `radius` [px] is the circle's; the Gate ignores it. */
+	int searchDescriptors(const TKeyframeMatchInput& in, double radius, std::vector<int>& matchOf) const;
+
+	/** The predicted measurement of landmark P_kf (covariance cov_P [m^2]) at
+	 * T_curr_kf (covariance cov_T, left convention) with pixel noise sigma_px. */
+	static TPredictedMeasurement predict(
+		const geometry::TStereoCalib& calib, const Eigen::Isometry3d& T_curr_kf, const geometry::Matrix6d& cov_T,
+		const Eigen::Vector3d& P_kf, const Eigen::Matrix3d& cov_P, double sigma_px);
+
+	/** The gate's matrix: S with its eigenvalues clamped so that every axis of
+	 * {r : r^T G^-1 r <= gate_chi2} lies in [gate_min_px, gate_max_px]. */
+	Eigen::Matrix3d gateMatrix(const Eigen::Matrix3d& S) const;
+
+	const TOptions& options() const { return m_opts; }
+
+   private:
+	TOptions m_opts;
+};
+
+}  // namespace shadyloc::vo

@@ -1,0 +1,296 @@
+/* ShadyLoc — the keyframe matcher (stereo VO stage, reused by the localisers). */
+#include <shadyloc/vo/KeyframeMatcher.h>
+
+#include <Eigen/Eigenvalues>
+#include <Eigen/LU>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace shadyloc::vo
+{
+namespace
+{
+/** ZNCC of a stored kPatchSize^2 patch against the image window at (x, y). */
+float patchZncc(const std::array<uint8_t, features::kPatchSize * features::kPatchSize>& p, const cv::Mat& img, int x, int y)
+{
+	constexpr int N = features::kPatchSize, h = N / 2;
+	int sa = 0, sb = 0;
+	int64_t saa = 0, sbb = 0, sab = 0;
+	for (int dy = 0; dy < N; dy++)
+	{
+		const uint8_t* row = img.ptr<uint8_t>(y - h + dy) + x - h;
+		const uint8_t* pr = p.data() + dy * N;
+		for (int dx = 0; dx < N; dx++)
+		{
+			const int a = pr[dx], b = row[dx];
+			sa += a;
+			sb += b;
+			saa += a * a;
+			sbb += b * b;
+			sab += a * b;
+		}
+	}
+	const double n = N * N;
+	const double va = saa - double(sa) * sa / n, vb = sbb - double(sb) * sb / n;
+	if (va < 1e-6 || vb < 1e-6) return -1.f;
+	return static_cast<float>((sab - double(sa) * sb / n) / std::sqrt(va * vb));
+}
+
+/** Uniform grid over the current measurements for region queries. */
+struct MeasGrid
+{
+	static constexpr int kCell = 16;
+	int cols = 0, rows = 0;
+	std::vector<std::vector<int>> cells;
+	void build(const std::vector<features::TStereoMeasurement>& m, int W, int H)
+	{
+		cols = (W + kCell - 1) / kCell;
+		rows = (H + kCell - 1) / kCell;
+		cells.assign(static_cast<size_t>(cols * rows), {});
+		for (size_t i = 0; i < m.size(); i++)
+			cells[static_cast<int>(m[i].v) / kCell * cols + static_cast<int>(m[i].uL) / kCell].push_back(
+				static_cast<int>(i));
+	}
+};
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v)
+{
+	Eigen::Matrix3d S;
+	S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+	return S;
+}
+
+void checkInput(const TKeyframeMatchInput& in)
+{
+	if (!in.landmarks || !in.frame)
+		throw std::invalid_argument("CKeyframeMatcher: input without landmarks or frame");
+	if (in.frame->left.type() != CV_8UC1 || in.frame->left.empty())
+		throw std::invalid_argument("CKeyframeMatcher: the frame's left image must be a non-empty CV_8UC1");
+}
+}  // namespace
+
+CKeyframeMatcher::CKeyframeMatcher(const TOptions& o) : m_opts(o) {}
+
+TPredictedMeasurement CKeyframeMatcher::predict(
+	const geometry::TStereoCalib& calib, const Eigen::Isometry3d& T_curr_kf, const geometry::Matrix6d& cov_T,
+	const Eigen::Vector3d& P_kf, const Eigen::Matrix3d& cov_P, double sigma_px)
+{
+	TPredictedMeasurement pm;
+	const Eigen::Vector3d p = T_curr_kf * P_kf;
+	if (p.z() < 0.1) return pm;
+	Eigen::Matrix3d Jp;
+	pm.z = calib.project(p, &Jp);
+	// z = project(exp(xi) T P): dz/dP = Jp R, dz/dxi = Jp [I, -[p]x] (geometry::stereoResidual).
+	const Eigen::Matrix3d JP = Jp * T_curr_kf.linear();
+	geometry::Matrix36d Jxi;
+	Jxi.leftCols<3>() = Jp;
+	Jxi.rightCols<3>() = -Jp * skew(p);
+	pm.S = JP * cov_P * JP.transpose() + Jxi * cov_T * Jxi.transpose() +
+		   sigma_px * sigma_px * Eigen::Matrix3d::Identity();
+	pm.ok = pm.S.allFinite();
+	return pm;
+}
+
+Eigen::Matrix3d CKeyframeMatcher::gateMatrix(const Eigen::Matrix3d& S) const
+{
+	// An axis of {r : r^T G^-1 r <= chi2} has half-length sqrt(chi2 lambda).
+	const double chi2 = m_opts.gate_chi2;
+	const double lo = m_opts.gate_min_px * m_opts.gate_min_px / chi2;
+	const double hi = m_opts.gate_max_px * m_opts.gate_max_px / chi2;
+	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (S + S.transpose()));
+	const Eigen::Vector3d lam = es.eigenvalues().cwiseMax(lo).cwiseMin(hi);
+	return es.eigenvectors() * lam.asDiagonal() * es.eigenvectors().transpose();
+}
+
+int CKeyframeMatcher::searchDescriptors(const TKeyframeMatchInput& in, double radius, std::vector<int>& matchOf) const
+{
+	checkInput(in);
+	const auto& o = m_opts;
+	const auto& kfm = *in.landmarks;
+	const auto& meas = in.frame->meas;
+	const auto& calib = in.calib;
+	MeasGrid grid;
+	grid.build(meas, in.frame->left.cols, in.frame->left.rows);
+	matchOf.assign(kfm.size(), -1);
+	std::vector<int> bestKf(meas.size(), -1), bestD(meas.size(), 999);
+	const bool gate = o.region == SearchRegion::Gate;
+	const double r2 = radius * radius;
+	for (size_t j = 0; j < kfm.size(); j++)
+	{
+		double u = 0, v = 0, hu = radius, hv = radius;
+		Eigen::Vector3d zp = Eigen::Vector3d::Zero();
+		Eigen::Matrix3d Ginv = Eigen::Matrix3d::Zero();
+		if (gate)
+		{
+			const auto pm = predict(calib, in.T_curr_kf_pred, in.cov_T_curr_kf_pred, kfm[j].P, kfm[j].cov, o.sigma_px);
+			if (!pm.ok) continue;
+			const Eigen::Matrix3d G = gateMatrix(pm.S);
+			Ginv = G.inverse();
+			zp = pm.z;
+			u = zp.x();
+			v = zp.y();
+			// The ellipsoid's extent along uL and v: the search box.
+			hu = std::sqrt(o.gate_chi2 * G(0, 0));
+			hv = std::sqrt(o.gate_chi2 * G(1, 1));
+		}
+		else
+		{
+			const Eigen::Vector3d p = in.T_curr_kf_pred * kfm[j].P;
+			if (p.z() < 0.1) continue;
+			u = calib.fx * p.x() / p.z() + calib.cx;
+			v = calib.fy * p.y() / p.z() + calib.cy;
+		}
+		const int c0 = std::max(0, static_cast<int>((u - hu) / MeasGrid::kCell));
+		const int c1 = std::min(grid.cols - 1, static_cast<int>((u + hu) / MeasGrid::kCell));
+		const int r0 = std::max(0, static_cast<int>((v - hv) / MeasGrid::kCell));
+		const int r1 = std::min(grid.rows - 1, static_cast<int>((v + hv) / MeasGrid::kCell));
+		int b1 = 999, b2 = 999, bi = -1;
+		for (int rr = r0; rr <= r1; rr++)
+			for (int cc = c0; cc <= c1; cc++)
+				for (int i : grid.cells[rr * grid.cols + cc])
+				{
+					const auto& m = meas[i];
+					if (gate)
+					{
+						const Eigen::Vector3d r = Eigen::Vector3d(m.uL, m.v, m.uR) - zp;
+						if (r.dot(Ginv * r) > o.gate_chi2) continue;
+					}
+					else
+					{
+						const double du = m.uL - u, dv = m.v - v;
+						if (du * du + dv * dv > r2) continue;
+					}
+					const int d = features::hamming(kfm[j].desc, m.desc);
+					if (d < b1)
+					{
+						b2 = b1;
+						b1 = d;
+						bi = i;
+					}
+					else if (d < b2)
+						b2 = d;
+				}
+		if (bi < 0 || b1 > o.max_hamming || (b2 < 999 && b1 >= o.match_ratio * b2)) continue;
+		// One keyframe landmark per current measurement: keep the closest descriptor.
+		if (b1 < bestD[bi])
+		{
+			if (bestKf[bi] >= 0) matchOf[bestKf[bi]] = -1;
+			bestD[bi] = b1;
+			bestKf[bi] = static_cast<int>(j);
+			matchOf[j] = bi;
+		}
+	}
+	return static_cast<int>(std::count_if(matchOf.begin(), matchOf.end(), [](int i) { return i >= 0; }));
+}
+
+void CKeyframeMatcher::match(const TKeyframeMatchInput& in, TKeyframeMatchOutput& out) const
+{
+	checkInput(in);
+	const auto& o = m_opts;
+	const auto& kfm = *in.landmarks;
+	const auto& fr = *in.frame;
+	const auto& calib = in.calib;
+	out = TKeyframeMatchOutput();
+	std::vector<int> matchOf;
+	int nMatch = 0;
+	if (o.region == SearchRegion::Gate)
+		nMatch = searchDescriptors(in, 0.0, matchOf);
+	else
+	{
+		nMatch = searchDescriptors(in, in.wide ? o.search_radius_lost_px : o.search_radius_px, matchOf);
+		if (nMatch < o.min_matches && !in.wide)
+		{
+			nMatch = searchDescriptors(in, o.search_radius_lost_px, matchOf);
+			out.widened = true;
+		}
+	}
+	out.descriptor_matches = nMatch;
+
+	// Sub-pixel refinement: where is the keyframe's patch in this image?
+	out.corr.reserve(nMatch);
+	const cv::Mat& img = fr.left;
+	const int ph = features::kPatchSize / 2;
+	for (size_t j = 0; j < kfm.size(); j++)
+	{
+		if (matchOf[j] < 0) continue;
+		const auto& m = fr.meas[matchOf[j]];
+		int x = static_cast<int>(m.uL), y = static_cast<int>(m.v);
+		const auto inside = [&](int xx, int yy) {
+			return xx - ph - 1 >= 0 && yy - ph - 1 >= 0 && xx + ph + 1 < img.cols && yy + ph + 1 < img.rows;
+		};
+		float c[3][3];
+		bool peak = false;
+		for (int step = 0; step <= o.refine_radius && inside(x, y); step++)
+		{
+			// All nine scores first, then the arg-max: comparing against the
+			// centre before it is computed read an uninitialised value (the
+			// run-to-run nondeterminism found with valgrind).
+			for (int dy = -1; dy <= 1; dy++)
+				for (int dx = -1; dx <= 1; dx++)
+					c[dy + 1][dx + 1] = patchZncc(kfm[j].patch, img, x + dx, y + dy);
+			int bx = 0, by = 0;
+			for (int dy = -1; dy <= 1; dy++)
+				for (int dx = -1; dx <= 1; dx++)
+					if (c[dy + 1][dx + 1] > c[by + 1][bx + 1]) bx = dx, by = dy;
+			if (bx == 0 && by == 0)
+			{
+				peak = true;
+				break;
+			}
+			if (step == o.refine_radius) break;
+			x += bx;
+			y += by;
+		}
+		if (!peak || c[1][1] < o.refine_min_zncc) continue;
+		float ox = features::parabolaPeak(c[1][0], c[1][1], c[1][2]);
+		float oy = features::parabolaPeak(c[0][1], c[1][1], c[2][1]);
+		{
+			// The parabola locks towards integer pixels; Gauss-Newton on the
+			// interpolated image does not (features::refinePatch2D).
+			float xr, yr;
+			if (features::refinePatch2D(
+					kfm[j].patch.data(), features::kPatchSize, img, x + ox, y + oy, o.refine_iterations, xr, yr))
+			{
+				ox = xr - x;
+				oy = yr - y;
+			}
+		}
+		geometry::TStereoCorrespondence k;
+		k.P_ref = kfm[j].P;
+		k.cov_ref = kfm[j].cov;
+		// The disparity measured at the corner carries over to the refined position.
+		const double du = x + ox - m.uL;
+		k.z_curr = Eigen::Vector3d(x + ox, y + oy, m.uR + du);
+		if (!calib.triangulate(k.z_curr.x(), k.z_curr.y(), k.z_curr.z(), k.P_curr)) continue;
+		out.corr.push_back(k);
+		out.landmark.push_back(static_cast<int>(j));
+		out.measurement.push_back(matchOf[j]);
+	}
+	if (o.near_min_disparity > 0)
+	{
+		// Near landmarks only, if there are enough of them (TStereoVOOptions::near_min_disparity).
+		const double fb = calib.fx * calib.baseline;
+		size_t n = 0;
+		for (const auto& k : out.corr) n += fb / k.P_ref.z() >= o.near_min_disparity;
+		if (static_cast<int>(n) >= o.near_min_matches)
+		{
+			size_t w = 0;
+			for (size_t i = 0; i < out.corr.size(); i++)
+				if (fb / out.corr[i].P_ref.z() >= o.near_min_disparity)
+				{
+					out.corr[w] = out.corr[i];
+					out.landmark[w] = out.landmark[i];
+					out.measurement[w] = out.measurement[i];
+					w++;
+				}
+			out.corr.resize(w);
+			out.landmark.resize(w);
+			out.measurement.resize(w);
+			out.near_only = true;
+		}
+	}
+}
+
+}  // namespace shadyloc::vo
