@@ -72,6 +72,17 @@ geometry::Matrix6d getCov(ByteReader& r)
 	return C;
 }
 
+/** FNV-1a, 64 bit, of the stored (compressed) bytes: each step is a
+ * bijection of the state for a given byte, so any single changed byte
+ * changes the sum. zstd's own checksum covers the decompressed content only:
+ * a flipped bit the entropy decoder ignores would pass it. */
+uint64_t fnv1a(const std::vector<uint8_t>& b)
+{
+	uint64_t h = 0xcbf29ce484222325ull;
+	for (uint8_t x : b) h = (h ^ x) * 0x100000001b3ull;
+	return h;
+}
+
 std::vector<uint8_t> compressBlock(const std::vector<uint8_t>& raw, int level)
 {
 	ZSTD_CCtx* c = ZSTD_createCCtx();
@@ -588,7 +599,7 @@ void CKeyframeMap::serializeTo(mrpt::serialization::CArchive& out) const
 	for (const auto* raw : blocks)
 	{
 		const auto comp = compressBlock(*raw, options.compression_level);
-		out << static_cast<uint64_t>(raw->size()) << static_cast<uint64_t>(comp.size());
+		out << static_cast<uint64_t>(raw->size()) << static_cast<uint64_t>(comp.size()) << fnv1a(comp);
 		out.WriteBuffer(comp.data(), comp.size());
 	}
 }
@@ -607,10 +618,12 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 			for (int i = 0; i < nBlocks; i++)
 			{
 				const std::string what = std::string(kClass) + " block " + std::to_string(i);
-				uint64_t rawSize, compSize;
-				in >> rawSize >> compSize;
+				uint64_t rawSize, compSize, sum;
+				in >> rawSize >> compSize >> sum;
 				if (rawSize > kMaxBlockBytes) throw std::runtime_error(what + ": size " + std::to_string(rawSize) + " (damaged)");
-				raw.push_back(decompressBlock(readBlob(in, compSize, what), rawSize, what));
+				const auto comp = readBlob(in, compSize, what);
+				if (fnv1a(comp) != sum) throw std::runtime_error(what + ": checksum mismatch (damaged)");
+				raw.push_back(decompressBlock(comp, rawSize, what));
 			}
 			// Parse into locals, then swap in: a failed load leaves the map as it was.
 			ByteReader r(raw[0].data(), raw[0].size(), std::string(kClass) + " metadata");
@@ -772,6 +785,18 @@ CKeyframeMap::Ptr CKeyframeMap::LoadFromFile(const std::string& path)
 	if (!f) throw std::runtime_error("keyframe map '" + path + "': cannot open");
 	std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
 	if (bytes.empty()) throw std::runtime_error("keyframe map '" + path + "': empty file");
+	// MRPT's object header: 0x80 | name length, the class name, the version.
+	// ReadObject(existing) does not compare the name, so check it here: a file
+	// of another class is refused before anything of it is parsed.
+	const std::string name = kClass;
+	const size_t nameLen = bytes[0] & 0x7f;
+	const std::string stored(
+		reinterpret_cast<const char*>(bytes.data()) + 1, std::min(nameLen, bytes.size() - 1));
+	if ((bytes[0] & 0x80) == 0 || stored != name)
+		throw std::runtime_error(
+			"keyframe map '" + path + "': holds " +
+			((bytes[0] & 0x80) && nameLen == stored.size() ? "a '" + stored + "' object" : std::string("no MRPT object")) +
+			", not a " + name);
 	mrpt::io::CMemoryStream mem;
 	mem.assignMemoryNotOwn(bytes.data(), bytes.size());
 	auto ar = mrpt::serialization::archiveFrom(mem);
