@@ -39,7 +39,7 @@ struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 	int landmarks_per_keyframe = 120;
 	int selection_grid_cols = 8;  //!< buckets across the image for landmark selection
 	int selection_grid_rows = 6;  //!< buckets down the image
-	int compression_level = 19;	 //!< zstd level, 1 (fast) .. 22 (small)
+	int compression_level = 9;  //!< zstd level, 1 (fast) .. 22 (small); 19 saves 3 % for 5x the time
 	double index_cell_m = 10.0;	 //!< cell size of the spatial hash grid [m]
 	bool draw_landmarks = false;  //!< getVisualizationInto draws landmarks, coloured by channel
 	double draw_landmark_max_depth_m = 30.0;  //!< farther landmarks are not drawn [m]
