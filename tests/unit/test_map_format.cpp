@@ -264,6 +264,7 @@ TEST(MapFormat, KilledSavesLeaveThePreviousFileLoadable)
 	const size_t total = bytesOf(*newMap).size();
 	const size_t chunks = (total + (64 << 10) - 1) / (64 << 10);
 	ASSERT_GE(chunks, 20u) << "the test map must span at least 20 chunks";
+	std::printf("[map-atomic] %zu bytes, %zu chunks: %zu kill points\n", total, chunks, chunks + 1);
 	int killedAt = 0;
 	for (size_t c = 0; c <= chunks; c++)
 	{
