@@ -12,6 +12,7 @@ packages=(
   libmrpt-serialization-dev libmrpt-poses-dev libmrpt-math-dev libmrpt-tclap-dev
   mrpt-apps                      # rawlog-edit, RawLogViewer (integration tests)
   libopencv-dev libeigen3-dev
+  libzstd-dev                    # keyframe map compression
   libgtest-dev libbenchmark-dev
   libegl-mesa0 libgl1-mesa-dri   # headless offscreen rendering (EGL/Mesa)
 )

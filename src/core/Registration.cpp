@@ -2,6 +2,7 @@
  * registerAllClasses.cpp per library). Add new classes here. */
 #include <shadyloc/core/Registration.h>
 #include <shadyloc/filters/Filters.h>
+#include <shadyloc/map/CKeyframeMap.h>
 
 #include <mrpt/core/initializer.h>
 #include <mrpt/rtti/CObject.h>
@@ -13,6 +14,7 @@ void shadyloc::registerAllClasses()
 	registerClass(CLASS_ID(shadyloc::CFilterMonochrome));
 	registerClass(CLASS_ID(shadyloc::CFilterInvariant));
 	registerClass(CLASS_ID(shadyloc::CFilterLinearise));
+	registerClass(CLASS_ID(shadyloc::CKeyframeMap));
 }
 
 MRPT_INITIALIZER(shadyloc_register_all_classes) { shadyloc::registerAllClasses(); }

@@ -1,0 +1,189 @@
+/* ShadyLoc — the dual-channel keyframe map: an MRPT metric map
+ * (mrpt::maps::CMetricMap) holding the survey's keyframes with the stereo
+ * measurements of every channel, queried by the localisers through
+ * map::KeyframeQueries. Creatable from MRPT .ini files (CMultiMetricMap:
+ * `keyframeMap_count = 1`, options in `<prefix>_keyframeMap_00_creationOpts`),
+ * serialised with versions (options included), drawn by getVisualizationInto.
+ *
+ * Storage: measurement coordinates are quantised to 1/16 px (landmarks and
+ * their covariances are recomputed from them with the map's calibration on
+ * insertion and on load, so the in-memory map equals the stored one); BRIEF
+ * descriptors and pixel patches are stored as they are; every block is
+ * compressed with zstd and carries a checksum, so any damaged byte is an
+ * error on load. docs/map.md.
+ */
+#pragma once
+
+#include <shadyloc/geometry/StereoCamera.h>
+#include <shadyloc/map/MapTypes.h>
+
+#include <mrpt/config/CLoadableOptions.h>
+#include <mrpt/maps/CMetricMap.h>
+
+#include <functional>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace shadyloc
+{
+/** Options of the keyframe map: how a survey thins and stores keyframes, and
+ * how the map is drawn. Stored with the map. ([map] in config/vo*.ini, or the
+ * creationOpts section of a CMultiMetricMap .ini.) */
+struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
+{
+	double kf_spacing_m = 3.0;	//!< a new map keyframe after this distance along the VO path [m]
+	double kf_spacing_deg = 15.0;  //!< ... or this change of heading (rotation angle) [deg]
+	/** Landmarks kept per keyframe and channel (0 = all): the strongest per
+	 * image bucket first, so they stay spread over the image (docs/map.md). */
+	int landmarks_per_keyframe = 120;
+	int selection_grid_cols = 8;  //!< buckets across the image for landmark selection
+	int selection_grid_rows = 6;  //!< buckets down the image
+	int compression_level = 9;  //!< zstd level, 1 (fast) .. 22 (small); 19 saves 3 % for 5x the time
+	double index_cell_m = 10.0;	 //!< cell size of the spatial hash grid [m]
+	bool draw_landmarks = false;  //!< getVisualizationInto draws landmarks, coloured by channel
+	double draw_landmark_max_depth_m = 30.0;  //!< farther landmarks are not drawn [m]
+	double draw_frame_every_m = 5.0;  //!< a keyframe axis triad at most every this far [m]
+
+	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
+	void dumpToTextStream(std::ostream& out) const override;
+	/** Throws std::invalid_argument naming the option. */
+	void validate() const;
+	bool operator==(const TKeyframeMapOptions& o) const;
+};
+
+class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
+{
+	DEFINE_SERIALIZABLE(CKeyframeMap, shadyloc)
+
+   public:
+	/** Map file extension, used everywhere (".kfmap"). */
+	static constexpr const char* kFileExtension = ".kfmap";
+	/** Coordinates are stored as integers in 1/kPixelQuantum px. */
+	static constexpr int kPixelQuantum = 16;
+
+	CKeyframeMap() = default;
+
+	TKeyframeMapOptions options;  //!< stored with the map
+
+	// ---- what the map was made with ----------------------------------------
+	/** Sets the camera and the channels; only on an empty map (throws otherwise). */
+	void setup(
+		const geometry::TStereoCalib& calib, int imageWidth, int imageHeight,
+		const std::vector<map::TChannelParams>& channels);
+	const geometry::TStereoCalib& calibration() const { return m_calib; }
+	int imageWidth() const { return m_width; }
+	int imageHeight() const { return m_height; }
+	const std::vector<map::TChannelParams>& channels() const { return m_channels; }
+	/** Throws std::runtime_error naming both parameter sets if live data made
+	 * with `live` is not comparable with this map's channel of the same label. */
+	void checkCompatible(const map::TChannelParams& live) const;
+
+	/** Survey runs (a keyframe's `run` indexes this). */
+	const std::vector<std::string>& runs() const { return m_runs; }
+	/** Index of a run, adding it if new. */
+	uint16_t addRun(const std::string& name);
+
+	// ---- building --------------------------------------------------------------
+	/** Appends a keyframe (id set here). Its measurements are quantised and
+	 * their landmarks and covariances recomputed with the map's calibration
+	 * (what a load would give); measurements that no longer triangulate are
+	 * dropped. Throws if channels do not match the map's or a coordinate
+	 * cannot be stored. */
+	void appendKeyframe(map::TMapKeyframe kf);
+
+	// ---- map::KeyframeQueries -----------------------------------------------------
+	size_t keyframeCount() const override { return m_keyframes.size(); }
+	const map::TMapKeyframe& keyframe(uint32_t id) const override;
+	size_t channelIndex(const std::string& label) const override;
+	std::vector<map::TKeyframeHit> nearestKeyframes(
+		const Eigen::Isometry3d& T_map_query, const map::TNearestQuery& q = {}) const override;
+	std::vector<uint32_t> keyframesAlongChain(uint32_t id, double back_m, double ahead_m) const override;
+	const std::vector<features::TStereoMeasurement>& measurements(
+		uint32_t id, const std::string& channel) const override;
+	bool sameSegment(uint32_t a, uint32_t b) const override;
+	map::TRelativePose relativePose(uint32_t a, uint32_t b) const override;
+
+	const std::vector<map::TMapKeyframe>& keyframes() const { return m_keyframes; }
+	/** Path length along the chains (segment gaps not counted) [m]. */
+	double pathLength() const;
+	/** Distance along the chain from the first keyframe of its segment [m]. */
+	double chainDistance(uint32_t id) const;
+
+	// ---- files -------------------------------------------------------------------
+	/** Writes the map (an MRPT archive of this one object, the file MRPT
+	 * tools read with the plugin) atomically: a temporary sibling, flushed to
+	 * disk, then renamed. afterChunk(bytes written so far), if given, is
+	 * called after each 64 kB written (progress). */
+	void saveToFile(const std::string& path, const std::function<void(size_t)>& afterChunk = {}) const;
+	/** Reads a map file; throws std::runtime_error naming the file on any
+	 * damage (truncation, flipped bytes, another class, unknown version). */
+	static CKeyframeMap::Ptr LoadFromFile(const std::string& path);
+
+	/** Stored bytes per block, measured by serialising: the metadata block
+	 * (options, calibration, channels, keyframe poses) and one block per channel. */
+	struct TSizeReport
+	{
+		size_t meta_bytes = 0;	//!< compressed
+		std::vector<size_t> channel_bytes;	//!< compressed, per channel
+		std::vector<size_t> channel_raw_bytes;	//!< before compression, per channel
+		std::vector<size_t> channel_measurements;  //!< measurements kept, per channel
+		size_t total_bytes = 0;	 //!< whole serialised object
+	};
+	TSizeReport sizeReport() const;
+
+	// ---- CMetricMap ----------------------------------------------------------------
+	bool isEmpty() const override { return m_keyframes.empty(); }
+	/** Writes `<prefix>.kfmap` (the map) and `<prefix>_keyframes.tum` (keyframe poses). */
+	void saveMetricMapRepresentationToFile(const std::string& prefix) const override;
+	/** Path (per segment), keyframe axis triads, optionally landmarks coloured by channel. */
+	void getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const override;
+	std::string asString() const override;
+
+	// Virtuals that make no sense for a keyframe map: they throw, naming the class.
+	void determineMatching2D(
+		const mrpt::maps::CMetricMap*, const mrpt::poses::CPose2D&, mrpt::tfest::TMatchingPairList&,
+		const mrpt::maps::TMatchingParams&, mrpt::maps::TMatchingExtraResults&) const override;
+	void determineMatching3D(
+		const mrpt::maps::CMetricMap*, const mrpt::poses::CPose3D&, mrpt::tfest::TMatchingPairList&,
+		const mrpt::maps::TMatchingParams&, mrpt::maps::TMatchingExtraResults&) const override;
+	float compute3DMatchingRatio(
+		const mrpt::maps::CMetricMap*, const mrpt::poses::CPose3D&,
+		const mrpt::maps::TMatchingRatioParams&) const override;
+	float squareDistanceToClosestCorrespondence(float, float) const override;
+
+	MAP_DEFINITION_START(CKeyframeMap)
+	TKeyframeMapOptions creationOpts;  //!< [<prefix>_creationOpts]
+	MAP_DEFINITION_END(CKeyframeMap)
+
+   private:
+	geometry::TStereoCalib m_calib;
+	int m_width = 0, m_height = 0;	//!< image size [px]
+	std::vector<map::TChannelParams> m_channels;
+	std::vector<std::string> m_runs;
+	std::vector<map::TMapKeyframe> m_keyframes;
+	std::vector<double> m_chainDist;  //!< per keyframe, see chainDistance()
+	/** Spatial hash grid over camera centres: cell key -> keyframe ids. */
+	std::unordered_map<uint64_t, std::vector<uint32_t>> m_grid;
+
+	uint64_t cellKey(const Eigen::Vector3d& p) const;
+	void indexKeyframe(uint32_t id);
+	void rebuildIndex();
+	/** Quantises in place and recomputes landmark and covariance; false if
+	 * the quantised measurement does not triangulate. */
+	bool quantise(features::TStereoMeasurement& m, const map::TChannelParams& ch) const;
+	void appendLoaded(map::TMapKeyframe kf);  //!< as stored: no quantisation, index updated
+
+	void internal_clear() override;
+	bool internal_insertObservation(
+		const mrpt::obs::CObservation& obs,
+		const std::optional<const mrpt::poses::CPose3D>& robotPose = std::nullopt) override;
+	double internal_computeObservationLikelihood(
+		const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D& takenFrom) const override;
+	bool internal_canComputeObservationLikelihood(const mrpt::obs::CObservation&) const override
+	{
+		return false;  // see internal_computeObservationLikelihood
+	}
+};
+
+}  // namespace shadyloc

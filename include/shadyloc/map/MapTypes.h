@@ -1,0 +1,159 @@
+/* ShadyLoc — what the dual-channel keyframe map stores (McManus et al. 2014,
+ * Section II: the survey's "visual memory"): keyframes of one VO chain, each
+ * with the stereo measurements of every channel (monochrome, invariant) at
+ * the same frame, and the parameters that define those measurements.
+ *
+ * Frames: the map frame is the first keyframe's left camera (x right, y down,
+ * z forward, metres). Each keyframe stores T_map_kf (the chain's product) and
+ * T_prev_kf with its 6x6 covariance (left perturbation, (translation,
+ * rotation), geometry/PoseSolver.h). After a VO break the keyframes start a
+ * new segment whose T_map_kf is only predicted (`predicted` set). docs/map.md.
+ */
+#pragma once
+
+#include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/geometry/PoseSolver.h>
+#include <shadyloc/image/ColourTransforms.h>
+
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace shadyloc::map
+{
+/** How a channel's grey image is made from the colour one. */
+enum class ChannelKind : uint8_t
+{
+	Mono = 0,  //!< BT.601 luma (image::toMonochrome)
+	Invariant = 1  //!< illumination-invariant transform (image::InvariantTransform)
+};
+std::string toString(ChannelKind k);
+
+/** The parameters that define a channel's descriptors: a live run whose
+ * values differ produces descriptors that do not compare with the map's. */
+struct TChannelParams
+{
+	std::string label;	//!< the channel's name, e.g. "mono", "invariant"
+	ChannelKind kind = ChannelKind::Mono;
+	image::ChannelOrder order = image::ChannelOrder::BGR;  //!< colour order of the input (mono conversion)
+	image::InvariantParams invariant;  //!< transform and 8-bit mapping (kind == Invariant only)
+	int brief_patch_size = 32;	//!< BRIEF patch side [px]
+	uint32_t brief_seed = 0x5ad710c;  //!< BRIEF test pattern seed
+	double presmooth_sigma = 0;	 //!< Gaussian pre-smoothing before detection [px], 0 = off
+	/** Pixel noise of (uL, v, uR) behind the landmark covariances [px] (not
+	 * descriptor-defining: landmark covariances are recomputed with it on load). */
+	double sigma_px = 0.5;
+
+	/** From the options a survey or a live run uses for this channel. */
+	static TChannelParams From(
+		const std::string& label, ChannelKind kind, const features::TStereoFeatureOptions& fo,
+		const image::InvariantParams& inv = {}, image::ChannelOrder order = image::ChannelOrder::BGR);
+
+	/** One line, every descriptor-defining value. */
+	std::string asString() const;
+	/** Names of the descriptor-defining fields that differ ("" when none):
+	 * kind, order, the invariant transform (kind Invariant), BRIEF patch
+	 * size and seed, pre-smoothing. */
+	std::string differences(const TChannelParams& o) const;
+	bool operator==(const TChannelParams& o) const;
+};
+
+/** One keyframe of the map. */
+struct TMapKeyframe
+{
+	uint32_t id = 0;  //!< index in the map
+	uint16_t run = 0;  //!< survey run (index into CKeyframeMap::runs())
+	uint32_t segment = 0;  //!< chain segment, a new one after each VO break (map-wide counter)
+	uint64_t frame = 0;	 //!< index of the source frame in its survey run
+	double timestamp = 0;  //!< [s]
+	/** T_map_kf is a prediction across a VO break (this keyframe's segment did
+	 * not start at the map origin): use it to search, never as a measured pose. */
+	bool predicted = false;
+	Eigen::Isometry3d T_map_kf = Eigen::Isometry3d::Identity();	 //!< left camera in the map frame
+	/** Left camera in the previous keyframe's left camera (identity for the
+	 * first keyframe of a run); across a break, a prediction. */
+	Eigen::Isometry3d T_prev_kf = Eigen::Isometry3d::Identity();
+	/** Covariance of T_prev_kf, left perturbation (translation, rotation) [m^2, rad^2]. */
+	geometry::Matrix6d cov_prev_kf = geometry::Matrix6d::Zero();
+	/** Stereo measurements per channel (indexed like CKeyframeMap::channels()),
+	 * landmarks in this keyframe's left camera frame. */
+	std::vector<std::vector<features::TStereoMeasurement>> channels;
+	/** Ground-truth pose of the left camera in the ground truth's world frame,
+	 * if the survey had one. Evaluation only: localisation never reads it. */
+	std::optional<Eigen::Isometry3d> T_gt_kf;
+};
+
+/** A keyframe found by a spatial query. */
+struct TKeyframeHit
+{
+	uint32_t id = 0;
+	double distance_m = 0;	//!< between the camera centres [m]
+	double angle_deg = 0;  //!< between the optical axes [deg]
+};
+
+/** Parameters of CKeyframeMap's nearest-keyframe query. */
+struct TNearestQuery
+{
+	double max_distance_m = 5.0;  //!< camera centres within this [m]
+	double max_angle_deg = 30.0;  //!< optical axes within this: roads are driven both ways [deg]
+	size_t max_results = 5;	 //!< best first (by distance + angle_weight_m_per_deg * angle)
+	double angle_weight_m_per_deg = 0.1;  //!< ranking: metres a degree of heading is worth [m/deg]
+	bool include_predicted = true;	//!< also keyframes whose map pose is only predicted
+};
+
+/** The pose of one keyframe in another's frame, composed along the chain. */
+struct TRelativePose
+{
+	Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();  //!< keyframe b's left camera in a's [m]
+	geometry::Matrix6d cov = geometry::Matrix6d::Zero();  //!< of T_a_b, left perturbation [m^2, rad^2]
+	double chain_length_m = 0;	//!< distance along the chain between a and b [m]
+};
+
+/** The queries a localiser makes of a keyframe map (MOLA's
+ * KeyframeMapCapable shape: a small interface beside CMetricMap rather than
+ * computeObservationLikelihood). Ids are keyframe indices. */
+class KeyframeQueries
+{
+   public:
+	virtual ~KeyframeQueries() = default;
+
+	virtual size_t keyframeCount() const = 0;
+	virtual const TMapKeyframe& keyframe(uint32_t id) const = 0;
+	/** Index of a channel by its label; throws std::out_of_range naming the
+	 * label and the map's channels if there is none. */
+	virtual size_t channelIndex(const std::string& label) const = 0;
+
+	/** Keyframes near a query pose in the map frame, heading included, best
+	 * first (spatial index: a hash grid over camera centres). */
+	virtual std::vector<TKeyframeHit> nearestKeyframes(
+		const Eigen::Isometry3d& T_map_query, const TNearestQuery& q = {}) const = 0;
+
+	/** Keyframes of id's run and segment within back_m behind and ahead_m
+	 * ahead of it along the chain (distance along the path), in chain order,
+	 * id included. */
+	virtual std::vector<uint32_t> keyframesAlongChain(uint32_t id, double back_m, double ahead_m) const = 0;
+
+	/** A keyframe's measurements of one channel (landmarks in its left camera). */
+	virtual const std::vector<features::TStereoMeasurement>& measurements(
+		uint32_t id, const std::string& channel) const = 0;
+
+	/** Whether two keyframes are linked by measured transforms (same run and segment). */
+	virtual bool sameSegment(uint32_t a, uint32_t b) const = 0;
+
+	/** T_a_b composed along the chain with its covariance propagated. Throws
+	 * std::invalid_argument naming both keyframes when they are not in one
+	 * segment (a break is never silently chained). */
+	virtual TRelativePose relativePose(uint32_t a, uint32_t b) const = 0;
+};
+
+/** Composition of uncertain poses, left perturbation T = exp(xi) T_mean,
+ * xi = (rho, phi): for T_ac = T_ab T_bc with independent errors,
+ * cov_ac = cov_ab + Ad(T_ab) cov_bc Ad(T_ab)^T. */
+void composeWithCovariance(
+	const Eigen::Isometry3d& T_ab, const geometry::Matrix6d& cov_ab, const Eigen::Isometry3d& T_bc,
+	const geometry::Matrix6d& cov_bc, Eigen::Isometry3d& T_ac, geometry::Matrix6d& cov_ac);
+
+}  // namespace shadyloc::map

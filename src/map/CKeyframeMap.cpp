@@ -1,0 +1,1008 @@
+/* ShadyLoc — the dual-channel keyframe map. */
+#include "ByteBuffer.h"
+
+#include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/map/CKeyframeMap.h>
+
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/opengl/CPointCloudColoured.h>
+#include <mrpt/opengl/CSetOfLines.h>
+#include <mrpt/opengl/CSetOfObjects.h>
+#include <mrpt/opengl/stock_objects.h>
+#include <mrpt/math/CMatrixFixed.h>
+#include <mrpt/poses/CPose3D.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <zstd.h>
+
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <set>
+#include <sstream>
+
+using namespace shadyloc;
+using shadyloc::map::detail::ByteReader;
+using shadyloc::map::detail::ByteWriter;
+
+IMPLEMENTS_SERIALIZABLE(CKeyframeMap, mrpt::maps::CMetricMap, shadyloc)
+MAP_DEFINITION_REGISTER("shadyloc::CKeyframeMap,keyframeMap", shadyloc::CKeyframeMap)
+
+namespace
+{
+constexpr const char* kClass = "shadyloc::CKeyframeMap";
+// Bytes per stored measurement: uL, v, disparity, response (u16 each), zncc
+// (i8), BRIEF (32), patch.
+constexpr size_t kMeasBytes = 2 + 2 + 2 + 2 + 1 + 32 + features::kPatchSize * features::kPatchSize;
+constexpr uint8_t kMaxChannels = 16;
+constexpr uint64_t kMaxBlockBytes = uint64_t(1) << 36;	// 64 GiB: far beyond any map
+
+void putPose(ByteWriter& w, const Eigen::Isometry3d& T)
+{
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 4; j++) w.put<double>(T.matrix()(i, j));
+}
+Eigen::Isometry3d getPose(ByteReader& r, const char* what)
+{
+	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 4; j++) T.matrix()(i, j) = r.get<double>();
+	if (!T.matrix().allFinite()) r.fail(std::string(what) + ": not finite");
+	const Eigen::Matrix3d RtR = T.linear().transpose() * T.linear();
+	if (!RtR.isApprox(Eigen::Matrix3d::Identity(), 1e-6)) r.fail(std::string(what) + ": rotation not orthonormal");
+	return T;
+}
+void putCov(ByteWriter& w, const geometry::Matrix6d& C)
+{
+	for (int i = 0; i < 6; i++)
+		for (int j = i; j < 6; j++) w.put<double>(C(i, j));
+}
+geometry::Matrix6d getCov(ByteReader& r)
+{
+	geometry::Matrix6d C;
+	for (int i = 0; i < 6; i++)
+		for (int j = i; j < 6; j++) C(i, j) = C(j, i) = r.get<double>();
+	if (!C.allFinite()) r.fail("covariance not finite");
+	return C;
+}
+
+/** FNV-1a, 64 bit, of the stored (compressed) bytes: each step is a
+ * bijection of the state for a given byte, so any single changed byte
+ * changes the sum. zstd's own checksum covers the decompressed content only:
+ * a flipped bit the entropy decoder ignores would pass it. */
+uint64_t fnv1a(const std::vector<uint8_t>& b)
+{
+	uint64_t h = 0xcbf29ce484222325ull;
+	for (uint8_t x : b) h = (h ^ x) * 0x100000001b3ull;
+	return h;
+}
+
+std::vector<uint8_t> compressBlock(const std::vector<uint8_t>& raw, int level)
+{
+	ZSTD_CCtx* c = ZSTD_createCCtx();
+	if (!c) throw std::runtime_error(std::string(kClass) + ": zstd context");
+	ZSTD_CCtx_setParameter(c, ZSTD_c_compressionLevel, level);
+	ZSTD_CCtx_setParameter(c, ZSTD_c_checksumFlag, 1);	// any damaged byte fails the load
+	ZSTD_CCtx_setParameter(c, ZSTD_c_contentSizeFlag, 1);
+	std::vector<uint8_t> out(ZSTD_compressBound(raw.size()));
+	const size_t n = ZSTD_compress2(c, out.data(), out.size(), raw.data(), raw.size());
+	ZSTD_freeCCtx(c);
+	if (ZSTD_isError(n)) throw std::runtime_error(std::string(kClass) + ": zstd: " + ZSTD_getErrorName(n));
+	out.resize(n);
+	return out;
+}
+
+std::vector<uint8_t> decompressBlock(const std::vector<uint8_t>& comp, uint64_t rawSize, const std::string& what)
+{
+	const unsigned long long fs = ZSTD_getFrameContentSize(comp.data(), comp.size());
+	if (fs == ZSTD_CONTENTSIZE_ERROR || fs == ZSTD_CONTENTSIZE_UNKNOWN)
+		throw std::runtime_error(what + ": not a zstd frame (damaged)");
+	if (fs != rawSize)
+		throw std::runtime_error(
+			what + ": stored size " + std::to_string(rawSize) + " disagrees with the frame's " +
+			std::to_string(fs) + " (damaged)");
+	std::vector<uint8_t> raw(rawSize);
+	const size_t n = ZSTD_decompress(raw.data(), raw.size(), comp.data(), comp.size());
+	if (ZSTD_isError(n)) throw std::runtime_error(what + ": " + ZSTD_getErrorName(n) + " (damaged)");
+	if (n != rawSize) throw std::runtime_error(what + ": short block (damaged)");
+	return raw;
+}
+
+/** Reads n bytes in chunks, so a damaged size cannot allocate more than the
+ * stream holds before the read fails. */
+std::vector<uint8_t> readBlob(mrpt::serialization::CArchive& in, uint64_t n, const std::string& what)
+{
+	if (n > kMaxBlockBytes) throw std::runtime_error(what + ": block size " + std::to_string(n) + " (damaged)");
+	std::vector<uint8_t> out;
+	const size_t kChunk = 1 << 20;
+	while (out.size() < n)
+	{
+		const size_t k = std::min<uint64_t>(kChunk, n - out.size());
+		const size_t at = out.size();
+		out.resize(at + k);
+		if (in.ReadBuffer(out.data() + at, k) != k)
+			throw std::runtime_error(what + ": truncated (" + std::to_string(at) + " of " + std::to_string(n) + " bytes)");
+	}
+	return out;
+}
+
+void putChannel(ByteWriter& w, const map::TChannelParams& c)
+{
+	w.str(c.label);
+	w.put<uint8_t>(static_cast<uint8_t>(c.kind));
+	w.put<uint8_t>(static_cast<uint8_t>(c.order));
+	const auto& p = c.invariant;
+	w.put<double>(p.alpha);
+	w.put<double>(p.beta);
+	w.put<uint8_t>(static_cast<uint8_t>(p.order));
+	w.put<uint8_t>(static_cast<uint8_t>(p.linearisation));
+	w.put<double>(p.gamma);
+	w.put<double>(p.scale);
+	w.put<double>(p.offset);
+	w.put<int32_t>(c.brief_patch_size);
+	w.put<uint32_t>(c.brief_seed);
+	w.put<double>(c.presmooth_sigma);
+	w.put<double>(c.sigma_px);
+}
+map::TChannelParams getChannel(ByteReader& r)
+{
+	map::TChannelParams c;
+	c.label = r.str();
+	const auto kind = r.get<uint8_t>(), order = r.get<uint8_t>();
+	if (kind > 1) r.fail("channel kind " + std::to_string(kind));
+	if (order > 1) r.fail("channel order " + std::to_string(order));
+	c.kind = static_cast<map::ChannelKind>(kind);
+	c.order = static_cast<image::ChannelOrder>(order);
+	auto& p = c.invariant;
+	p.alpha = r.get<double>();
+	p.beta = r.get<double>();
+	const auto po = r.get<uint8_t>(), pl = r.get<uint8_t>();
+	if (po > 1 || pl > 2) r.fail("invariant order/linearisation");
+	p.order = static_cast<image::ChannelOrder>(po);
+	p.linearisation = static_cast<image::Linearisation>(pl);
+	p.gamma = r.get<double>();
+	p.scale = r.get<double>();
+	p.offset = r.get<double>();
+	c.brief_patch_size = r.get<int32_t>();
+	c.brief_seed = r.get<uint32_t>();
+	c.presmooth_sigma = r.get<double>();
+	c.sigma_px = r.get<double>();
+	if (c.label.empty()) r.fail("channel without a label");
+	if (!(c.sigma_px > 0) || !std::isfinite(c.sigma_px)) r.fail("channel '" + c.label + "': sigma_px");
+	return c;
+}
+
+void putOptions(ByteWriter& w, const TKeyframeMapOptions& o)
+{
+	w.put<double>(o.kf_spacing_m);
+	w.put<double>(o.kf_spacing_deg);
+	w.put<int32_t>(o.landmarks_per_keyframe);
+	w.put<int32_t>(o.selection_grid_cols);
+	w.put<int32_t>(o.selection_grid_rows);
+	w.put<int32_t>(o.compression_level);
+	w.put<double>(o.index_cell_m);
+	w.put<uint8_t>(o.draw_landmarks);
+	w.put<double>(o.draw_landmark_max_depth_m);
+	w.put<double>(o.draw_frame_every_m);
+}
+TKeyframeMapOptions getOptions(ByteReader& r)
+{
+	TKeyframeMapOptions o;
+	o.kf_spacing_m = r.get<double>();
+	o.kf_spacing_deg = r.get<double>();
+	o.landmarks_per_keyframe = r.get<int32_t>();
+	o.selection_grid_cols = r.get<int32_t>();
+	o.selection_grid_rows = r.get<int32_t>();
+	o.compression_level = r.get<int32_t>();
+	o.index_cell_m = r.get<double>();
+	const auto d = r.get<uint8_t>();
+	if (d > 1) r.fail("draw_landmarks is not a bool");
+	o.draw_landmarks = d;
+	o.draw_landmark_max_depth_m = r.get<double>();
+	o.draw_frame_every_m = r.get<double>();
+	try
+	{
+		o.validate();
+	}
+	catch (const std::exception& e)
+	{
+		r.fail(std::string("stored options: ") + e.what());
+	}
+	return o;
+}
+}  // namespace
+
+// ============================================================================
+// Options
+// ============================================================================
+void TKeyframeMapOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+	MRPT_LOAD_CONFIG_VAR(kf_spacing_m, double, c, s);
+	MRPT_LOAD_CONFIG_VAR(kf_spacing_deg, double, c, s);
+	MRPT_LOAD_CONFIG_VAR(landmarks_per_keyframe, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(selection_grid_cols, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(selection_grid_rows, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(compression_level, int, c, s);
+	MRPT_LOAD_CONFIG_VAR(index_cell_m, double, c, s);
+	MRPT_LOAD_CONFIG_VAR(draw_landmarks, bool, c, s);
+	MRPT_LOAD_CONFIG_VAR(draw_landmark_max_depth_m, double, c, s);
+	MRPT_LOAD_CONFIG_VAR(draw_frame_every_m, double, c, s);
+	try
+	{
+		validate();
+	}
+	catch (const std::exception& e)
+	{
+		throw std::invalid_argument("[" + s + "] " + e.what());
+	}
+}
+
+void TKeyframeMapOptions::dumpToTextStream(std::ostream& out) const
+{
+	// Bools on lines of their own: MRPT reads "true ; comment" as false.
+	out << "kf_spacing_m = " << kf_spacing_m << " ; new map keyframe after this distance [m]\n"
+		<< "kf_spacing_deg = " << kf_spacing_deg << " ; ... or this rotation [deg]\n"
+		<< "landmarks_per_keyframe = " << landmarks_per_keyframe << " ; per channel, 0 = all\n"
+		<< "selection_grid_cols = " << selection_grid_cols << " ; buckets across the image\n"
+		<< "selection_grid_rows = " << selection_grid_rows << " ; buckets down the image\n"
+		<< "compression_level = " << compression_level << " ; zstd, 1..22\n"
+		<< "index_cell_m = " << index_cell_m << " ; spatial hash grid cell [m]\n"
+		<< "; draw landmarks coloured by channel\n"
+		<< "draw_landmarks = " << (draw_landmarks ? "true" : "false") << "\n"
+		<< "draw_landmark_max_depth_m = " << draw_landmark_max_depth_m << " ; [m]\n"
+		<< "draw_frame_every_m = " << draw_frame_every_m << " ; keyframe triads at most this often [m]\n";
+}
+
+void TKeyframeMapOptions::validate() const
+{
+	auto need = [](bool ok, const char* what) {
+		if (!ok) throw std::invalid_argument(std::string("keyframe map option ") + what);
+	};
+	need(kf_spacing_m >= 0 && std::isfinite(kf_spacing_m), "kf_spacing_m must be >= 0 [m]");
+	need(kf_spacing_deg > 0 && kf_spacing_deg <= 180, "kf_spacing_deg must be in (0, 180] [deg]");
+	need(landmarks_per_keyframe >= 0, "landmarks_per_keyframe must be >= 0 (0 = all)");
+	need(selection_grid_cols >= 1 && selection_grid_cols <= 256, "selection_grid_cols must be in 1..256");
+	need(selection_grid_rows >= 1 && selection_grid_rows <= 256, "selection_grid_rows must be in 1..256");
+	need(compression_level >= 1 && compression_level <= 22, "compression_level must be in 1..22");
+	need(index_cell_m > 0 && std::isfinite(index_cell_m), "index_cell_m must be > 0 [m]");
+	need(draw_landmark_max_depth_m > 0, "draw_landmark_max_depth_m must be > 0 [m]");
+	need(draw_frame_every_m >= 0, "draw_frame_every_m must be >= 0 [m]");
+}
+
+bool TKeyframeMapOptions::operator==(const TKeyframeMapOptions& o) const
+{
+	ByteWriter a, b;
+	putOptions(a, *this);
+	putOptions(b, o);
+	return a.buf == b.buf;
+}
+
+// ============================================================================
+// Building
+// ============================================================================
+void CKeyframeMap::setup(
+	const geometry::TStereoCalib& calib, int w, int h, const std::vector<map::TChannelParams>& channels)
+{
+	if (!m_keyframes.empty())
+		throw std::logic_error(std::string(kClass) + "::setup: the map already holds keyframes");
+	if (channels.empty() || channels.size() > kMaxChannels)
+		throw std::invalid_argument(std::string(kClass) + "::setup: 1.." + std::to_string(kMaxChannels) + " channels");
+	for (size_t i = 0; i < channels.size(); i++)
+		for (size_t j = 0; j < i; j++)
+			if (channels[i].label == channels[j].label)
+				throw std::invalid_argument(std::string(kClass) + "::setup: channel '" + channels[i].label + "' twice");
+	if (w <= 0 || h <= 0 || w * kPixelQuantum > 65535 || h * kPixelQuantum > 65535)
+		throw std::invalid_argument(
+			std::string(kClass) + "::setup: image size " + std::to_string(w) + "x" + std::to_string(h) +
+			" cannot be stored (at most " + std::to_string(65535 / kPixelQuantum) + " px a side)");
+	m_calib = calib;
+	m_width = w;
+	m_height = h;
+	m_channels = channels;
+}
+
+void CKeyframeMap::checkCompatible(const map::TChannelParams& live) const
+{
+	const size_t i = channelIndex(live.label);
+	const std::string d = m_channels[i].differences(live);
+	if (!d.empty())
+		throw std::runtime_error(
+			std::string(kClass) + ": live channel '" + live.label + "' was made with other descriptor parameters (" + d +
+			"): map " + m_channels[i].asString() + "; live " + live.asString());
+}
+
+uint16_t CKeyframeMap::addRun(const std::string& name)
+{
+	for (size_t i = 0; i < m_runs.size(); i++)
+		if (m_runs[i] == name) return static_cast<uint16_t>(i);
+	if (m_runs.size() >= 65535) throw std::length_error(std::string(kClass) + ": too many runs");
+	m_runs.push_back(name);
+	return static_cast<uint16_t>(m_runs.size() - 1);
+}
+
+bool CKeyframeMap::quantise(features::TStereoMeasurement& m, const map::TChannelParams& ch) const
+{
+	const double q = kPixelQuantum;
+	const long uL = std::lround(m.uL * q), v = std::lround(m.v * q), d = std::lround((m.uL - m.uR) * q);
+	if (uL < 0 || uL > 65535 || v < 0 || v > 65535 || d < -32768 || d > 32767)
+		throw std::out_of_range(
+			std::string(kClass) + ": measurement (uL " + std::to_string(m.uL) + ", v " + std::to_string(m.v) +
+			", uR " + std::to_string(m.uR) + ") cannot be stored");
+	m.uL = static_cast<float>(uL) / kPixelQuantum;
+	m.v = static_cast<float>(v) / kPixelQuantum;
+	m.uR = m.uL - static_cast<float>(d) / kPixelQuantum;
+	m.response = static_cast<float>(std::clamp<long>(std::lround(m.response), 0, 65535));
+	m.zncc = static_cast<float>(std::clamp<long>(std::lround(m.zncc * 127.f), -127, 127)) / 127.f;
+	Eigen::Matrix3d J;
+	if (!m_calib.triangulate(m.uL, m.v, m.uR, m.P, &J)) return false;
+	m.cov = m_calib.triangulationCovariance(J, ch.sigma_px);
+	return true;
+}
+
+void CKeyframeMap::appendKeyframe(map::TMapKeyframe kf)
+{
+	if (m_channels.empty()) throw std::logic_error(std::string(kClass) + "::appendKeyframe: setup() first");
+	if (kf.channels.size() != m_channels.size())
+		throw std::invalid_argument(
+			std::string(kClass) + "::appendKeyframe: " + std::to_string(kf.channels.size()) +
+			" channels of measurements, the map has " + std::to_string(m_channels.size()));
+	if (kf.run >= m_runs.size())
+		throw std::invalid_argument(std::string(kClass) + "::appendKeyframe: unknown run " + std::to_string(kf.run));
+	if (!m_keyframes.empty() && kf.segment < m_keyframes.back().segment)
+		throw std::invalid_argument(std::string(kClass) + "::appendKeyframe: segments must not decrease");
+	if (m_keyframes.size() >= 0xffffffffu) throw std::length_error(std::string(kClass) + ": too many keyframes");
+	for (size_t c = 0; c < kf.channels.size(); c++)
+	{
+		auto& ms = kf.channels[c];
+		size_t k = 0;
+		for (auto& m : ms)
+			if (quantise(m, m_channels[c])) ms[k++] = m;
+		ms.resize(k);
+	}
+	kf.id = static_cast<uint32_t>(m_keyframes.size());
+	const bool segStart = m_keyframes.empty() || m_keyframes.back().segment != kf.segment ||
+						  m_keyframes.back().run != kf.run;
+	m_chainDist.push_back(segStart ? 0.0 : m_chainDist.back() + kf.T_prev_kf.translation().norm());
+	m_keyframes.push_back(std::move(kf));
+	indexKeyframe(m_keyframes.back().id);
+}
+
+// ============================================================================
+// Queries
+// ============================================================================
+const map::TMapKeyframe& CKeyframeMap::keyframe(uint32_t id) const
+{
+	if (id >= m_keyframes.size())
+		throw std::out_of_range(
+			std::string(kClass) + ": no keyframe " + std::to_string(id) + " (" + std::to_string(m_keyframes.size()) +
+			" keyframes)");
+	return m_keyframes[id];
+}
+
+size_t CKeyframeMap::channelIndex(const std::string& label) const
+{
+	std::string have;
+	for (size_t i = 0; i < m_channels.size(); i++)
+	{
+		if (m_channels[i].label == label) return i;
+		have += (i ? ", " : "") + m_channels[i].label;
+	}
+	throw std::out_of_range(std::string(kClass) + ": no channel '" + label + "' (the map has: " + have + ")");
+}
+
+uint64_t CKeyframeMap::cellKey(const Eigen::Vector3d& p) const
+{
+	auto c = [&](double x) {
+		const int64_t i = static_cast<int64_t>(std::floor(x / options.index_cell_m));
+		return static_cast<uint64_t>(std::clamp<int64_t>(i, -(1 << 20), (1 << 20) - 1) + (1 << 20)) & 0x1fffff;
+	};
+	return (c(p.x()) << 42) | (c(p.y()) << 21) | c(p.z());
+}
+
+void CKeyframeMap::indexKeyframe(uint32_t id) { m_grid[cellKey(m_keyframes[id].T_map_kf.translation())].push_back(id); }
+
+void CKeyframeMap::rebuildIndex()
+{
+	m_grid.clear();
+	for (uint32_t i = 0; i < m_keyframes.size(); i++) indexKeyframe(i);
+}
+
+std::vector<map::TKeyframeHit> CKeyframeMap::nearestKeyframes(
+	const Eigen::Isometry3d& T_map_query, const map::TNearestQuery& q) const
+{
+	std::vector<map::TKeyframeHit> hits;
+	if (m_keyframes.empty() || q.max_results == 0) return hits;
+	const Eigen::Vector3d p = T_map_query.translation();
+	const Eigen::Vector3d zq = T_map_query.linear().col(2);
+	const double r = q.max_distance_m, cell = options.index_cell_m;
+	const double cosMax = std::cos(q.max_angle_deg * M_PI / 180.0);
+	auto range = [&](double x) {
+		return std::make_pair(
+			static_cast<int64_t>(std::floor((x - r) / cell)), static_cast<int64_t>(std::floor((x + r) / cell)));
+	};
+	const auto [x0, x1] = range(p.x());
+	const auto [y0, y1] = range(p.y());
+	const auto [z0, z1] = range(p.z());
+	if ((x1 - x0 + 1) * (y1 - y0 + 1) * (z1 - z0 + 1) > 100000)
+		throw std::invalid_argument(
+			std::string(kClass) + "::nearestKeyframes: radius " + std::to_string(r) + " m spans too many index cells");
+	for (int64_t ix = x0; ix <= x1; ix++)
+		for (int64_t iy = y0; iy <= y1; iy++)
+			for (int64_t iz = z0; iz <= z1; iz++)
+			{
+				const auto it = m_grid.find(cellKey(Eigen::Vector3d((ix + 0.5) * cell, (iy + 0.5) * cell, (iz + 0.5) * cell)));
+				if (it == m_grid.end()) continue;
+				for (uint32_t id : it->second)
+				{
+					const auto& k = m_keyframes[id];
+					if (k.predicted && !q.include_predicted) continue;
+					const double d = (k.T_map_kf.translation() - p).norm();
+					if (d > r) continue;
+					const double c = std::clamp(zq.dot(k.T_map_kf.linear().col(2)), -1.0, 1.0);
+					if (c < cosMax) continue;
+					hits.push_back({id, d, std::acos(c) * 180.0 / M_PI});
+				}
+			}
+	auto score = [&](const map::TKeyframeHit& h) { return h.distance_m + q.angle_weight_m_per_deg * h.angle_deg; };
+	std::sort(hits.begin(), hits.end(), [&](const auto& a, const auto& b) {
+		const double sa = score(a), sb = score(b);
+		return sa < sb || (sa == sb && a.id < b.id);
+	});
+	if (hits.size() > q.max_results) hits.resize(q.max_results);
+	return hits;
+}
+
+std::vector<uint32_t> CKeyframeMap::keyframesAlongChain(uint32_t id, double back_m, double ahead_m) const
+{
+	keyframe(id);
+	uint32_t a = id, b = id;
+	while (a > 0 && sameSegment(a - 1, id) && m_chainDist[id] - m_chainDist[a - 1] <= back_m) a--;
+	while (b + 1 < m_keyframes.size() && sameSegment(b + 1, id) && m_chainDist[b + 1] - m_chainDist[id] <= ahead_m)
+		b++;
+	std::vector<uint32_t> out;
+	for (uint32_t i = a; i <= b; i++) out.push_back(i);
+	return out;
+}
+
+const std::vector<features::TStereoMeasurement>& CKeyframeMap::measurements(
+	uint32_t id, const std::string& channel) const
+{
+	return keyframe(id).channels[channelIndex(channel)];
+}
+
+bool CKeyframeMap::sameSegment(uint32_t a, uint32_t b) const
+{
+	const auto &ka = keyframe(a), &kb = keyframe(b);
+	return ka.run == kb.run && ka.segment == kb.segment;
+}
+
+double CKeyframeMap::chainDistance(uint32_t id) const
+{
+	keyframe(id);
+	return m_chainDist[id];
+}
+
+map::TRelativePose CKeyframeMap::relativePose(uint32_t a, uint32_t b) const
+{
+	if (!sameSegment(a, b))
+		throw std::invalid_argument(
+			std::string(kClass) + "::relativePose: keyframes " + std::to_string(a) + " (segment " +
+			std::to_string(m_keyframes[a].segment) + ") and " + std::to_string(b) + " (segment " +
+			std::to_string(m_keyframes[b].segment) + ") are not linked by measurements (a VO break lies between)");
+	map::TRelativePose r;
+	const uint32_t lo = std::min(a, b), hi = std::max(a, b);
+	for (uint32_t k = lo + 1; k <= hi; k++)
+		map::composeWithCovariance(r.T_a_b, r.cov, m_keyframes[k].T_prev_kf, m_keyframes[k].cov_prev_kf, r.T_a_b, r.cov);
+	r.chain_length_m = m_chainDist[hi] - m_chainDist[lo];
+	if (a > b)
+	{
+		r.cov = geometry::invertCovariance(r.T_a_b, r.cov);
+		r.T_a_b = r.T_a_b.inverse();
+	}
+	return r;
+}
+
+double CKeyframeMap::pathLength() const
+{
+	double L = 0;
+	for (size_t i = 1; i < m_keyframes.size(); i++)
+		if (m_chainDist[i] > 0) L += m_chainDist[i] - m_chainDist[i - 1];
+	return L;
+}
+
+// ============================================================================
+// Serialisation
+// ============================================================================
+namespace
+{
+struct TBlocks
+{
+	std::vector<uint8_t> meta;
+	std::vector<std::vector<uint8_t>> channels;
+};
+}  // namespace
+
+static TBlocks encode(
+	const TKeyframeMapOptions& o, const geometry::TStereoCalib& cal, int w, int h,
+	const std::vector<map::TChannelParams>& channels, const std::vector<std::string>& runs,
+	const std::vector<map::TMapKeyframe>& kfs)
+{
+	ByteWriter m;
+	putOptions(m, o);
+	for (double x : {cal.fx, cal.fy, cal.cx, cal.cy, cal.cxR, cal.baseline}) m.put<double>(x);
+	m.put<int32_t>(w);
+	m.put<int32_t>(h);
+	m.put<uint8_t>(static_cast<uint8_t>(channels.size()));
+	for (const auto& c : channels) putChannel(m, c);
+	m.put<uint16_t>(static_cast<uint16_t>(runs.size()));
+	for (const auto& r : runs) m.str(r);
+	m.put<uint32_t>(static_cast<uint32_t>(kfs.size()));
+	for (const auto& k : kfs)
+	{
+		m.put<uint16_t>(k.run);
+		m.put<uint32_t>(k.segment);
+		m.put<uint64_t>(k.frame);
+		m.put<double>(k.timestamp);
+		m.put<uint8_t>(uint8_t(k.predicted) | uint8_t(k.T_gt_kf ? 2 : 0));
+		putPose(m, k.T_map_kf);
+		putPose(m, k.T_prev_kf);
+		putCov(m, k.cov_prev_kf);
+		if (k.T_gt_kf) putPose(m, *k.T_gt_kf);
+	}
+	TBlocks b;
+	b.meta = std::move(m.buf);
+	// Channel blocks, column by column within a keyframe: like values sit
+	// together, which compresses better than measurement by measurement.
+	const double q = CKeyframeMap::kPixelQuantum;
+	for (size_t c = 0; c < channels.size(); c++)
+	{
+		ByteWriter x;
+		for (const auto& k : kfs)
+		{
+			const auto& ms = k.channels[c];
+			x.put<uint32_t>(static_cast<uint32_t>(ms.size()));
+			for (const auto& mm : ms) x.put<uint16_t>(static_cast<uint16_t>(std::lround(mm.uL * q)));
+			for (const auto& mm : ms) x.put<uint16_t>(static_cast<uint16_t>(std::lround(mm.v * q)));
+			for (const auto& mm : ms) x.put<int16_t>(static_cast<int16_t>(std::lround((mm.uL - mm.uR) * q)));
+			for (const auto& mm : ms) x.put<uint16_t>(static_cast<uint16_t>(mm.response));
+			for (const auto& mm : ms) x.put<int8_t>(static_cast<int8_t>(std::lround(mm.zncc * 127.f)));
+			for (const auto& mm : ms) x.bytes(mm.desc.w.data(), 32);
+			for (const auto& mm : ms)
+			{
+				// Horizontal differences (PNG's "Sub" filter): neighbouring pixels
+				// are alike, their differences compress.
+				uint8_t row[features::kPatchSize * features::kPatchSize];
+				for (int i = 0; i < features::kPatchSize * features::kPatchSize; i++)
+					row[i] = (i % features::kPatchSize) ? uint8_t(mm.patch[i] - mm.patch[i - 1]) : mm.patch[i];
+				x.bytes(row, sizeof(row));
+			}
+		}
+		b.channels.push_back(std::move(x.buf));
+	}
+	return b;
+}
+
+uint8_t CKeyframeMap::serializeGetVersion() const { return 0; }
+
+void CKeyframeMap::serializeTo(mrpt::serialization::CArchive& out) const
+{
+	const TBlocks b = encode(options, m_calib, m_width, m_height, m_channels, m_runs, m_keyframes);
+	std::vector<const std::vector<uint8_t>*> blocks{&b.meta};
+	for (const auto& c : b.channels) blocks.push_back(&c);
+	out << static_cast<uint8_t>(blocks.size());
+	for (const auto* raw : blocks)
+	{
+		const auto comp = compressBlock(*raw, options.compression_level);
+		out << static_cast<uint64_t>(raw->size()) << static_cast<uint64_t>(comp.size()) << fnv1a(comp);
+		out.WriteBuffer(comp.data(), comp.size());
+	}
+}
+
+void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
+{
+	switch (version)
+	{
+		case 0:
+		{
+			uint8_t nBlocks;
+			in >> nBlocks;
+			if (nBlocks < 2 || nBlocks > kMaxChannels + 1)
+				throw std::runtime_error(std::string(kClass) + ": " + std::to_string(nBlocks) + " blocks (damaged)");
+			std::vector<std::vector<uint8_t>> raw;
+			for (int i = 0; i < nBlocks; i++)
+			{
+				const std::string what = std::string(kClass) + " block " + std::to_string(i);
+				uint64_t rawSize, compSize, sum;
+				in >> rawSize >> compSize >> sum;
+				if (rawSize > kMaxBlockBytes) throw std::runtime_error(what + ": size " + std::to_string(rawSize) + " (damaged)");
+				const auto comp = readBlob(in, compSize, what);
+				if (fnv1a(comp) != sum) throw std::runtime_error(what + ": checksum mismatch (damaged)");
+				raw.push_back(decompressBlock(comp, rawSize, what));
+			}
+			// Parse into locals, then swap in: a failed load leaves the map as it was.
+			ByteReader r(raw[0].data(), raw[0].size(), std::string(kClass) + " metadata");
+			TKeyframeMapOptions o = getOptions(r);
+			geometry::TStereoCalib cal;
+			for (double* x : {&cal.fx, &cal.fy, &cal.cx, &cal.cy, &cal.cxR, &cal.baseline})
+			{
+				*x = r.get<double>();
+				if (!std::isfinite(*x)) r.fail("calibration not finite");
+			}
+			if (!(cal.fx > 0 && cal.fy > 0 && cal.baseline > 0)) r.fail("calibration: fx, fy, baseline must be > 0");
+			const int w = r.get<int32_t>(), h = r.get<int32_t>();
+			if (w <= 0 || h <= 0 || w * kPixelQuantum > 65535 || h * kPixelQuantum > 65535) r.fail("image size");
+			const auto nc = r.get<uint8_t>();
+			if (nc == 0 || nc > kMaxChannels || nc + 1 != nBlocks)
+				r.fail(std::to_string(nc) + " channels for " + std::to_string(nBlocks) + " blocks");
+			std::vector<map::TChannelParams> channels;
+			for (int i = 0; i < nc; i++) channels.push_back(getChannel(r));
+			const auto nr = r.get<uint16_t>();
+			std::vector<std::string> runs;
+			for (int i = 0; i < nr; i++) runs.push_back(r.str());
+			const auto nk = r.get<uint32_t>();
+			r.requireItems(nk, 2 + 4 + 8 + 8 + 1 + 2 * 96 + 21 * 8, "keyframe");
+			CKeyframeMap tmp;
+			tmp.options = o;
+			tmp.m_calib = cal;
+			tmp.m_width = w;
+			tmp.m_height = h;
+			tmp.m_channels = channels;
+			tmp.m_runs = runs;
+			std::vector<map::TMapKeyframe> kfs(nk);
+			for (uint32_t i = 0; i < nk; i++)
+			{
+				auto& k = kfs[i];
+				k.run = r.get<uint16_t>();
+				if (k.run >= runs.size()) r.fail("keyframe " + std::to_string(i) + ": run " + std::to_string(k.run));
+				k.segment = r.get<uint32_t>();
+				if (i > 0 && k.segment < kfs[i - 1].segment) r.fail("keyframe " + std::to_string(i) + ": segment decreases");
+				k.frame = r.get<uint64_t>();
+				k.timestamp = r.get<double>();
+				const auto flags = r.get<uint8_t>();
+				if (flags > 3) r.fail("keyframe " + std::to_string(i) + ": flags");
+				k.predicted = flags & 1;
+				k.T_map_kf = getPose(r, "T_map_kf");
+				k.T_prev_kf = getPose(r, "T_prev_kf");
+				k.cov_prev_kf = getCov(r);
+				if (flags & 2) k.T_gt_kf = getPose(r, "T_gt_kf");
+				k.channels.resize(nc);
+			}
+			if (r.remaining()) r.fail(std::to_string(r.remaining()) + " bytes left over");
+			for (int c = 0; c < nc; c++)
+			{
+				ByteReader x(raw[c + 1].data(), raw[c + 1].size(), std::string(kClass) + " channel '" + channels[c].label + "'");
+				for (uint32_t i = 0; i < nk; i++)
+				{
+					const auto n = x.get<uint32_t>();
+					x.requireItems(n, kMeasBytes, "measurement");
+					auto& ms = kfs[i].channels[c];
+					ms.resize(n);
+					for (auto& m : ms) m.uL = static_cast<float>(x.get<uint16_t>()) / kPixelQuantum;
+					for (auto& m : ms) m.v = static_cast<float>(x.get<uint16_t>()) / kPixelQuantum;
+					for (auto& m : ms) m.uR = m.uL - static_cast<float>(x.get<int16_t>()) / kPixelQuantum;
+					for (auto& m : ms) m.response = x.get<uint16_t>();
+					for (auto& m : ms)
+					{
+						const auto z = x.get<int8_t>();
+						if (z < -127) x.fail("zncc out of range");
+						m.zncc = static_cast<float>(z) / 127.f;
+					}
+					for (auto& m : ms) x.bytes(m.desc.w.data(), 32);
+					for (auto& m : ms)
+					{
+						x.bytes(m.patch.data(), m.patch.size());
+						for (size_t j = 0; j < m.patch.size(); j++)
+							if (j % features::kPatchSize) m.patch[j] = uint8_t(m.patch[j] + m.patch[j - 1]);
+					}
+					for (size_t j = 0; j < ms.size(); j++)
+					{
+						Eigen::Matrix3d J;
+						if (!cal.triangulate(ms[j].uL, ms[j].v, ms[j].uR, ms[j].P, &J))
+							x.fail("keyframe " + std::to_string(i) + " measurement " + std::to_string(j) + " does not triangulate");
+						ms[j].cov = cal.triangulationCovariance(J, channels[c].sigma_px);
+					}
+				}
+				if (x.remaining()) x.fail(std::to_string(x.remaining()) + " bytes left over");
+			}
+			for (auto& k : kfs) tmp.appendLoaded(std::move(k));
+			*this = std::move(tmp);
+		}
+		break;
+		default: MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
+	}
+}
+
+void CKeyframeMap::appendLoaded(map::TMapKeyframe kf)
+{
+	kf.id = static_cast<uint32_t>(m_keyframes.size());
+	const bool segStart = m_keyframes.empty() || m_keyframes.back().segment != kf.segment ||
+						  m_keyframes.back().run != kf.run;
+	m_chainDist.push_back(segStart ? 0.0 : m_chainDist.back() + kf.T_prev_kf.translation().norm());
+	m_keyframes.push_back(std::move(kf));
+	indexKeyframe(m_keyframes.back().id);
+}
+
+CKeyframeMap::TSizeReport CKeyframeMap::sizeReport() const
+{
+	TSizeReport s;
+	const TBlocks b = encode(options, m_calib, m_width, m_height, m_channels, m_runs, m_keyframes);
+	s.meta_bytes = compressBlock(b.meta, options.compression_level).size();
+	for (size_t c = 0; c < b.channels.size(); c++)
+	{
+		s.channel_raw_bytes.push_back(b.channels[c].size());
+		s.channel_bytes.push_back(compressBlock(b.channels[c], options.compression_level).size());
+		size_t n = 0;
+		for (const auto& k : m_keyframes) n += k.channels[c].size();
+		s.channel_measurements.push_back(n);
+	}
+	mrpt::io::CMemoryStream mem;
+	auto ar = mrpt::serialization::archiveFrom(mem);
+	ar << *this;
+	s.total_bytes = mem.getTotalBytesCount();
+	return s;
+}
+
+// ============================================================================
+// Files
+// ============================================================================
+void CKeyframeMap::saveToFile(const std::string& path, const std::function<void(size_t)>& afterChunk) const
+{
+	mrpt::io::CMemoryStream mem;
+	auto ar = mrpt::serialization::archiveFrom(mem);
+	ar << *this;
+	const auto* data = static_cast<const uint8_t*>(mem.getRawBufferData());
+	const size_t n = mem.getTotalBytesCount();
+	io::writeAtomically(path, [&](const std::string& tmp) {
+		const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+		if (fd < 0) throw std::runtime_error("cannot create '" + tmp + "' (for '" + path + "')");
+		size_t done = 0;
+		const size_t kChunk = 64 << 10;
+		while (done < n)
+		{
+			const ssize_t k = ::write(fd, data + done, std::min(kChunk, n - done));
+			if (k <= 0)
+			{
+				::close(fd);
+				throw std::runtime_error("cannot write '" + tmp + "' (for '" + path + "'): disk full?");
+			}
+			done += static_cast<size_t>(k);
+			if (afterChunk) afterChunk(done);
+		}
+		// On disk before the rename makes it the map: a crash leaves the old file or the new one.
+		if (::fsync(fd) != 0 || ::close(fd) != 0) throw std::runtime_error("cannot flush '" + tmp + "'");
+	});
+}
+
+CKeyframeMap::Ptr CKeyframeMap::LoadFromFile(const std::string& path)
+{
+	std::ifstream f(path, std::ios::binary);
+	if (!f) throw std::runtime_error("keyframe map '" + path + "': cannot open");
+	std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+	if (bytes.empty()) throw std::runtime_error("keyframe map '" + path + "': empty file");
+	// MRPT's object header: 0x80 | name length, the class name, the version.
+	// ReadObject(existing) does not compare the name, so check it here: a file
+	// of another class is refused before anything of it is parsed.
+	const std::string name = kClass;
+	const size_t nameLen = bytes[0] & 0x7f;
+	const std::string stored(
+		reinterpret_cast<const char*>(bytes.data()) + 1, std::min(nameLen, bytes.size() - 1));
+	if ((bytes[0] & 0x80) == 0 || stored != name)
+		throw std::runtime_error(
+			"keyframe map '" + path + "': holds " +
+			((bytes[0] & 0x80) && nameLen == stored.size() ? "a '" + stored + "' object" : std::string("no MRPT object")) +
+			", not a " + name);
+	mrpt::io::CMemoryStream mem;
+	mem.assignMemoryNotOwn(bytes.data(), bytes.size());
+	auto ar = mrpt::serialization::archiveFrom(mem);
+	auto map = CKeyframeMap::Create();
+	try
+	{
+		// Checks the stored class name against ours before reading anything of
+		// the object, so a file of another class is refused, not parsed.
+		ar.ReadObject(map.get());
+	}
+	catch (const std::exception& e)
+	{
+		throw std::runtime_error(
+			"keyframe map '" + path + "': cannot be read (damaged, or not a " + kClass +
+			" file): " + mrpt::exception_to_str(e));
+	}
+	if (mem.getPosition() != bytes.size())
+		throw std::runtime_error(
+			"keyframe map '" + path + "': " + std::to_string(bytes.size() - mem.getPosition()) +
+			" unexpected bytes after the map");
+	return map;
+}
+
+void CKeyframeMap::saveMetricMapRepresentationToFile(const std::string& prefix) const
+{
+	saveToFile(prefix + kFileExtension);
+	io::writeAtomically(prefix + "_keyframes.tum", [&](const std::string& tmp) {
+		std::ofstream f(tmp);
+		f << "# keyframes of " << kClass << ": timestamp, left camera in the map frame (TUM)\n"
+		  << std::setprecision(9);
+		for (const auto& k : m_keyframes)
+		{
+			const Eigen::Quaterniond q(k.T_map_kf.linear());
+			const auto& t = k.T_map_kf.translation();
+			f << k.timestamp << ' ' << t.x() << ' ' << t.y() << ' ' << t.z() << ' ' << q.x() << ' ' << q.y() << ' '
+			  << q.z() << ' ' << q.w() << '\n';
+		}
+		if (!f) throw std::runtime_error("cannot write '" + tmp + "'");
+	});
+}
+
+// ============================================================================
+// CMetricMap
+// ============================================================================
+void CKeyframeMap::internal_clear()
+{
+	m_keyframes.clear();
+	m_chainDist.clear();
+	m_grid.clear();
+	m_runs.clear();
+}
+
+bool CKeyframeMap::internal_insertObservation(
+	const mrpt::obs::CObservation& obs, const std::optional<const mrpt::poses::CPose3D>&)
+{
+	throw std::logic_error(
+		std::string(kClass) + "::insertObservation(" + obs.GetRuntimeClass()->className +
+		"): keyframes come from a VO chain; build maps with map::CSurveyBuilder (`shadyloc survey`)");
+}
+
+double CKeyframeMap::internal_computeObservationLikelihood(
+	const mrpt::obs::CObservation& obs, const mrpt::poses::CPose3D&) const
+{
+	throw std::logic_error(
+		std::string(kClass) + "::computeObservationLikelihood(" + obs.GetRuntimeClass()->className +
+		"): not defined for a keyframe map; localisers use its map::KeyframeQueries interface");
+}
+
+void CKeyframeMap::determineMatching2D(
+	const mrpt::maps::CMetricMap*, const mrpt::poses::CPose2D&, mrpt::tfest::TMatchingPairList&,
+	const mrpt::maps::TMatchingParams&, mrpt::maps::TMatchingExtraResults&) const
+{
+	throw std::logic_error(std::string(kClass) + "::determineMatching2D: not defined for a keyframe map");
+}
+void CKeyframeMap::determineMatching3D(
+	const mrpt::maps::CMetricMap*, const mrpt::poses::CPose3D&, mrpt::tfest::TMatchingPairList&,
+	const mrpt::maps::TMatchingParams&, mrpt::maps::TMatchingExtraResults&) const
+{
+	throw std::logic_error(std::string(kClass) + "::determineMatching3D: not defined for a keyframe map");
+}
+float CKeyframeMap::compute3DMatchingRatio(
+	const mrpt::maps::CMetricMap*, const mrpt::poses::CPose3D&, const mrpt::maps::TMatchingRatioParams&) const
+{
+	throw std::logic_error(std::string(kClass) + "::compute3DMatchingRatio: not defined for a keyframe map");
+}
+float CKeyframeMap::squareDistanceToClosestCorrespondence(float, float) const
+{
+	throw std::logic_error(std::string(kClass) + "::squareDistanceToClosestCorrespondence: not defined for a keyframe map");
+}
+
+void CKeyframeMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const
+{
+	if (!genericMapParams.enableSaveAs3DObject) return;
+	// One polyline per segment: blue for measured chains, orange where the
+	// map pose is only predicted (after a VO break).
+	for (size_t i = 0; i < m_keyframes.size();)
+	{
+		size_t j = i;
+		auto lines = mrpt::opengl::CSetOfLines::Create();
+		lines->setLineWidth(2);
+		const auto& k0 = m_keyframes[i];
+		lines->setColor_u8(k0.predicted ? mrpt::img::TColor(230, 120, 0) : mrpt::img::TColor(20, 60, 220));
+		while (j + 1 < m_keyframes.size() && sameSegment(static_cast<uint32_t>(i), static_cast<uint32_t>(j + 1)))
+		{
+			const auto& a = m_keyframes[j].T_map_kf.translation();
+			const auto& b = m_keyframes[j + 1].T_map_kf.translation();
+			lines->appendLine(a.x(), a.y(), a.z(), b.x(), b.y(), b.z());
+			j++;
+		}
+		if (!lines->empty()) o.insert(lines);
+		i = j + 1;
+	}
+	double last = -1e18;
+	for (size_t i = 0; i < m_keyframes.size(); i++)
+	{
+		const auto& k = m_keyframes[i];
+		if (m_chainDist[i] != 0 && m_chainDist[i] - last < options.draw_frame_every_m) continue;
+		last = m_chainDist[i];
+		auto c = mrpt::opengl::stock_objects::CornerXYZSimple(0.5f, 2.0f);
+		c->setPose(mrpt::poses::CPose3D(mrpt::math::CMatrixDouble44(k.T_map_kf.matrix())));
+		o.insert(c);
+	}
+	if (options.draw_landmarks)
+	{
+		static const mrpt::img::TColorf colours[] = {{0.1f, 0.1f, 0.1f}, {0.9f, 0.1f, 0.6f}, {0.1f, 0.7f, 0.2f}, {0.9f, 0.6f, 0.0f}};
+		for (size_t c = 0; c < m_channels.size(); c++)
+		{
+			auto pc = mrpt::opengl::CPointCloudColoured::Create();
+			pc->setPointSize(2);
+			const auto& col = colours[c % 4];
+			for (const auto& k : m_keyframes)
+				for (const auto& m : k.channels[c])
+				{
+					if (m.P.z() > options.draw_landmark_max_depth_m) continue;
+					const Eigen::Vector3d p = k.T_map_kf * m.P;
+					pc->push_back(p.x(), p.y(), p.z(), col.R, col.G, col.B);
+				}
+			o.insert(pc);
+		}
+	}
+}
+
+std::string CKeyframeMap::asString() const
+{
+	std::ostringstream s;
+	std::set<uint32_t> segs;
+	size_t predicted = 0, gt = 0;
+	for (const auto& k : m_keyframes)
+	{
+		segs.insert(k.segment);
+		predicted += k.predicted;
+		gt += bool(k.T_gt_kf);
+	}
+	const double L = pathLength();
+	s << kClass << ": " << m_keyframes.size() << " keyframes, " << std::fixed << std::setprecision(1) << L
+	  << " m of path, " << m_runs.size() << " run(s)";
+	for (size_t i = 0; i < m_runs.size(); i++) s << (i ? ", " : " (") << "'" << m_runs[i] << "'" << (i + 1 == m_runs.size() ? ")" : "");
+	s << ", " << segs.size() << " segment(s)";
+	if (predicted) s << " (" << predicted << " keyframes after VO breaks: map pose predicted)";
+	s << "\n  ground truth beside " << gt << " keyframes (evaluation only)\n";
+	if (!m_channels.empty())
+		s << "  camera " << m_width << "x" << m_height << " px, " << m_calib.asString() << "\n";
+	const bool sized = !m_keyframes.empty();
+	TSizeReport sz;
+	if (sized) sz = sizeReport();
+	for (size_t c = 0; c < m_channels.size(); c++)
+	{
+		s << "  channel " << m_channels[c].asString() << "\n";
+		if (sized)
+		{
+			const double n = sz.channel_measurements[c];
+			s << std::setprecision(1) << "    " << n / m_keyframes.size() << " measurements/keyframe, "
+			  << sz.channel_bytes[c] / 1e3 << " kB (" << sz.channel_bytes[c] / std::max(1.0, n) << " B/measurement, "
+			  << sz.channel_bytes[c] / 1e3 / m_keyframes.size() << " kB/keyframe";
+			if (L > 0) s << ", " << std::setprecision(2) << sz.channel_bytes[c] / 1e6 / (L / 1000) << " MB/km";
+			s << ")\n";
+		}
+	}
+	if (sized) s << "  stored: " << sz.total_bytes << " bytes (metadata " << sz.meta_bytes << ")\n";
+	s << "  options: kf_spacing " << std::setprecision(2) << options.kf_spacing_m << " m / " << options.kf_spacing_deg
+	  << " deg, landmarks_per_keyframe " << options.landmarks_per_keyframe << ", zstd level "
+	  << options.compression_level;
+	return s.str();
+}
+
+// ============================================================================
+// Map definition (CMultiMetricMap .ini)
+// ============================================================================
+CKeyframeMap::TMapDefinition::TMapDefinition() = default;
+
+void CKeyframeMap::TMapDefinition::loadFromConfigFile_map_specific(
+	const mrpt::config::CConfigFileBase& source, const std::string& prefix)
+{
+	creationOpts.loadFromConfigFile(source, prefix + "_creationOpts");
+}
+
+void CKeyframeMap::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const
+{
+	out << "[creationOpts]\n";
+	creationOpts.dumpToTextStream(out);
+}
+
+mrpt::maps::CMetricMap* CKeyframeMap::internal_CreateFromMapDefinition(const mrpt::maps::TMetricMapInitializer& def)
+{
+	const auto& d = dynamic_cast<const CKeyframeMap::TMapDefinition&>(def);
+	auto* m = new CKeyframeMap();
+	m->options = d.creationOpts;
+	return m;
+}

@@ -1,0 +1,295 @@
+/* Tests of the keyframe map's persistence: byte-exact round trips, every
+ * field reaching the bytes, the map inside a CMultiMetricMap made from .ini
+ * text, a file opened by another process through the plugin only, damaged
+ * files, and saves killed part-way. */
+#include <shadyloc/filters/Filters.h>
+#include <shadyloc/map/CKeyframeMap.h>
+
+#include "../support/TestSupport.h"
+#include "test_map_support.h"
+
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/io/CFileOutputStream.h>
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/maps/CMultiMetricMap.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+
+using namespace shadyloc;
+namespace fs = std::filesystem;
+
+namespace
+{
+std::vector<uint8_t> bytesOf(const mrpt::serialization::CSerializable& o)
+{
+	mrpt::io::CMemoryStream mem;
+	auto ar = mrpt::serialization::archiveFrom(mem);
+	ar << o;
+	const auto* p = static_cast<const uint8_t*>(mem.getRawBufferData());
+	return std::vector<uint8_t>(p, p + mem.getTotalBytesCount());
+}
+std::vector<uint8_t> fileBytes(const std::string& path)
+{
+	std::ifstream f(path, std::ios::binary);
+	return std::vector<uint8_t>((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+}
+void writeBytes(const std::string& path, const std::vector<uint8_t>& b, size_t n)
+{
+	std::ofstream f(path, std::ios::binary | std::ios::trunc);
+	f.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(n));
+}
+}  // namespace
+
+TEST(MapFormat, RoundTripIsByteIdenticalAndLossless)
+{
+	const auto m = test::makeSyntheticMap();
+	const std::string dir = test::tempDir("map_roundtrip"), a = dir + "/a.kfmap", b = dir + "/b.kfmap";
+	m->saveToFile(a);
+	const auto loaded = CKeyframeMap::LoadFromFile(a);
+	loaded->saveToFile(b);
+	EXPECT_EQ(fileBytes(a), fileBytes(b));
+	EXPECT_EQ(bytesOf(*m), bytesOf(*loaded));
+	// Field by field: the in-memory map is what the file holds (quantised on insertion).
+	ASSERT_EQ(loaded->keyframeCount(), m->keyframeCount());
+	EXPECT_TRUE(loaded->options == m->options);
+	EXPECT_EQ(loaded->runs(), m->runs());
+	ASSERT_EQ(loaded->channels().size(), 2u);
+	EXPECT_TRUE(loaded->channels()[1] == m->channels()[1]);
+	for (uint32_t i = 0; i < m->keyframeCount(); i++)
+	{
+		const auto &x = m->keyframe(i), &y = loaded->keyframe(i);
+		EXPECT_EQ(x.timestamp, y.timestamp);
+		EXPECT_EQ(x.segment, y.segment);
+		EXPECT_EQ(x.predicted, y.predicted);
+		EXPECT_TRUE(x.T_map_kf.isApprox(y.T_map_kf, 0));
+		EXPECT_EQ(x.cov_prev_kf, y.cov_prev_kf);
+		ASSERT_EQ(bool(x.T_gt_kf), bool(y.T_gt_kf));
+		for (size_t c = 0; c < 2; c++)
+		{
+			ASSERT_EQ(x.channels[c].size(), y.channels[c].size());
+			for (size_t j = 0; j < x.channels[c].size(); j++)
+			{
+				const auto &p = x.channels[c][j], &q = y.channels[c][j];
+				EXPECT_EQ(p.uL, q.uL);
+				EXPECT_EQ(p.uR, q.uR);
+				EXPECT_EQ(p.desc, q.desc);
+				EXPECT_EQ(p.patch, q.patch);
+				EXPECT_EQ(p.P, q.P);
+				EXPECT_EQ(p.cov, q.cov);
+			}
+		}
+	}
+	// Quantisation to 1/16 px loses at most half a quantum.
+	EXPECT_GT(m->keyframe(3).channels[0][0].P.z(), 0);
+	EXPECT_NEAR(m->chainDistance(10), loaded->chainDistance(10), 0);
+}
+
+TEST(MapFormat, EveryFieldReachesTheBytes)
+{
+	const auto ref = bytesOf(*test::makeSyntheticMap());
+	for (int k = 1; k < test::kMutationCount; k++)
+	{
+		const auto other = bytesOf(*test::makeSyntheticMap(24, 40, 15, k));
+		EXPECT_NE(ref, other) << "mutation " << k << " did not change the stored bytes";
+	}
+	// And the baseline is deterministic (the comparison above can fail only by a field).
+	EXPECT_EQ(ref, bytesOf(*test::makeSyntheticMap()));
+}
+
+TEST(MapFormat, InsideACMultiMetricMapFromIni)
+{
+	const std::string ini =
+		"[map]\n"
+		"keyframeMap_count = 1\n"
+		"pointsMap_count = 1\n"
+		"[map_keyframeMap_00_creationOpts]\n"
+		"kf_spacing_m = 2.5\n"
+		"landmarks_per_keyframe = 90\n"
+		"compression_level = 5\n";
+	mrpt::config::CConfigFileMemory cfg(ini);
+	mrpt::maps::TSetOfMetricMapInitializers init;
+	init.loadFromConfigFile(cfg, "map");
+	mrpt::maps::CMultiMetricMap mm;
+	mm.setListOfMaps(init);
+	auto km = mm.mapByClass<CKeyframeMap>();
+	ASSERT_TRUE(km) << "CMultiMetricMap did not create a shadyloc::CKeyframeMap from the .ini";
+	EXPECT_EQ(km->options.kf_spacing_m, 2.5);
+	EXPECT_EQ(km->options.landmarks_per_keyframe, 90);
+	EXPECT_EQ(km->options.compression_level, 5);
+	EXPECT_TRUE(km->isEmpty());
+	// Filled, serialised as part of the multi-map, and read back whole.
+	auto filled = test::makeSyntheticMap();
+	filled->options = km->options;
+	*km = *filled;
+	const auto bytes = bytesOf(mm);
+	mrpt::io::CMemoryStream mem;
+	mem.assignMemoryNotOwn(bytes.data(), bytes.size());
+	auto back = mrpt::serialization::archiveFrom(mem).ReadObject<mrpt::maps::CMultiMetricMap>();
+	ASSERT_TRUE(back);
+	auto km2 = back->mapByClass<CKeyframeMap>();
+	ASSERT_TRUE(km2);
+	EXPECT_EQ(bytesOf(*km2), bytesOf(*filled));
+	EXPECT_EQ(km2->keyframeCount(), 24u);
+	// A bad option is an error naming the section.
+	mrpt::config::CConfigFileMemory bad(
+		"[m]\nkeyframeMap_count = 1\n[m_keyframeMap_00_creationOpts]\nkf_spacing_deg = -3\n");
+	mrpt::maps::TSetOfMetricMapInitializers init2;
+	try
+	{
+		init2.loadFromConfigFile(bad, "m");
+		FAIL() << "a negative kf_spacing_deg was accepted";
+	}
+	catch (const std::exception& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("m_keyframeMap_00_creationOpts"), std::string::npos) << e.what();
+		EXPECT_NE(std::string(e.what()).find("kf_spacing_deg"), std::string::npos) << e.what();
+	}
+}
+
+TEST(MapFormat, OpenedByAnotherProcessWithOnlyThePlugin)
+{
+	const std::string dir = test::tempDir("map_plugin"), path = dir + "/m.kfmap";
+	test::makeSyntheticMap()->saveToFile(path);
+	std::string out;
+	ASSERT_EQ(test::runCommand(std::string(SHADYLOC_KFMAP_LOADER) + " " + test::pluginPath() + " " + path, &out), 0)
+		<< out;
+	EXPECT_NE(out.find("class: shadyloc::CKeyframeMap"), std::string::npos) << out;
+	EXPECT_NE(out.find("24 keyframes"), std::string::npos) << out;
+	// Without the plugin the same program must fail (the class is unknown), not print a map.
+	EXPECT_NE(test::runCommand(std::string(SHADYLOC_KFMAP_LOADER) + " /nonexistent/plugin.so " + path, &out), 0);
+	// MRPT's own rawlog-edit reads it as a one-object file with the plugin.
+	if (test::runCommand("command -v rawlog-edit >/dev/null") == 0)
+	{
+		ASSERT_EQ(test::runCommand("rawlog-edit -p " + test::pluginPath() + " -i " + path + " --info", &out), 0) << out;
+		EXPECT_TRUE(std::regex_search(out, std::regex("number of objects\\s*:\\s*1\\b"))) << out;
+		EXPECT_EQ(out.find("not registered"), std::string::npos) << out;
+		// Without the plugin MRPT cannot read the object (the check above can fail).
+		test::runCommand("rawlog-edit -i " + path + " --info", &out);
+		EXPECT_NE(out.find("'shadyloc::CKeyframeMap' which is not registered"), std::string::npos) << out;
+	}
+}
+
+TEST(MapFormat, DamagedFilesAreCleanErrors)
+{
+	const std::string dir = test::tempDir("map_bad"), path = dir + "/bad.kfmap";
+	const auto good = bytesOf(*test::makeSyntheticMap(6, 8, 4));
+	const size_t n = good.size();
+	auto expectError = [&](const std::string& what) {
+		try
+		{
+			CKeyframeMap::LoadFromFile(path);
+			ADD_FAILURE() << what << ": loaded without an error";
+		}
+		catch (const std::runtime_error& e)
+		{
+			EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << what << ": " << e.what();
+		}
+	};
+	// Offsets: every one of the first 160 bytes (class header, block sizes and
+	// sums, the first frame's header), then 600 spread over the rest. (Each
+	// failed load costs a few ms: MRPT's exceptions carry a stack trace.)
+	std::vector<size_t> offsets;
+	for (size_t k = 0; k < std::min<size_t>(160, n); k++) offsets.push_back(k);
+	for (size_t i = 0; i < 600; i++) offsets.push_back(160 + i * (n - 160) / 600);
+	offsets.push_back(n - 1);
+	for (size_t k : offsets)
+	{
+		writeBytes(path, good, k);
+		expectError("truncated at " + std::to_string(k));
+	}
+	int flips = 0;
+	for (size_t k : offsets)
+		for (uint8_t x : {0x01, 0x80, 0xff})
+		{
+			if (k >= 160 && x != 0x01) continue;
+			auto b = good;
+			b[k] ^= x;
+			writeBytes(path, b, n);
+			expectError("byte " + std::to_string(k) + " ^ " + std::to_string(x));
+			flips++;
+		}
+	EXPECT_GE(flips, 1000);
+	// A version this build does not know: the byte after the class name.
+	{
+		const std::string name = "shadyloc::CKeyframeMap";
+		auto it = std::search(good.begin(), good.end(), name.begin(), name.end());
+		ASSERT_NE(it, good.end());
+		auto b = good;
+		b[(it - good.begin()) + name.size()] = 7;
+		writeBytes(path, b, n);
+		try
+		{
+			CKeyframeMap::LoadFromFile(path);
+			ADD_FAILURE() << "version 7 loaded";
+		}
+		catch (const std::runtime_error& e)
+		{
+			EXPECT_NE(std::string(e.what()).find("version"), std::string::npos) << e.what();
+		}
+	}
+	// Empty, and a serialised object of another class.
+	writeBytes(path, good, 0);
+	expectError("empty");
+	{
+		mrpt::io::CFileOutputStream f(path);
+		auto ar = mrpt::serialization::archiveFrom(f);
+		ar << CFilterMonochrome();
+	}
+	expectError("another class");
+	// Trailing garbage after a whole map.
+	{
+		auto b = good;
+		b.push_back(0);
+		writeBytes(path, b, b.size());
+		expectError("trailing byte");
+	}
+	EXPECT_THROW(CKeyframeMap::LoadFromFile(dir + "/missing.kfmap"), std::runtime_error);
+}
+
+TEST(MapFormat, KilledSavesLeaveThePreviousFileLoadable)
+{
+	const std::string dir = test::tempDir("map_atomic"), path = dir + "/m.kfmap";
+	// Old map on disk; the new one is large enough for many 64 kB chunks.
+	const auto oldMap = test::makeSyntheticMap(6, 20, 0);
+	oldMap->saveToFile(path);
+	const auto oldBytes = fileBytes(path);
+	const auto newMap = test::makeSyntheticMap(60, 150, 40);
+	const size_t total = bytesOf(*newMap).size();
+	const size_t chunks = (total + (64 << 10) - 1) / (64 << 10);
+	ASSERT_GE(chunks, 20u) << "the test map must span at least 20 chunks";
+	std::printf("[map-atomic] %zu bytes, %zu chunks: %zu kill points\n", total, chunks, chunks + 1);
+	int killedAt = 0;
+	for (size_t c = 0; c <= chunks; c++)
+	{
+		const pid_t pid = fork();
+		ASSERT_GE(pid, 0);
+		if (pid == 0)
+		{
+			// Child: killed after c chunks (c = 0: before the first byte lands;
+			// c = chunks: the temporary file is complete, not yet renamed).
+			size_t seen = 0;
+			if (c == 0) raise(SIGKILL);
+			newMap->saveToFile(path, [&](size_t) {
+				if (++seen == c) raise(SIGKILL);
+			});
+			_exit(3);
+		}
+		int status = 0;
+		waitpid(pid, &status, 0);
+		ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "chunk " << c;
+		killedAt++;
+		EXPECT_EQ(fileBytes(path), oldBytes) << "killed after chunk " << c;
+		EXPECT_NO_THROW(CKeyframeMap::LoadFromFile(path)) << "killed after chunk " << c;
+	}
+	EXPECT_GE(killedAt, 20);
+	// An uninterrupted save replaces it.
+	newMap->saveToFile(path);
+	EXPECT_EQ(CKeyframeMap::LoadFromFile(path)->keyframeCount(), 60u);
+}

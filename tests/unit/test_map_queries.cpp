@@ -1,0 +1,341 @@
+/* Tests of the keyframe map's queries (nearest with heading, along the chain,
+ * relative pose with covariance), the descriptor-parameter check, the
+ * CMetricMap virtuals it refuses, landmark selection, and `shadyloc survey`
+ * / `map-info` end to end on a synthetic stereo run. */
+#include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/io/Rawlog.h>
+#include <shadyloc/map/CKeyframeMap.h>
+#include <shadyloc/map/SurveyBuilder.h>
+#include <shadyloc/vo/SyntheticCorridor.h>
+
+#include "../support/TestSupport.h"
+#include "test_map_support.h"
+
+#include <mrpt/obs/CObservationStereoImages.h>
+#include <mrpt/opengl/CSetOfObjects.h>
+#include <mrpt/poses/CPose3D.h>
+
+#include <fstream>
+#include <random>
+#include <regex>
+
+using namespace shadyloc;
+
+namespace
+{
+Eigen::Isometry3d poseAt(double x, double z, double yawDeg)
+{
+	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+	T.linear() = Eigen::AngleAxisd(yawDeg * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+	T.translation() = Eigen::Vector3d(x, 0, z);
+	return T;
+}
+}  // namespace
+
+TEST(MapQueries, NearestKeyframesRespectHeading)
+{
+	auto m = test::makeSyntheticMap(4, 5, 0);
+	// Rebuild: an out-and-back road, the return leg 0.5 m to the side, facing back.
+	auto r = CKeyframeMap::Create();
+	r->setup(m->calibration(), 512, 384, m->channels());
+	const uint16_t run = r->addRun("outback");
+	std::vector<Eigen::Isometry3d> poses;
+	for (int i = 0; i <= 20; i++) poses.push_back(poseAt(0, 2.0 * i, 0));
+	for (int i = 20; i >= 0; i--) poses.push_back(poseAt(0.5, 2.0 * i + 1, 180));
+	for (size_t i = 0; i < poses.size(); i++)
+	{
+		map::TMapKeyframe k;
+		k.run = run;
+		k.T_map_kf = poses[i];
+		k.T_prev_kf = i ? poses[i - 1].inverse() * poses[i] : Eigen::Isometry3d::Identity();
+		k.channels.resize(2);
+		r->appendKeyframe(k);
+	}
+	map::TNearestQuery q;
+	q.max_distance_m = 3;
+	q.max_angle_deg = 30;
+	// Driving forward at z = 10.2: keyframes at z = 10 (id 5), 12, 8; never the return leg.
+	auto hits = r->nearestKeyframes(poseAt(0.1, 10.2, 5), q);
+	ASSERT_FALSE(hits.empty());
+	EXPECT_EQ(hits[0].id, 5u);
+	for (const auto& h : hits) EXPECT_LE(h.id, 20u) << "a keyframe facing the other way was returned";
+	// Driving back at the same place: only the return leg (ids 21..41), z = 11 is id 41 - 5 = 36.
+	hits = r->nearestKeyframes(poseAt(0.4, 10.9, 178), q);
+	ASSERT_FALSE(hits.empty());
+	EXPECT_EQ(hits[0].id, 36u);
+	for (const auto& h : hits) EXPECT_GT(h.id, 20u);
+	// Brute force agrees over many random queries (the index misses nothing).
+	std::mt19937 rng(3);
+	std::uniform_real_distribution<double> U(-5, 45), Y(-180, 180);
+	for (int t = 0; t < 300; t++)
+	{
+		const auto T = poseAt(U(rng) / 10, U(rng), Y(rng));
+		q.max_results = 100;
+		const auto got = r->nearestKeyframes(T, q);
+		size_t expected = 0;
+		for (const auto& k : r->keyframes())
+		{
+			const double d = (k.T_map_kf.translation() - T.translation()).norm();
+			const double c = T.linear().col(2).dot(k.T_map_kf.linear().col(2));
+			expected += d <= q.max_distance_m && c >= std::cos(q.max_angle_deg * M_PI / 180);
+		}
+		EXPECT_EQ(got.size(), expected);
+	}
+}
+
+TEST(MapQueries, AlongTheChainStopsAtBreaks)
+{
+	const auto m = test::makeSyntheticMap(24, 5, 15);
+	// ~2.1 m spacing: 5 m ahead of keyframe 3 reaches 5 (not 6); 3 m behind reaches 2.
+	const auto ids = m->keyframesAlongChain(3, 3.0, 5.0);
+	ASSERT_FALSE(ids.empty());
+	EXPECT_EQ(ids.front(), 2u);
+	EXPECT_EQ(ids.back(), 5u);
+	// Keyframe 14 is the last of segment 0: nothing ahead of it.
+	EXPECT_EQ(m->keyframesAlongChain(14, 0, 100).back(), 14u);
+	EXPECT_EQ(m->keyframesAlongChain(16, 100, 0).front(), 15u);
+	EXPECT_THROW(m->keyframesAlongChain(99, 1, 1), std::out_of_range);
+}
+
+TEST(MapQueries, RelativePoseComposesAndPropagates)
+{
+	const auto m = test::makeSyntheticMap(24, 5, 15);
+	const auto r = m->relativePose(2, 9);
+	const Eigen::Isometry3d expect = m->keyframe(2).T_map_kf.inverse() * m->keyframe(9).T_map_kf;
+	EXPECT_TRUE(r.T_a_b.isApprox(expect, 1e-9));
+	// Covariance grows along the chain and inverts consistently.
+	const auto r1 = m->relativePose(2, 3), r7 = m->relativePose(2, 9);
+	EXPECT_GT(r7.cov.trace(), r1.cov.trace());
+	EXPECT_NEAR(r7.chain_length_m, m->chainDistance(9) - m->chainDistance(2), 1e-12);
+	const auto back = m->relativePose(9, 2);
+	EXPECT_TRUE(back.T_a_b.isApprox(expect.inverse(), 1e-9));
+	EXPECT_TRUE(back.cov.isApprox(geometry::invertCovariance(r.T_a_b, r.cov), 1e-9));
+	// Across the break: refused, naming both keyframes.
+	try
+	{
+		m->relativePose(10, 20);
+		FAIL() << "chained across a VO break";
+	}
+	catch (const std::invalid_argument& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("10"), std::string::npos);
+		EXPECT_NE(std::string(e.what()).find("20"), std::string::npos);
+	}
+}
+
+TEST(MapQueries, CompositionCovarianceMatchesMonteCarlo)
+{
+	// T_ac = T_ab T_bc with left-perturbed noise: the first-order covariance
+	// against 10^4 samples, each diagonal entry within 5 %.
+	std::mt19937 rng(11);
+	std::normal_distribution<double> N(0, 1);
+	Eigen::Isometry3d A = poseAt(1, 3, 20), B = poseAt(-2, 5, -35);
+	A.linear() = A.linear() * Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitX()).toRotationMatrix();
+	geometry::Matrix6d Ca = geometry::Matrix6d::Zero(), Cb = geometry::Matrix6d::Zero();
+	Ca.diagonal() << 4e-4, 1e-4, 9e-4, 1e-5, 4e-5, 1e-5;
+	Cb.diagonal() << 1e-4, 4e-4, 1e-4, 2e-5, 1e-5, 3e-5;
+	Eigen::Isometry3d Tac;
+	geometry::Matrix6d Cac;
+	map::composeWithCovariance(A, Ca, B, Cb, Tac, Cac);
+	auto sampleOf = [&](const geometry::Matrix6d& C) {
+		geometry::Vector6d x;
+		for (int i = 0; i < 6; i++) x(i) = std::sqrt(C(i, i)) * N(rng);
+		return x;
+	};
+	const int n = 10000;
+	geometry::Matrix6d S = geometry::Matrix6d::Zero();
+	for (int s = 0; s < n; s++)
+	{
+		const Eigen::Isometry3d Ta = geometry::retractLeft(sampleOf(Ca), A), Tb = geometry::retractLeft(sampleOf(Cb), B);
+		const Eigen::Isometry3d E = (Ta * Tb) * Tac.inverse();	// exp(xi) = T T_mean^-1
+		geometry::Vector6d xi;
+		xi.tail<3>() = Eigen::AngleAxisd(E.linear()).angle() * Eigen::AngleAxisd(E.linear()).axis();
+		xi.head<3>() = E.translation();
+		S += xi * xi.transpose();
+	}
+	S /= n;
+	for (int i = 0; i < 6; i++) EXPECT_NEAR(S(i, i), Cac(i, i), 0.05 * Cac(i, i)) << "entry " << i;
+}
+
+TEST(MapQueries, MeasurementsByChannelAndDescriptorCheck)
+{
+	const auto m = test::makeSyntheticMap();
+	EXPECT_EQ(m->measurements(4, "mono").size(), 40u);
+	EXPECT_EQ(&m->measurements(4, "invariant"), &m->keyframe(4).channels[1]);
+	EXPECT_THROW(m->measurements(4, "infrared"), std::out_of_range);
+	auto live = m->channels()[1];
+	EXPECT_NO_THROW(m->checkCompatible(live));
+	live.brief_seed ^= 1;
+	live.invariant.scale = 255;
+	try
+	{
+		m->checkCompatible(live);
+		FAIL() << "other descriptor parameters accepted";
+	}
+	catch (const std::runtime_error& e)
+	{
+		const std::string w = e.what();
+		EXPECT_NE(w.find("BRIEF pattern seed"), std::string::npos) << w;
+		EXPECT_NE(w.find("invariant transform"), std::string::npos) << w;
+		EXPECT_NE(w.find("map 'invariant'"), std::string::npos) << w;  // both sets named
+		EXPECT_NE(w.find("live 'invariant'"), std::string::npos) << w;
+		EXPECT_NE(w.find("scale=128"), std::string::npos) << w;
+	}
+	// sigma_px is not descriptor-defining.
+	live = m->channels()[0];
+	live.sigma_px = 2;
+	EXPECT_NO_THROW(m->checkCompatible(live));
+}
+
+TEST(MapQueries, MeaninglessMetricMapCallsThrowNamingTheClass)
+{
+	const auto m = test::makeSyntheticMap(4, 3, 0);
+	auto named = [](const std::function<void()>& f) {
+		try
+		{
+			f();
+		}
+		catch (const std::exception& e)
+		{
+			return std::string(e.what()).find("CKeyframeMap") != std::string::npos;
+		}
+		return false;
+	};
+	mrpt::obs::CObservationStereoImages obs;
+	EXPECT_TRUE(named([&] { m->insertObservation(obs); }));
+	EXPECT_TRUE(named([&] { m->computeObservationLikelihood(obs, mrpt::poses::CPose3D()); }));
+	EXPECT_FALSE(m->canComputeObservationLikelihood(obs));
+	EXPECT_TRUE(named([&] { m->squareDistanceToClosestCorrespondence(0, 0); }));
+	EXPECT_TRUE(named([&] { m->compute3DMatchingRatio(m.get(), mrpt::poses::CPose3D(), {}); }));
+	mrpt::tfest::TMatchingPairList c;
+	mrpt::maps::TMatchingExtraResults x;
+	EXPECT_TRUE(named([&] { m->determineMatching3D(m.get(), mrpt::poses::CPose3D(), c, {}, x); }));
+	// The summary names what matters; the 3D view holds the path and triads.
+	const std::string s = m->asString();
+	EXPECT_NE(s.find("4 keyframes"), std::string::npos) << s;
+	EXPECT_NE(s.find("'mono'"), std::string::npos) << s;
+	EXPECT_NE(s.find("alpha="), std::string::npos) << s;
+	EXPECT_NE(s.find("kB/keyframe"), std::string::npos) << s;
+	mrpt::opengl::CSetOfObjects scene;
+	m->options.draw_landmarks = true;
+	m->getVisualizationInto(scene);
+	EXPECT_GE(scene.size(), 1u + 1u + 2u);	// path, >= 1 triad, one cloud per channel
+}
+
+TEST(MapQueries, LandmarkSelectionSpreadsOverTheImage)
+{
+	std::vector<features::TStereoMeasurement> all;
+	// 200 strong corners in the top-left bucket, 20 weak ones elsewhere.
+	for (int i = 0; i < 200; i++)
+	{
+		features::TStereoMeasurement m;
+		m.uL = 5 + i % 20;
+		m.v = 5 + i / 20;
+		m.response = 100 + i;
+		all.push_back(m);
+	}
+	for (int i = 0; i < 20; i++)
+	{
+		features::TStereoMeasurement m;
+		m.uL = 100 + 20 * i;
+		m.v = 300;
+		m.response = 15;
+		all.push_back(m);
+	}
+	const auto kept = map::selectLandmarks(all, 40, 8, 6, 512, 384);
+	ASSERT_EQ(kept.size(), 40u);
+	int weak = 0;
+	for (const auto& m : kept) weak += m.response == 15;
+	EXPECT_EQ(weak, 20) << "every bucket must give up its corners before a bucket gives a second";
+	EXPECT_EQ(map::selectLandmarks(all, 0, 8, 6, 512, 384).size(), all.size());
+}
+
+namespace
+{
+void writeCorridorRawlog(const std::string& rawlog, const std::string& gtTum, int n)
+{
+	vo::SyntheticCorridor corridor;
+	const auto c = corridor.calib();
+	io::RawlogWriter w(rawlog);
+	eval::Trajectory gt;
+	for (int k = 0; k < n; k++)
+	{
+		const Eigen::Isometry3d T = vo::SyntheticCorridor::examplePose(k, 0.25);
+		cv::Mat l, r;
+		corridor.render(T, l, r, k);
+		mrpt::obs::CObservationStereoImages obs;
+		obs.sensorLabel = "CAMERA";
+		const double t = 1000.0 + 0.1 * k;
+		obs.timestamp = mrpt::Clock::fromDouble(t);
+		obs.imageLeft = mrpt::img::CImage(l, mrpt::img::DEEP_COPY);
+		obs.imageRight = mrpt::img::CImage(r, mrpt::img::DEEP_COPY);
+		obs.hasImageRight = true;
+		obs.leftCamera.ncols = obs.rightCamera.ncols = l.cols;
+		obs.leftCamera.nrows = obs.rightCamera.nrows = l.rows;
+		obs.leftCamera.setIntrinsicParamsFromValues(c.fx, c.fy, c.cx, c.cy);
+		obs.rightCamera = obs.leftCamera;
+		obs.rightCameraPose = mrpt::poses::CPose3DQuat(mrpt::poses::CPose3D(c.baseline, 0, 0, 0, 0, 0));
+		w.write(obs);
+		gt.push_back({t, T});
+	}
+	w.commit();
+	eval::writeTum(gtTum, gt);
+}
+}  // namespace
+
+TEST(MapSurvey, SurveyAndMapInfoOnASyntheticRun)
+{
+	const std::string dir = test::tempDir("map_survey");
+	const std::string rawlog = dir + "/corridor.rawlog", gt = dir + "/gt.tum", map = dir + "/corridor.kfmap";
+	writeCorridorRawlog(rawlog, gt, 40);  // 10 m
+	const std::string ini = dir + "/survey.ini";
+	{
+		std::ofstream f(ini);
+		f << "[map]\nkf_spacing_m = 1.0\nlandmarks_per_keyframe = 60\ncompression_level = 3\n";
+	}
+	std::string out;
+	ASSERT_EQ(test::runCommand(test::appPath() + " survey -i " + rawlog + " -o " + map + " -c " + ini + " --gt " + gt, &out), 0)
+		<< out;
+	const auto m = CKeyframeMap::LoadFromFile(map);
+	// 9.75 m at 1 m spacing: 9 or 10 keyframes, one segment, both channels filled.
+	EXPECT_GE(m->keyframeCount(), 9u) << out;
+	EXPECT_LE(m->keyframeCount(), 11u) << out;
+	EXPECT_EQ(m->runs(), std::vector<std::string>{"corridor"});
+	for (const auto& k : m->keyframes())
+	{
+		EXPECT_EQ(k.segment, 0u);
+		EXPECT_FALSE(k.predicted);
+		ASSERT_TRUE(k.T_gt_kf);
+		EXPECT_GT(k.channels[0].size(), 20u);
+		EXPECT_LE(k.channels[0].size(), 60u);
+		EXPECT_GT(k.channels[1].size(), 10u);
+		EXPECT_LE(k.channels[1].size(), 60u);
+	}
+	EXPECT_TRUE(m->keyframe(0).T_map_kf.isApprox(Eigen::Isometry3d::Identity()));
+	// The chain against the ground truth: the corridor VO is good to a few cm over 10 m.
+	eval::Trajectory est, g;
+	for (const auto& k : m->keyframes())
+	{
+		est.push_back({k.timestamp, k.T_map_kf});
+		g.push_back({k.timestamp, *k.T_gt_kf});
+	}
+	const auto e = eval::computeErrors(g, est, 1e-6);
+	std::printf("[map-survey] %zu keyframes, ATE %.4f m\n", m->keyframeCount(), e.ate_rmse);
+	EXPECT_LT(e.ate_rmse, 0.05);
+	// The relative transforms agree with the poses along the chain.
+	const auto r = m->relativePose(0, static_cast<uint32_t>(m->keyframeCount() - 1));
+	EXPECT_TRUE(r.T_a_b.isApprox(m->keyframes().back().T_map_kf, 1e-6));
+	EXPECT_GT(r.cov.trace(), 0);
+	ASSERT_EQ(test::runCommand(test::appPath() + " map-info " + map, &out), 0) << out;
+	EXPECT_NE(out.find("chain vs ground truth"), std::string::npos) << out;
+	EXPECT_NE(out.find("MB/km"), std::string::npos) << out;
+	// Bad input: clear errors, non-zero exit, no map left behind.
+	const std::string none = dir + "/none.kfmap";
+	EXPECT_NE(test::runCommand(test::appPath() + " survey -i " + dir + "/missing.rawlog -o " + none, &out), 0);
+	EXPECT_NE(out.find("missing.rawlog"), std::string::npos) << out;
+	EXPECT_NE(test::runCommand(test::appPath() + " survey -i " + rawlog + " -o " + dir + "/x.map", &out), 0);
+	EXPECT_NE(out.find(".kfmap"), std::string::npos) << out;
+	EXPECT_NE(test::runCommand(test::appPath() + " map-info " + rawlog, &out), 0);
+	EXPECT_NE(out.find("corridor.rawlog"), std::string::npos) << out;
+	EXPECT_FALSE(std::filesystem::exists(none));
+}
