@@ -54,3 +54,59 @@ TEST(Settings, VOOptionsDumpLoadsBackIdentically)
 	back.dumpToTextStream(again);
 	EXPECT_EQ(again.str(), dump.str());
 }
+
+// Regression (issue 9, fault 5): config values silently became other numbers.
+TEST(Settings, FeatureNumbersOutOfRangeOrNotNumbersAreRefused)
+{
+	auto load = [](const std::string& line) {
+		return [line] {
+			mrpt::config::CConfigFileMemory c("[features]\n" + line + "\n");
+			features::TStereoFeatureOptions o;
+			o.loadFromConfigFile(c, "features");
+		};
+	};
+	for (const char* line :
+		 {"fast_threshold = 1e308", "fast_threshold = 12.5", "fast_threshold = abc",
+		  "max_per_cell = 2147483648", "max_per_cell = 4294967308", "max_per_cell = -2147483649",
+		  "brief_seed = 4294967296", "brief_seed = -1", "sigma_px = nan", "sigma_px = inf",
+		  "max_depth = 1e400", "min_zncc = 0.8x", "dense_check = maybe", "dense_check = 2"})
+	{
+		const std::string l(line);
+		expectRefused(load(l), {"[features]", l.substr(0, l.find(' '))}, l);
+	}
+}
+
+TEST(Settings, VONumbersOutOfRangeOrNotNumbersAreRefused)
+{
+	auto load = [](const std::string& line) {
+		return [line] {
+			mrpt::config::CConfigFileMemory c("[vo]\n" + line + "\n");
+			vo::TStereoVOOptions o;
+			o.loadFromConfigFile(c, "vo");
+		};
+	};
+	for (const char* line :
+		 {"kf_rotation_deg = inf", "max_lost_frames = 4294967299", "ransac_iterations = 1e308",
+		  "huber_k = 1.0.0", "two_view_ba = ja", "max_step_rotation_deg = 30 deg"})
+	{
+		const std::string l(line);
+		expectRefused(load(l), {"[vo]", l.substr(0, l.find(' '))}, l);
+	}
+}
+
+TEST(Settings, FilterNumbersThatAreTextAreRefused)
+{
+	auto load = [](const std::string& line) {
+		return [line] {
+			mrpt::config::CConfigFileMemory c(
+				"[filters]\npipeline = inv\n[inv]\nclass = CFilterInvariant\n" + line + "\n");
+			filters::FilterPipeline::FromConfig(c, "test.ini");
+		};
+	};
+	for (const char* line :
+		 {"beta = abc", "alpha = 0.4.8", "scale = 1e999", "offset = nan", "parallel_eyes = yes please"})
+	{
+		const std::string l(line);
+		expectRefused(load(l), {"test.ini", "[inv]", l.substr(0, l.find(' '))}, l);
+	}
+}
