@@ -8,6 +8,8 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <fstream>
+#include <map>
 #include <sstream>
 
 namespace shadyloc::core
@@ -251,10 +253,46 @@ void SettingsSection::finish() const
 }
 
 // ---- whole file -----------------------------------------------------------------
+namespace
+{
+/** MRPT keeps the last of two equal keys in a section (ignoring case) without
+ * a word; in a file, that is almost always an edit gone wrong. */
+void rejectDuplicateKeys(const std::string& path)
+{
+	std::ifstream in(path);
+	std::map<std::string, std::map<std::string, size_t>> seen;	 // section -> key -> line
+	std::string section, sectionName, line;
+	for (size_t n = 1; std::getline(in, line); n++)
+	{
+		const std::string t = mrpt::system::trim(line);
+		if (t.empty() || t[0] == ';' || t[0] == '#' || t[0] == '@') continue;
+		if (t[0] == '[')
+		{
+			const size_t close = t.find(']');
+			if (close != std::string::npos)
+			{
+				sectionName = mrpt::system::trim(t.substr(1, close - 1));
+				section = lower(sectionName);
+			}
+			continue;
+		}
+		const size_t eq = t.find('=');
+		if (eq == std::string::npos) continue;
+		const std::string key = mrpt::system::trim(t.substr(0, eq));
+		auto [it, fresh] = seen[section].emplace(lower(key), n);
+		if (!fresh)
+			throw SettingsError(
+				"'" + path + "': [" + sectionName + "] " + key + ": given twice (lines " +
+				std::to_string(it->second) + " and " + std::to_string(n) + ")");
+	}
+}
+}  // namespace
+
 void checkSections(
 	const mrpt::config::CConfigFileBase& c, const std::vector<std::string>& known, const std::string& what)
 {
 	const std::string file = filePrefix(settingsSource(c));
+	if (!settingsSource(c).empty()) rejectDuplicateKeys(settingsSource(c));
 	std::vector<std::string> sections;
 	c.getAllSections(sections);
 	for (const auto& s : sections)

@@ -627,3 +627,16 @@ TEST(Settings, WriterPrintsDoublesThatReadBackExactly)
 	EXPECT_THROW(w.value("k", std::string(" padded")), std::invalid_argument);
 	EXPECT_THROW(w.value("k", std::nan("")), std::invalid_argument);
 }
+
+TEST(Settings, KeyGivenTwiceInAFileIsAnError)
+{
+	// MRPT keeps the last one without a word; an edit gone wrong, usually.
+	const std::string p = test::tempDir("settings_twice") + "/vo.ini";
+	std::ofstream(p) << "[vo]\ntwo_view_ba = true\n[features]\nfast_threshold = 5\n[vo]\nTwo_View_BA = false ; later\n";
+	mrpt::config::CConfigFile c(p);
+	expectRefused([&] { vo::checkVOConfigSections(c); }, {p, "[vo] Two_View_BA", "given twice (lines 2 and 6)"}, "twice");
+	// The same key in two sections is fine.
+	std::ofstream(p) << "[vo]\nsigma_px = 0.5\n[features]\nsigma_px = 0.5\n";
+	mrpt::config::CConfigFile ok(p);
+	EXPECT_NO_THROW(vo::checkVOConfigSections(ok));
+}

@@ -14,7 +14,8 @@
  *     declared, and keys renamed in an earlier version are refused with the
  *     new name;
  *   - checkSections() rejects sections a command does not know (a misspelt
- *     section would otherwise be ignored as a whole).
+ *     section would otherwise be ignored as a whole) and, in a file, a key
+ *     given twice in one section.
  *
  * Every error is a SettingsError whose what() names the file (when the
  * settings came from one), the section and the key.
@@ -150,7 +151,9 @@ class SettingsSection
 
 /** Throws SettingsError naming the first section of c that is not in
  * `known` (with the closest known one as a hint), or a key given before any
- * section. `what` says whose settings they are (e.g. "vo config"). */
+ * section. When c was read from a file, a key given twice in one section is
+ * an error too (MRPT would keep the last silently). `what` says whose
+ * settings they are (e.g. "VO config"). */
 void checkSections(
 	const mrpt::config::CConfigFileBase& c, const std::vector<std::string>& known,
 	const std::string& what);
