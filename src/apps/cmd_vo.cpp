@@ -8,6 +8,7 @@
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/vo/Channel.h>
 #include <shadyloc/vo/StereoVO.h>
+#include <shadyloc/vo/VOConfig.h>
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/config/CConfigFile.h>
@@ -96,6 +97,7 @@ int run(int argc, char** argv)
 		if (!std::filesystem::exists(cfgArg.getValue()))
 			throw std::runtime_error("config file '" + cfgArg.getValue() + "' does not exist");
 		cfg = std::make_unique<mrpt::config::CConfigFile>(cfgArg.getValue());
+		vo::checkVOConfigSections(*cfg);
 	}
 	else
 		cfg = std::make_unique<mrpt::config::CConfigFileMemory>("");

@@ -1,6 +1,7 @@
 /* ShadyLoc — shared importer code: options, image reading, the rawlog sink. */
 #include "Detail.h"
 
+#include <shadyloc/core/Settings.h>
 #include <shadyloc/io/AtomicFile.h>
 
 #include <mrpt/config/CConfigFileBase.h>
@@ -23,18 +24,27 @@ namespace shadyloc::datasets
 {
 void TImportOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	MRPT_LOAD_CONFIG_VAR(sensorLabel, string, c, s);
-	MRPT_LOAD_CONFIG_VAR(externalImages, bool, c, s);
-	maxFrames = static_cast<size_t>(c.read_uint64_t(s, "maxFrames", maxFrames));
-	progressEvery = static_cast<size_t>(c.read_uint64_t(s, "progressEvery", progressEvery));
+	core::SettingsSection r(c, s);
+	r.renamed(
+		{{"sensorLabel", "sensor_label"},
+		 {"externalImages", "external_images"},
+		 {"maxFrames", "max_frames"},
+		 {"progressEvery", "progress_every"}});
+	r.read("sensor_label", sensorLabel);
+	r.read("external_images", externalImages);
+	r.read("max_frames", maxFrames);
+	r.read("progress_every", progressEvery);
+	r.finish();
+	if (sensorLabel.empty()) r.fail("sensor_label", "must not be empty");
 }
 
 void TImportOptions::dumpToTextStream(std::ostream& out) const
 {
-	out << "sensorLabel    = " << sensorLabel << "\n"
-		<< "externalImages = " << (externalImages ? "true" : "false") << "\n"
-		<< "maxFrames      = " << maxFrames << "  ; 0: all\n"
-		<< "progressEvery  = " << progressEvery << "  ; frames\n";
+	core::SettingsWriter w(out);
+	w.value("sensor_label", sensorLabel, "label of the stereo observations");
+	w.value("external_images", externalImages, "PNG files in <stem>_Images/ instead of inline images");
+	w.value("max_frames", maxFrames, "0: all");
+	w.value("progress_every", progressEvery, "log progress every this many frames, 0: never");
 }
 
 std::string groundTruthPathFor(const std::string& rawlogPath)

@@ -3,6 +3,8 @@
 
 #include "Detail.h"
 
+#include <shadyloc/core/Settings.h>
+
 #include <mrpt/config/CConfigFile.h>
 
 #include <algorithm>
@@ -33,47 +35,62 @@ std::vector<std::string> listImages(const std::string& dir)
 
 void TFolderCalib::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string&)
 {
-	auto need = [&](const std::string& sect, const std::string& key) {
-		if (!c.keyExists(sect, key))
-			throw DatasetError("[" + sect + "] " + key + ": missing");
-		// Trailing ";" / "#" / "//" comments are documentation in our .ini files.
-		std::string v = c.read_string(sect, key, "");
-		for (const char* mark : {";", "#", "//"}) v = v.substr(0, v.find(mark));
-		v.erase(0, v.find_first_not_of(" \t"));
-		v.erase(v.find_last_not_of(" \t\r") + 1);
-		return detail::parseDouble(v, "[" + sect + "] " + key);
+	core::checkSections(c, {"left", "right", "stereo"}, "stereo calibration");
+	const std::vector<core::TRenamedKey> renamedIntrinsics = {
+		{"fx", "fx_px"}, {"fy", "fy_px"}, {"cx", "cx_px"}, {"cy", "cy_px"}};
+	auto need = [](core::SettingsSection& s, const char* key, auto& v) {
+		if (!s.has(key)) s.fail(key, "missing");
+		s.read(key, v);
 	};
-	auto opt = [&](const std::string& sect, const std::string& key, double def) {
-		return c.keyExists(sect, key) ? need(sect, key) : def;
+	core::SettingsSection left(c, "left"), right(c, "right"), stereo(c, "stereo");
+	left.renamed(renamedIntrinsics);
+	right.renamed(renamedIntrinsics);
+	stereo.renamed({{"width", "width_px"}, {"height", "height_px"}});
+	need(left, "fx_px", fx_l);
+	need(left, "fy_px", fy_l);
+	need(left, "cx_px", cx_l);
+	need(left, "cy_px", cy_l);
+	left.finish();
+	// Any key missing in [right]: the left value.
+	fx_r = fx_l, fy_r = fy_l, cx_r = cx_l, cy_r = cy_l;
+	right.read("fx_px", fx_r);
+	right.read("fy_px", fy_r);
+	right.read("cx_px", cx_r);
+	right.read("cy_px", cy_r);
+	right.finish();
+	need(stereo, "baseline_m", baseline_m);
+	need(stereo, "width_px", width);
+	need(stereo, "height_px", height);
+	stereo.finish();
+	auto focal = [](core::SettingsSection& s, const char* key, double f) {
+		if (!(f > 0)) s.fail(key, "a focal length must be > 0 (pixels)");
 	};
-	fx_l = need("left", "fx");
-	fy_l = need("left", "fy");
-	cx_l = need("left", "cx");
-	cy_l = need("left", "cy");
-	fx_r = opt("right", "fx", fx_l);
-	fy_r = opt("right", "fy", fy_l);
-	cx_r = opt("right", "cx", cx_l);
-	cy_r = opt("right", "cy", cy_l);
-	baseline_m = need("stereo", "baseline_m");
-	const double w = need("stereo", "width"), h = need("stereo", "height");
-	if (!(fx_l > 0) || !(fy_l > 0) || !(fx_r > 0) || !(fy_r > 0))
-		throw DatasetError("[left]/[right] fx, fy: focal lengths must be > 0 (pixels)");
-	if (!(baseline_m > 0))
-		throw DatasetError("[stereo] baseline_m: must be > 0 (metres, right camera along +x)");
-	if (!(w >= 1) || !(h >= 1) || w != std::floor(w) || h != std::floor(h))
-		throw DatasetError("[stereo] width/height: must be positive integers (pixels)");
-	width = uint32_t(w);
-	height = uint32_t(h);
+	focal(left, "fx_px", fx_l);
+	focal(left, "fy_px", fy_l);
+	focal(right, "fx_px", fx_r);
+	focal(right, "fy_px", fy_r);
+	if (!(baseline_m > 0)) stereo.fail("baseline_m", "must be > 0 (metres, right camera along +x)");
+	if (width < 1) stereo.fail("width_px", "must be a positive integer (pixels)");
+	if (height < 1) stereo.fail("height_px", "must be a positive integer (pixels)");
 }
 
 void TFolderCalib::dumpToTextStream(std::ostream& out) const
 {
-	out << "[left]  fx = " << fx_l << " fy = " << fy_l << " cx = " << cx_l << " cy = " << cy_l
-		<< "  ; px\n"
-		<< "[right] fx = " << fx_r << " fy = " << fy_r << " cx = " << cx_r << " cy = " << cy_r
-		<< "  ; px\n"
-		<< "[stereo] baseline_m = " << baseline_m << " ; m,  width = " << width
-		<< " height = " << height << " ; px\n";
+	core::SettingsWriter w(out);
+	w.section("left");
+	w.value("fx_px", fx_l);
+	w.value("fy_px", fy_l);
+	w.value("cx_px", cx_l);
+	w.value("cy_px", cy_l);
+	w.section("right");
+	w.value("fx_px", fx_r);
+	w.value("fy_px", fy_r);
+	w.value("cx_px", cx_r);
+	w.value("cy_px", cy_r);
+	w.section("stereo");
+	w.value("baseline_m", baseline_m, "right camera centre at +baseline_m along the left camera's x axis");
+	w.value("width_px", width);
+	w.value("height_px", height);
 }
 
 TFolderCalib TFolderCalib::FromFile(const std::string& iniPath)
@@ -85,9 +102,9 @@ TFolderCalib TFolderCalib::FromFile(const std::string& iniPath)
 	{
 		c.loadFromConfigFile(cfg, "");
 	}
-	catch (const DatasetError& e)
+	catch (const std::exception& e)
 	{
-		throw DatasetError("'" + iniPath + "': " + e.what());
+		throw DatasetError(core::withSource(iniPath, e.what()));
 	}
 	return c;
 }

@@ -5,6 +5,8 @@
 
 #include "Detail.h"
 
+#include <shadyloc/core/Settings.h>
+
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/math/CQuaternion.h>
 #include <mrpt/obs/CObservationStereoImages.h>
@@ -284,22 +286,32 @@ TImportResult KittiImporter::run(
 void KittiExporter::TOptions::loadFromConfigFile(
 	const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	MRPT_LOAD_CONFIG_VAR(sequence, string, c, s);
-	MRPT_LOAD_CONFIG_VAR(sensorLabel, string, c, s);
-	MRPT_LOAD_CONFIG_VAR(groundTruthTum, string, c, s);
-	MRPT_LOAD_CONFIG_VAR(gtTimeTolerance, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(absoluteTimes, bool, c, s);
-	progressEvery = static_cast<size_t>(c.read_uint64_t(s, "progressEvery", progressEvery));
+	core::SettingsSection r(c, s);
+	r.renamed(
+		{{"sensorLabel", "sensor_label"},
+		 {"groundTruthTum", "ground_truth_tum"},
+		 {"gtTimeTolerance", "gt_time_tolerance_s"},
+		 {"absoluteTimes", "absolute_times"},
+		 {"progressEvery", "progress_every"}});
+	r.read("sequence", sequence);
+	r.read("sensor_label", sensorLabel);
+	r.read("ground_truth_tum", groundTruthTum);
+	r.read("gt_time_tolerance_s", gtTimeTolerance);
+	r.read("absolute_times", absoluteTimes);
+	r.read("progress_every", progressEvery);
+	r.finish();
+	if (!(gtTimeTolerance >= 0)) r.fail("gt_time_tolerance_s", "must be >= 0");
 }
 
 void KittiExporter::TOptions::dumpToTextStream(std::ostream& out) const
 {
-	out << "sequence        = " << sequence << "\n"
-		<< "sensorLabel     = " << sensorLabel << "\n"
-		<< "groundTruthTum  = " << groundTruthTum << "\n"
-		<< "gtTimeTolerance = " << gtTimeTolerance << "  ; s\n"
-		<< "absoluteTimes   = " << (absoluteTimes ? "true" : "false") << "\n"
-		<< "progressEvery   = " << progressEvery << "  ; frames\n";
+	core::SettingsWriter w(out);
+	w.value("sequence", sequence, "NN");
+	w.value("sensor_label", sensorLabel, "which stereo observations to export");
+	w.value("ground_truth_tum", groundTruthTum, "TUM file for poses/NN.txt, empty: none");
+	w.value("gt_time_tolerance_s", gtTimeTolerance, "max |t_frame - t_gt| to pair a pose [s]");
+	w.value("absolute_times", absoluteTimes, "times.txt: absolute instead of since frame 0");
+	w.value("progress_every", progressEvery, "log progress every this many frames, 0: never");
 }
 
 KittiExporter::KittiExporter() : mrpt::system::COutputLogger("shadyloc.export.kitti") {}

@@ -1,4 +1,5 @@
 /* ShadyLoc — FAST grid detection and stereo measurements. */
+#include <shadyloc/core/Settings.h>
 #include <shadyloc/features/StereoFeatures.h>
 
 #include <mrpt/config/CConfigFileBase.h>
@@ -29,65 +30,82 @@ double msSince(Clock::time_point t0)
 }  // namespace
 
 // ---- options ------------------------------------------------------------------
+/** Keys renamed to carry their unit (the members keep their names). */
+static const std::vector<core::TRenamedKey> kRenamedFeatureKeys = {
+	{"min_disparity", "min_disparity_px"},
+	{"max_disparity", "max_disparity_px"},
+	{"row_tolerance", "row_tolerance_px"},
+	{"patch_radius", "patch_radius_px"},
+	{"brief_patch_size", "brief_patch_size_px"},
+	{"max_depth", "max_depth_m"},
+	{"presmooth_sigma", "presmooth_sigma_px"},
+};
+
 void TStereoFeatureOptions::loadFromConfigFile(
 	const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	MRPT_LOAD_CONFIG_VAR(fast_threshold, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(grid_cols, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(grid_rows, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(max_per_cell, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(max_per_cell_right, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(min_disparity, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(max_disparity, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(row_tolerance, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(patch_radius, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(min_zncc, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(max_ambiguity, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(lr_tolerance_px, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(min_zncc_shifted, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(brief_patch_size, int, c, s);
-	brief_seed = static_cast<uint32_t>(c.read_uint64_t(s, "brief_seed", brief_seed));
-	MRPT_LOAD_CONFIG_VAR(sigma_px, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(max_depth, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(presmooth_sigma, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(subpixel_iterations, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(dense_check, bool, c, s);
-	MRPT_LOAD_CONFIG_VAR(shifted_window_check, bool, c, s);
-	MRPT_LOAD_CONFIG_VAR(shifted_window_margin, double, c, s);
+	core::SettingsSection r(c, s);
+	r.renamed(kRenamedFeatureKeys);
+	r.read("fast_threshold", fast_threshold);
+	r.read("grid_cols", grid_cols);
+	r.read("grid_rows", grid_rows);
+	r.read("max_per_cell", max_per_cell);
+	r.read("max_per_cell_right", max_per_cell_right);
+	r.read("min_disparity_px", min_disparity);
+	r.read("max_disparity_px", max_disparity);
+	r.read("row_tolerance_px", row_tolerance);
+	r.read("patch_radius_px", patch_radius);
+	r.read("min_zncc", min_zncc);
+	r.read("max_ambiguity", max_ambiguity);
+	r.read("lr_tolerance_px", lr_tolerance_px);
+	r.read("min_zncc_shifted", min_zncc_shifted);
+	r.read("brief_patch_size_px", brief_patch_size);
+	r.read("brief_seed", brief_seed);
+	r.read("sigma_px", sigma_px);
+	r.read("max_depth_m", max_depth);
+	r.read("presmooth_sigma_px", presmooth_sigma);
+	r.read("subpixel_iterations", subpixel_iterations);
+	r.read("dense_check", dense_check);
+	r.read("shifted_window_check", shifted_window_check);
+	r.read("shifted_window_margin", shifted_window_margin);
+	r.finish();
 	try
 	{
 		validate();
 	}
 	catch (const std::exception& e)
 	{
-		throw std::invalid_argument("[" + s + "] " + e.what());
+		throw core::SettingsError(r.where() + " " + e.what());
 	}
 }
 
 void TStereoFeatureOptions::dumpToTextStream(std::ostream& o) const
 {
-	o << "fast_threshold = " << fast_threshold << "   ; FAST threshold [grey levels]\n"
-	  << "grid_cols = " << grid_cols << "   ; buckets across\n"
-	  << "grid_rows = " << grid_rows << "   ; buckets down\n"
-	  << "max_per_cell = " << max_per_cell << "   ; left corners kept per bucket\n"
-	  << "max_per_cell_right = " << max_per_cell_right << "   ; right corners kept per bucket\n"
-	  << "min_disparity = " << min_disparity << "   ; true disparity fx*b/Z [px]\n"
-	  << "max_disparity = " << max_disparity << "   ; true disparity fx*b/Z [px]\n"
-	  << "row_tolerance = " << row_tolerance << "   ; candidate rows +- [px]\n"
-	  << "patch_radius = " << patch_radius << "   ; ZNCC patch (2r+1)^2 [px]\n"
-	  << "min_zncc = " << min_zncc << "   ; weakest stereo correlation\n"
-	  << "max_ambiguity = " << max_ambiguity << "   ; (1-best)/(1-second) bound\n"
-	  << "lr_tolerance_px = " << lr_tolerance_px << "   ; left-right check [px]\n"
-	  << "min_zncc_shifted = " << min_zncc_shifted << "   ; silhouette check, -1 = off\n"
-	  << "brief_patch_size = " << brief_patch_size << "   ; BRIEF patch side [px]\n"
-	  << "brief_seed = " << brief_seed << "   ; BRIEF pattern seed\n"
-	  << "sigma_px = " << sigma_px << "   ; pixel noise for landmark covariance [px]\n"
-	  << "max_depth = " << max_depth << "   ; farthest landmark kept [m]\n"
-	  << "presmooth_sigma = " << presmooth_sigma << "   ; Gaussian pre-smoothing, 0 = off [px]\n"
-	  << "subpixel_iterations = " << subpixel_iterations << "   ; Gauss-Newton steps on uR, 0 = parabola only\n"
-	  << "dense_check = " << dense_check << "   ; verify the match against every shift of the range\n"
-	  << "shifted_window_check = " << shifted_window_check << "   ; four corner-holding windows must agree (needs dense_check)\n"
-	  << "shifted_window_margin = " << shifted_window_margin << "   ; ZNCC a shifted window's other peak may exceed the match by\n";
+	core::SettingsWriter w(o);
+	w.value("fast_threshold", fast_threshold, "FAST threshold [grey levels]");
+	w.value("grid_cols", grid_cols, "buckets across");
+	w.value("grid_rows", grid_rows, "buckets down");
+	w.value("max_per_cell", max_per_cell, "left corners kept per bucket");
+	w.value("max_per_cell_right", max_per_cell_right, "right corners kept per bucket");
+	w.value("min_disparity_px", min_disparity, "true disparity fx*b/Z [px]");
+	w.value("max_disparity_px", max_disparity, "true disparity fx*b/Z [px]");
+	w.value("row_tolerance_px", row_tolerance, "candidate rows +- [px]");
+	w.value("patch_radius_px", patch_radius, "ZNCC patch (2r+1)^2 [px]");
+	w.value("min_zncc", min_zncc, "weakest stereo correlation");
+	w.value("max_ambiguity", max_ambiguity, "(1-best)/(1-second) bound");
+	w.value("lr_tolerance_px", lr_tolerance_px, "left-right check [px]");
+	w.value("min_zncc_shifted", min_zncc_shifted, "silhouette check, -1 = off");
+	w.value("brief_patch_size_px", brief_patch_size, "BRIEF patch side [px]");
+	w.value("brief_seed", brief_seed, "BRIEF pattern seed");
+	w.value("sigma_px", sigma_px, "pixel noise for landmark covariance [px]");
+	w.value("max_depth_m", max_depth, "farthest landmark kept [m]");
+	w.value("presmooth_sigma_px", presmooth_sigma, "Gaussian pre-smoothing, 0 = off [px]");
+	w.value("subpixel_iterations", subpixel_iterations, "Gauss-Newton steps on uR, 0 = parabola only");
+	w.value("dense_check", dense_check, "verify the match against every shift of the range");
+	w.value("shifted_window_check", shifted_window_check,
+			"four corner-holding windows must agree (needs dense_check)");
+	w.value("shifted_window_margin", shifted_window_margin,
+			"ZNCC a shifted window's other peak may exceed the match by");
 }
 
 void TStereoFeatureOptions::validate() const
@@ -96,14 +114,14 @@ void TStereoFeatureOptions::validate() const
 	if (fast_threshold < 1 || fast_threshold > 254) bad("fast_threshold must be in [1,254]");
 	if (grid_cols < 1 || grid_rows < 1) bad("grid_cols/grid_rows must be >= 1");
 	if (!(min_disparity > 0) || !(max_disparity > min_disparity))
-		bad("min_disparity must be > 0 and < max_disparity");
-	if (row_tolerance < 0 || row_tolerance > 3) bad("row_tolerance must be in [0,3]");
-	if (patch_radius < 1 || patch_radius > 7) bad("patch_radius must be in [1,7]");
+		bad("min_disparity_px must be > 0 and < max_disparity_px");
+	if (row_tolerance < 0 || row_tolerance > 3) bad("row_tolerance_px must be in [0,3]");
+	if (patch_radius < 1 || patch_radius > 7) bad("patch_radius_px must be in [1,7]");
 	if (!(min_zncc > -1 && min_zncc < 1)) bad("min_zncc must be in (-1,1)");
 	if (!(max_ambiguity > 0 && max_ambiguity <= 1)) bad("max_ambiguity must be in (0,1]");
 	if (!(sigma_px > 0)) bad("sigma_px must be > 0");
-	if (!(max_depth > 0)) bad("max_depth must be > 0");
-	if (!(presmooth_sigma >= 0 && presmooth_sigma <= 5)) bad("presmooth_sigma must be in [0,5]");
+	if (!(max_depth > 0)) bad("max_depth_m must be > 0");
+	if (!(presmooth_sigma >= 0 && presmooth_sigma <= 5)) bad("presmooth_sigma_px must be in [0,5]");
 	if (subpixel_iterations < 0 || subpixel_iterations > 20) bad("subpixel_iterations must be in [0,20]");
 	if (!(shifted_window_margin >= 0 && shifted_window_margin <= 2)) bad("shifted_window_margin must be in [0,2]");
 }

@@ -16,29 +16,31 @@ IMPLEMENTS_VIRTUAL_SERIALIZABLE(CObservationFilter, CSerializable, shadyloc)
 void CObservationFilter::loadFromConfig(
 	const mrpt::config::CConfigFileBase& cfg, const std::string& section)
 {
-	common.output_suffix = cfg.read_string(section, "output_suffix", common.output_suffix);
-	common.sensor_labels = cfg.read_string(section, "sensor_labels", common.sensor_labels);
+	core::SettingsSection s(cfg, section);
+	s.alsoKnown({"class"});	// read by FilterPipeline::FromConfig
+	s.read("output_suffix", common.output_suffix);
+	s.read("sensor_labels", common.sensor_labels);
 	if (common.output_suffix.empty())
-		throw std::invalid_argument(
-			"[" + section + "] output_suffix: must not be empty (the derived channel "
-			"would take the source's sensor label)");
+		s.fail("output_suffix", "must not be empty (the derived channel would take the source's sensor label)");
+	loadSpecificOptions(s);
+	s.finish();
 	try
 	{
-		loadSpecificOptions(cfg, section);
 		onOptionsChanged();
 	}
 	catch (const std::exception& e)
 	{
-		throw std::invalid_argument("[" + section + "] " + e.what());
+		throw core::SettingsError(s.where() + " " + e.what());
 	}
 }
 
 std::string CObservationFilter::optionsAsIni() const
 {
 	std::ostringstream s;
-	s << "class = " << GetRuntimeClass()->className << "\n";
-	s << "output_suffix = " << common.output_suffix << "\n";
-	s << "sensor_labels = " << common.sensor_labels << "\n";
+	core::SettingsWriter w(s);
+	w.value("class", GetRuntimeClass()->className);
+	w.value("output_suffix", common.output_suffix);
+	w.value("sensor_labels", common.sensor_labels);
 	specificOptionsAsIni(s);
 	return s.str();
 }

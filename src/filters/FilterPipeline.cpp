@@ -1,4 +1,5 @@
 /* ShadyLoc — filter pipeline and streaming rawlog processor. */
+#include <shadyloc/core/Settings.h>
 #include <shadyloc/filters/FilterPipeline.h>
 #include <shadyloc/filters/Filters.h>
 #include <shadyloc/io/Rawlog.h>
@@ -38,37 +39,39 @@ FilterPipeline FilterPipeline::FromConfigFile(const std::string& iniPath)
 FilterPipeline FilterPipeline::FromConfig(
 	const mrpt::config::CConfigFileBase& cfg, const std::string& what)
 {
-	const std::string list = cfg.read_string(kPipelineSection, "pipeline", "");
-	if (list.empty())
-		throw std::invalid_argument(
-			"'" + what + "': [" + kPipelineSection + "] pipeline: missing or empty");
-	std::vector<std::string> sections;
-	mrpt::system::tokenize(list, ", \t", sections);
-	FilterPipeline p;
-	for (const auto& sect : sections)
+	try
 	{
-		std::string cls = cfg.read_string(sect, "class", "");
-		if (cls.empty())
-			throw std::invalid_argument(
-				"'" + what + "': [" + sect + "] class: missing (section listed in pipeline)");
-		if (cls.find("::") == std::string::npos) cls = "shadyloc::" + cls;
-		auto obj = mrpt::rtti::classFactory(cls);
-		auto f = std::dynamic_pointer_cast<CObservationFilter>(obj);
-		if (!f)
-			throw std::invalid_argument(
-				"'" + what + "': [" + sect + "] class = " + cls +
-				": not a registered observation filter");
-		try
+		core::SettingsSection top(cfg, kPipelineSection, what);
+		std::string list;
+		top.read("pipeline", list);
+		top.finish();
+		if (list.empty()) top.fail("pipeline", "missing or empty");
+		std::vector<std::string> sections;
+		mrpt::system::tokenize(list, ", \t", sections);
+		// A section not in the pipeline would be ignored whole: a misspelling.
+		std::vector<std::string> known = {kPipelineSection};
+		known.insert(known.end(), sections.begin(), sections.end());
+		core::checkSections(cfg, known, "filter config (sections must be listed in [filters] pipeline)");
+		FilterPipeline p;
+		for (const auto& sect : sections)
 		{
+			core::SettingsSection s(cfg, sect, what);
+			std::string cls;
+			s.read("class", cls);
+			if (cls.empty()) s.fail("class", "missing (section listed in pipeline)");
+			if (cls.find("::") == std::string::npos) cls = "shadyloc::" + cls;
+			auto obj = mrpt::rtti::classFactory(cls);
+			auto f = std::dynamic_pointer_cast<CObservationFilter>(obj);
+			if (!f) s.fail("class", "'" + cls + "' is not a registered observation filter");
 			f->loadFromConfig(cfg, sect);
+			p.filters.push_back(f);
 		}
-		catch (const std::exception& e)
-		{
-			throw std::invalid_argument("'" + what + "': " + e.what());
-		}
-		p.filters.push_back(f);
+		return p;
 	}
-	return p;
+	catch (const std::exception& e)
+	{
+		throw core::SettingsError(core::withSource(what, e.what()));
+	}
 }
 
 std::string FilterPipeline::asIni() const

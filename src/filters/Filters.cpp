@@ -40,14 +40,14 @@ void CFilterMonochrome::transformImage(const cv::Mat& in, cv::Mat& out) const
 {
 	image::toMonochrome(in, out, order);
 }
-void CFilterMonochrome::loadSpecificOptions(
-	const mrpt::config::CConfigFileBase& c, const std::string& s)
+void CFilterMonochrome::loadSpecificOptions(core::SettingsSection& s)
 {
-	order = image::parseChannelOrder(c.read_string(s, "channel_order", image::toString(order)));
+	s.readChoice("channel_order", order, {{"bgr", image::ChannelOrder::BGR}, {"rgb", image::ChannelOrder::RGB}});
 }
 void CFilterMonochrome::specificOptionsAsIni(std::ostream& out) const
 {
-	out << "; memory order of colour input\nchannel_order = " << image::toString(order) << "\n";
+	core::SettingsWriter w(out);
+	w.value("channel_order", image::toString(order), "memory order of colour input: bgr | rgb");
 }
 uint8_t CFilterMonochrome::serializeGetVersion() const { return 0; }
 void CFilterMonochrome::serializeTo(mrpt::serialization::CArchive& out) const
@@ -105,52 +105,19 @@ void CFilterInvariant::transformImages(
 		for (size_t i = 0; i < in.size(); i++) m_transform->apply(in[i], out[i]);
 }
 
-void CFilterInvariant::loadSpecificOptions(
-	const mrpt::config::CConfigFileBase& c, const std::string& s)
+void CFilterInvariant::loadSpecificOptions(core::SettingsSection& s)
 {
 	image::InvariantParams p = m_params;
-	// Either three peak wavelengths (beta = 1 - alpha), or alpha and beta.
-	const double l1 = c.read_double(s, "peak_wavelength_blue_nm", 0);
-	const double l2 = c.read_double(s, "peak_wavelength_green_nm", 0);
-	const double l3 = c.read_double(s, "peak_wavelength_red_nm", 0);
-	const bool byWavelength = l1 > 0 || l2 > 0 || l3 > 0;
-	if (byWavelength)
-	{
-		if (c.keyExists(s, "alpha") || c.keyExists(s, "beta"))
-			throw std::invalid_argument(
-				"give either peak_wavelength_*_nm or alpha/beta, not both");
-		const auto w = image::InvariantParams::FromWavelengths(l1, l2, l3);
-		p.alpha = w.alpha;
-		p.beta = w.beta;
-	}
-	else
-	{
-		p.alpha = c.read_double(s, "alpha", p.alpha);
-		p.beta = c.read_double(s, "beta", p.beta);
-	}
-	p.order = image::parseChannelOrder(c.read_string(s, "channel_order", image::toString(p.order)));
-	p.linearisation = image::parseLinearisation(
-		c.read_string(s, "linearisation", image::toString(p.linearisation)));
-	p.gamma = c.read_double(s, "gamma", p.gamma);
-	p.scale = c.read_double(s, "scale", p.scale);
-	p.offset = c.keyExists(s, "offset") ? c.read_double(s, "offset", 0) : p.defaultOffset();
-	parallel_eyes = c.read_bool(s, "parallel_eyes", parallel_eyes);
-	p.validate();
+	p.readFrom(s);
+	s.read("parallel_eyes", parallel_eyes);
 	m_params = p;
 }
 
 void CFilterInvariant::specificOptionsAsIni(std::ostream& out) const
 {
-	out.precision(10);
-	out << "; weights of log(blue) and log(red)\nalpha = " << m_params.alpha << "\n"
-		<< "beta = " << m_params.beta << "\n"
-		<< "channel_order = " << image::toString(m_params.order) << "\n"
-		<< "; none|srgb|gamma\nlinearisation = " << image::toString(m_params.linearisation) << "\n"
-		<< "gamma = " << m_params.gamma << "\n"
-		<< "; grey levels per unit log response; log units added before scaling\n"
-		<< "scale = " << m_params.scale << "\n"
-		<< "offset = " << m_params.offset << "\n"
-		<< "parallel_eyes = " << (parallel_eyes ? "true" : "false") << "\n";
+	core::SettingsWriter w(out);
+	m_params.writeTo(w);
+	w.value("parallel_eyes", parallel_eyes, "transform left and right on two threads");
 }
 
 uint8_t CFilterInvariant::serializeGetVersion() const { return 0; }
@@ -202,19 +169,21 @@ void CFilterLinearise::transformImage(const cv::Mat& in, cv::Mat& out) const
 	requireColour(in);
 	image::toLinear8(in, out, linearisation, gamma);
 }
-void CFilterLinearise::loadSpecificOptions(
-	const mrpt::config::CConfigFileBase& c, const std::string& s)
+void CFilterLinearise::loadSpecificOptions(core::SettingsSection& s)
 {
-	linearisation = image::parseLinearisation(
-		c.read_string(s, "linearisation", image::toString(linearisation)));
-	gamma = c.read_double(s, "gamma", gamma);
+	s.readChoice(
+		"linearisation", linearisation,
+		{{"none", image::Linearisation::None}, {"srgb", image::Linearisation::SRGB},
+		 {"gamma", image::Linearisation::Gamma}});
+	s.read("gamma", gamma);
 	if (linearisation == image::Linearisation::Gamma && !(gamma > 0 && gamma < 10))
-		throw std::invalid_argument("gamma = " + std::to_string(gamma) + ": must be in (0,10)");
+		s.fail("gamma", "'" + core::formatSetting(gamma) + "' must be in (0,10)");
 }
 void CFilterLinearise::specificOptionsAsIni(std::ostream& out) const
 {
-	out << "; none|srgb|gamma\nlinearisation = " << image::toString(linearisation) << "\n"
-		<< "gamma = " << gamma << "\n";
+	core::SettingsWriter w(out);
+	w.value("linearisation", image::toString(linearisation), "none | srgb | gamma");
+	w.value("gamma", gamma, "exponent with linearisation = gamma");
 }
 uint8_t CFilterLinearise::serializeGetVersion() const { return 0; }
 void CFilterLinearise::serializeTo(mrpt::serialization::CArchive& out) const

@@ -1,111 +1,23 @@
 /* ShadyLoc simulator — options. */
 #include <shadyloc/sim/SimOptions.h>
 
+#include <shadyloc/core/Settings.h>
+
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/system/string_utils.h>
 
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
-#include <iomanip>
 #include <ostream>
-#include <set>
 #include <sstream>
 
 namespace shadyloc::sim
 {
 namespace
 {
-/** Strict reading of one section: values must parse completely, and keys the
- * section does not know are reported (a typo must not fall back silently). */
-class StrictSection
-{
-   public:
-	StrictSection(const mrpt::config::CConfigFileBase& c, const std::string& s) : m_c(c), m_s(s) {}
-
-	/** The value of key without an inline comment (from ';' or '#'), trimmed. */
-	std::string raw(const char* key) const
-	{
-		std::string v = m_c.read_string(m_s, key, "");
-		const size_t cut = v.find_first_of(";#");
-		if (cut != std::string::npos) v.resize(cut);
-		return mrpt::system::trim(v);
-	}
-
-	void num(const char* key, double& v)
-	{
-		m_known.insert(key);
-		if (!m_c.keyExists(m_s, key)) return;
-		const std::string txt = raw(key);
-		size_t used = 0;
-		try
-		{
-			v = std::stod(txt, &used);
-		}
-		catch (...)
-		{
-			used = 0;
-		}
-		if (used == 0 || used != txt.size() || !std::isfinite(v)) bad(key, txt, "a number");
-	}
-	void integer(const char* key, int& v)
-	{
-		double d = v;
-		num(key, d);
-		if (d != std::floor(d) || std::abs(d) > 1e9)
-			bad(key, raw(key), "an integer");
-		v = static_cast<int>(d);
-	}
-	void seed(const char* key, uint32_t& v)
-	{
-		double d = v;
-		num(key, d);
-		if (d != std::floor(d) || d < 0 || d > 4294967295.0)
-			bad(key, raw(key), "an integer in [0, 2^32)");
-		v = static_cast<uint32_t>(d);
-	}
-	void flag(const char* key, bool& v)
-	{
-		m_known.insert(key);
-		if (!m_c.keyExists(m_s, key)) return;
-		const std::string t = mrpt::system::lowerCase(raw(key));
-		if (t == "true" || t == "1" || t == "yes")
-			v = true;
-		else if (t == "false" || t == "0" || t == "no")
-			v = false;
-		else
-			bad(key, t, "true or false");
-	}
-	void text(const char* key, std::string& v)
-	{
-		m_known.insert(key);
-		if (m_c.keyExists(m_s, key)) v = raw(key);
-	}
-	/** Throws if the section holds a key no reader asked for. */
-	void rejectUnknown() const
-	{
-		std::vector<std::string> keys;
-		m_c.getAllKeys(m_s, keys);
-		for (const auto& k : keys)
-			if (!m_known.count(k))
-			{
-				std::string list;
-				for (const auto& kk : m_known) list += " " + kk;
-				throw std::invalid_argument(
-					"[" + m_s + "] unknown option '" + k + "' (known:" + list + ")");
-			}
-	}
-
-   private:
-	[[noreturn]] void bad(const char* key, const std::string& txt, const char* want) const
-	{
-		throw std::invalid_argument(
-			"[" + m_s + "] " + key + " = '" + txt + "': expected " + want);
-	}
-	const mrpt::config::CConfigFileBase& m_c;
-	std::string m_s;
-	std::set<std::string> m_known;
-};
+using core::SettingsSection;
+using core::SettingsWriter;
 
 void require(bool ok, const std::string& section, const std::string& what)
 {
@@ -121,38 +33,39 @@ double TSimCameraOptions::focalPx() const
 
 void TSimCameraOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	StrictSection r(c, s);
-	r.integer("width", width);
-	r.integer("height", height);
-	r.num("hfov_deg", hfov_deg);
-	r.num("baseline_m", baseline_m);
-	r.num("height_m", height_m);
-	r.num("pitch_deg", pitch_deg);
-	r.num("fps", fps);
-	r.num("lambda_min_nm", grid.min_nm);
-	r.num("lambda_max_nm", grid.max_nm);
-	r.num("lambda_step_nm", grid.step_nm);
-	r.num("peak_wavelength_blue_nm", spectral.peak_nm[0]);
-	r.num("peak_wavelength_green_nm", spectral.peak_nm[1]);
-	r.num("peak_wavelength_red_nm", spectral.peak_nm[2]);
-	r.num("sensitivity_sigma_nm", spectral.sigma_nm);
-	r.num("white_balance_K", spectral.white_balance_K);
-	r.num("exposure_percentile", exposure_percentile);
-	r.num("exposure_target", exposure_target);
-	r.num("exposure_smoothing", exposure_smoothing);
-	r.num("exposure_roi_top", exposure_roi_top);
-	r.flag("noise", noise);
-	r.num("full_well_e", full_well_e);
-	r.num("read_noise_e", read_noise_e);
-	r.rejectUnknown();
+	SettingsSection r(c, s);
+	r.renamed({{"width", "width_px"}, {"height", "height_px"}});
+	r.read("width_px", width);
+	r.read("height_px", height);
+	r.read("hfov_deg", hfov_deg);
+	r.read("baseline_m", baseline_m);
+	r.read("height_m", height_m);
+	r.read("pitch_deg", pitch_deg);
+	r.read("fps", fps);
+	r.read("lambda_min_nm", grid.min_nm);
+	r.read("lambda_max_nm", grid.max_nm);
+	r.read("lambda_step_nm", grid.step_nm);
+	r.read("peak_wavelength_blue_nm", spectral.peak_nm[0]);
+	r.read("peak_wavelength_green_nm", spectral.peak_nm[1]);
+	r.read("peak_wavelength_red_nm", spectral.peak_nm[2]);
+	r.read("sensitivity_sigma_nm", spectral.sigma_nm);
+	r.read("white_balance_K", spectral.white_balance_K);
+	r.read("exposure_percentile", exposure_percentile);
+	r.read("exposure_target", exposure_target);
+	r.read("exposure_smoothing", exposure_smoothing);
+	r.read("exposure_roi_top", exposure_roi_top);
+	r.read("noise", noise);
+	r.read("full_well_e", full_well_e);
+	r.read("read_noise_e", read_noise_e);
+	r.finish();
 	validate();
 }
 
 void TSimCameraOptions::validate() const
 {
 	const std::string s = "sim.camera";
-	require(width >= 16 && width <= 8192, s, "width must be in [16, 8192] px");
-	require(height >= 16 && height <= 8192, s, "height must be in [16, 8192] px");
+	require(width >= 16 && width <= 8192, s, "width_px must be in [16, 8192]");
+	require(height >= 16 && height <= 8192, s, "height_px must be in [16, 8192]");
 	require(hfov_deg > 5 && hfov_deg < 170, s, "hfov_deg must be in (5, 170) deg");
 	require(baseline_m > 0 && baseline_m < 5, s, "baseline_m must be in (0, 5) m");
 	require(height_m > 0.1 && height_m < 20, s, "height_m must be in (0.1, 20) m");
@@ -177,44 +90,54 @@ void TSimCameraOptions::validate() const
 
 void TSimCameraOptions::dumpToTextStream(std::ostream& o) const
 {
-	o << "[sim.camera]\n"
-	  << "width = " << width << "  ; px\nheight = " << height << "  ; px\n"
-	  << "hfov_deg = " << hfov_deg << "  ; focal length " << focalPx() << " px\n"
-	  << "baseline_m = " << baseline_m << "\nheight_m = " << height_m << "\npitch_deg = " << pitch_deg
-	  << "\nfps = " << fps << "\nlambda_min_nm = " << grid.min_nm << "\nlambda_max_nm = " << grid.max_nm
-	  << "\nlambda_step_nm = " << grid.step_nm
-	  << "\npeak_wavelength_blue_nm = " << spectral.peak_nm[0]
-	  << "\npeak_wavelength_green_nm = " << spectral.peak_nm[1]
-	  << "\npeak_wavelength_red_nm = " << spectral.peak_nm[2]
-	  << "\nsensitivity_sigma_nm = " << spectral.sigma_nm
-	  << "\nwhite_balance_K = " << spectral.white_balance_K
-	  << "\nexposure_percentile = " << exposure_percentile << "\nexposure_target = " << exposure_target
-	  << "\nexposure_roi_top = " << exposure_roi_top << "\nexposure_smoothing = " << exposure_smoothing << "\nnoise = " << (noise ? "true" : "false")
-	  << "\nfull_well_e = " << full_well_e << "\nread_noise_e = " << read_noise_e << "\n";
+	SettingsWriter w(o);
+	w.section("sim.camera");
+	w.value("width_px", width);
+	w.value("height_px", height);
+	w.value("hfov_deg", hfov_deg, "focal length " + core::formatSetting(focalPx()) + " px");
+	w.value("baseline_m", baseline_m);
+	w.value("height_m", height_m);
+	w.value("pitch_deg", pitch_deg);
+	w.value("fps", fps);
+	w.value("lambda_min_nm", grid.min_nm);
+	w.value("lambda_max_nm", grid.max_nm);
+	w.value("lambda_step_nm", grid.step_nm);
+	w.value("peak_wavelength_blue_nm", spectral.peak_nm[0]);
+	w.value("peak_wavelength_green_nm", spectral.peak_nm[1]);
+	w.value("peak_wavelength_red_nm", spectral.peak_nm[2]);
+	w.value("sensitivity_sigma_nm", spectral.sigma_nm);
+	w.value("white_balance_K", spectral.white_balance_K);
+	w.value("exposure_percentile", exposure_percentile);
+	w.value("exposure_target", exposure_target);
+	w.value("exposure_roi_top", exposure_roi_top);
+	w.value("exposure_smoothing", exposure_smoothing);
+	w.value("noise", noise);
+	w.value("full_well_e", full_well_e);
+	w.value("read_noise_e", read_noise_e);
 }
 
 // ---------------------------------------------------------------- scene
 void TSimSceneOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	StrictSection r(c, s);
-	r.seed("seed", seed);
-	r.num("route_length_m", route_length_m);
-	r.num("route_amplitude_m", route_amplitude_m);
-	r.num("road_half_width_m", road_half_width_m);
-	r.num("sidewalk_width_m", sidewalk_width_m);
-	r.num("lane_offset_m", lane_offset_m);
-	r.num("trees_end_m", trees_end_m);
-	r.num("buildings_end_m", buildings_end_m);
-	r.num("tree_spacing_m", tree_spacing_m);
-	r.num("canopy_gap_fraction", canopy_gap_fraction);
-	r.num("leaf_scale_m", leaf_scale_m);
-	r.num("canopy_wind_m", canopy_wind_m);
-	r.num("texture_contrast", texture_contrast);
-	r.num("texture_chroma", texture_chroma);
-	r.num("max_distance_m", max_distance_m);
+	SettingsSection r(c, s);
+	r.read("seed", seed);
+	r.read("route_length_m", route_length_m);
+	r.read("route_amplitude_m", route_amplitude_m);
+	r.read("road_half_width_m", road_half_width_m);
+	r.read("sidewalk_width_m", sidewalk_width_m);
+	r.read("lane_offset_m", lane_offset_m);
+	r.read("trees_end_m", trees_end_m);
+	r.read("buildings_end_m", buildings_end_m);
+	r.read("tree_spacing_m", tree_spacing_m);
+	r.read("canopy_gap_fraction", canopy_gap_fraction);
+	r.read("leaf_scale_m", leaf_scale_m);
+	r.read("canopy_wind_m", canopy_wind_m);
+	r.read("texture_contrast", texture_contrast);
+	r.read("texture_chroma", texture_chroma);
+	r.read("max_distance_m", max_distance_m);
 	std::string m;
-	r.text("markers", m);
-	r.rejectUnknown();
+	r.read("markers", m);
+	r.finish();
 	markers.clear();
 	std::vector<std::string> items;
 	mrpt::system::tokenize(m, ",", items);
@@ -253,41 +176,52 @@ void TSimSceneOptions::validate() const
 
 void TSimSceneOptions::dumpToTextStream(std::ostream& o) const
 {
-	o << "[sim.scene]\nseed = " << seed << "\nroute_length_m = " << route_length_m
-	  << "\nroute_amplitude_m = " << route_amplitude_m << "\nroad_half_width_m = " << road_half_width_m
-	  << "\nsidewalk_width_m = " << sidewalk_width_m << "\nlane_offset_m = " << lane_offset_m
-	  << "\ntrees_end_m = " << trees_end_m << "\nbuildings_end_m = " << buildings_end_m
-	  << "\ntree_spacing_m = " << tree_spacing_m << "\ncanopy_gap_fraction = " << canopy_gap_fraction
-	  << "\nleaf_scale_m = " << leaf_scale_m << "\ncanopy_wind_m = " << canopy_wind_m
-	  << "\ntexture_contrast = " << texture_contrast << "\ntexture_chroma = " << texture_chroma
-	  << "\nmax_distance_m = " << max_distance_m << "\nmarkers = ";
+	SettingsWriter w(o);
+	w.section("sim.scene");
+	w.value("seed", seed);
+	w.value("route_length_m", route_length_m);
+	w.value("route_amplitude_m", route_amplitude_m);
+	w.value("road_half_width_m", road_half_width_m);
+	w.value("sidewalk_width_m", sidewalk_width_m);
+	w.value("lane_offset_m", lane_offset_m);
+	w.value("trees_end_m", trees_end_m);
+	w.value("buildings_end_m", buildings_end_m);
+	w.value("tree_spacing_m", tree_spacing_m);
+	w.value("canopy_gap_fraction", canopy_gap_fraction);
+	w.value("leaf_scale_m", leaf_scale_m);
+	w.value("canopy_wind_m", canopy_wind_m);
+	w.value("texture_contrast", texture_contrast);
+	w.value("texture_chroma", texture_chroma);
+	w.value("max_distance_m", max_distance_m);
+	std::string m;
 	for (size_t i = 0; i < markers.size(); i++)
-		o << (i ? ", " : "") << markers[i][0] << " " << markers[i][1] << " " << markers[i][2] << " "
-		  << markers[i][3];
-	o << "\n";
+		for (size_t k = 0; k < 4; k++)
+			m += (k ? " " : (i ? ", " : "")) + core::formatSetting(markers[i][k]);
+	w.value("markers", m, "x y z radius [m], ...");
 }
 
 // ---------------------------------------------------------------- traversal
 void TTraversal::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	StrictSection r(c, s);
-	r.num("sun_azimuth_deg", sun_azimuth_deg);
-	r.num("sun_elevation_deg", sun_elevation_deg);
-	r.num("sun_temperature_K", sun_temperature_K);
-	r.num("sky_temperature_K", sky_temperature_K);
-	r.num("sun_irradiance", sun_irradiance);
-	r.num("sky_irradiance", sky_irradiance);
-	r.flag("overcast", overcast);
-	r.num("lateral_offset_m", lateral_offset_m);
-	r.num("weave_amplitude_m", weave_amplitude_m);
-	r.num("speed_mps", speed_mps);
-	r.num("speed_variation", speed_variation);
-	r.num("start_s_m", start_s_m);
-	r.integer("frames", frames);
-	r.seed("wind_seed", wind_seed);
-	r.seed("noise_seed", noise_seed);
-	r.num("start_time", start_time);
-	r.rejectUnknown();
+	SettingsSection r(c, s);
+	r.renamed({{"start_time", "start_time_s"}});
+	r.read("sun_azimuth_deg", sun_azimuth_deg);
+	r.read("sun_elevation_deg", sun_elevation_deg);
+	r.read("sun_temperature_K", sun_temperature_K);
+	r.read("sky_temperature_K", sky_temperature_K);
+	r.read("sun_irradiance", sun_irradiance);
+	r.read("sky_irradiance", sky_irradiance);
+	r.read("overcast", overcast);
+	r.read("lateral_offset_m", lateral_offset_m);
+	r.read("weave_amplitude_m", weave_amplitude_m);
+	r.read("speed_mps", speed_mps);
+	r.read("speed_variation", speed_variation);
+	r.read("start_s_m", start_s_m);
+	r.read("frames", frames);
+	r.read("wind_seed", wind_seed);
+	r.read("noise_seed", noise_seed);
+	r.read("start_time_s", start_time);
+	r.finish();
 	validate();
 }
 
@@ -303,7 +237,7 @@ void TTraversal::validate() const
 	require(speed_mps > 0 && speed_mps < 100, s, "speed_mps must be in (0, 100) m/s");
 	require(speed_variation >= 0 && speed_variation < 1, s, "speed_variation must be in [0, 1)");
 	require(frames >= 1 && frames <= 1000000, s, "frames must be in [1, 1e6]");
-	require(start_time >= 0, s, "start_time must be >= 0 s");
+	require(start_time >= 0, s, "start_time_s must be >= 0");
 }
 
 double TTraversal::effectiveSunIrradiance() const
@@ -318,30 +252,43 @@ double TTraversal::effectiveSunIrradiance() const
 
 void TTraversal::dumpToTextStream(std::ostream& o) const
 {
-	o << "[traversal." << name << "]\nsun_azimuth_deg = " << sun_azimuth_deg
-	  << "\nsun_elevation_deg = " << sun_elevation_deg << "\nsun_temperature_K = " << sun_temperature_K
-	  << "\nsky_temperature_K = " << sky_temperature_K << "\nsun_irradiance = " << sun_irradiance
-	  << "  ; effective " << effectiveSunIrradiance() << "\nsky_irradiance = " << sky_irradiance
-	  << "\novercast = " << (overcast ? "true" : "false") << "\nlateral_offset_m = " << lateral_offset_m
-	  << "\nweave_amplitude_m = " << weave_amplitude_m << "\nspeed_mps = " << speed_mps
-	  << "\nspeed_variation = " << speed_variation << "\nstart_s_m = " << start_s_m
-	  << "\nframes = " << frames << "\nwind_seed = " << wind_seed << "\nnoise_seed = " << noise_seed
-	  << "\nstart_time = " << std::fixed << std::setprecision(3) << start_time << std::defaultfloat
-	  << "\n";
+	SettingsWriter w(o);
+	w.section("traversal." + name);
+	w.value("sun_azimuth_deg", sun_azimuth_deg);
+	w.value("sun_elevation_deg", sun_elevation_deg);
+	w.value("sun_temperature_K", sun_temperature_K);
+	w.value("sky_temperature_K", sky_temperature_K);
+	w.value("sun_irradiance", sun_irradiance,
+			"< 0: from the elevation; effective " + core::formatSetting(effectiveSunIrradiance()));
+	w.value("sky_irradiance", sky_irradiance);
+	w.value("overcast", overcast);
+	w.value("lateral_offset_m", lateral_offset_m);
+	w.value("weave_amplitude_m", weave_amplitude_m);
+	w.value("speed_mps", speed_mps);
+	w.value("speed_variation", speed_variation);
+	w.value("start_s_m", start_s_m);
+	w.value("frames", frames);
+	w.value("wind_seed", wind_seed);
+	w.value("noise_seed", noise_seed);
+	w.value("start_time_s", start_time);
 }
 
 // ---------------------------------------------------------------- all
 void TSimOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	StrictSection r(c, s);
+	SettingsSection r(c, s);
 	std::string list;
-	r.text("traversals", list);
-	r.rejectUnknown();
-	camera.loadFromConfigFile(c, s + ".camera");
-	scene.loadFromConfigFile(c, s + ".scene");
+	r.read("traversals", list);
+	r.finish();
 	std::vector<std::string> names;
 	mrpt::system::tokenize(list, " ,\t", names);
-	if (names.empty()) throw std::invalid_argument("[" + s + "] traversals: no traversal listed");
+	if (names.empty()) r.fail("traversals", "no traversal listed");
+	// Every section must be one of these: a [traversal.x] not listed would never be rendered.
+	std::vector<std::string> known = {s, s + ".camera", s + ".scene"};
+	for (const auto& n : names) known.push_back("traversal." + n);
+	core::checkSections(c, known, "simulator config ([traversal.<name>] sections must be listed in [" + s + "] traversals)");
+	camera.loadFromConfigFile(c, s + ".camera");
+	scene.loadFromConfigFile(c, s + ".scene");
 	std::vector<std::string> sections;
 	c.getAllSections(sections);
 	traversals.clear();
@@ -349,7 +296,7 @@ void TSimOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, con
 	{
 		const std::string sect = "traversal." + n;
 		if (std::find(sections.begin(), sections.end(), sect) == sections.end())
-			throw std::invalid_argument("[" + s + "] traversals: '" + n + "' has no section [" + sect + "]");
+			r.fail("traversals", "'" + n + "' has no section [" + sect + "]");
 		TTraversal t;
 		t.name = n;
 		t.loadFromConfigFile(c, sect);
@@ -359,9 +306,12 @@ void TSimOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, con
 
 void TSimOptions::dumpToTextStream(std::ostream& o) const
 {
-	o << "[sim]\ntraversals =";
-	for (const auto& t : traversals) o << " " << t.name;
-	o << "\n\n";
+	std::string names;
+	for (const auto& t : traversals) names += (names.empty() ? "" : " ") + t.name;
+	SettingsWriter w(o);
+	w.section("sim");
+	w.value("traversals", names);
+	o << "\n";
 	camera.dumpToTextStream(o);
 	o << "\n";
 	scene.dumpToTextStream(o);
@@ -384,7 +334,7 @@ TSimOptions TSimOptions::FromFile(const std::string& path)
 	}
 	catch (const std::exception& e)
 	{
-		throw SimOptionsError("'" + path + "': " + e.what());
+		throw SimOptionsError(core::withSource(path, e.what()));
 	}
 	return o;
 }

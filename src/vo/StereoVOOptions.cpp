@@ -1,5 +1,7 @@
 /* ShadyLoc — options of the stereo VO ([vo] in config/vo.ini). */
+#include <shadyloc/core/Settings.h>
 #include <shadyloc/vo/StereoVO.h>
+#include <shadyloc/vo/VOConfig.h>
 
 #include <mrpt/config/CConfigFileBase.h>
 
@@ -9,94 +11,125 @@
 namespace shadyloc::vo
 {
 // ---- options ------------------------------------------------------------------
+/** Keys renamed to carry their unit (the members keep their names). */
+static const std::vector<core::TRenamedKey> kRenamedVOKeys = {
+	{"refine_radius", "refine_radius_px"},
+	{"near_min_disparity", "near_min_disparity_px"},
+	{"kf_translation", "kf_translation_m"},
+	{"max_step_translation", "max_step_translation_m"},
+};
+
 void TStereoVOOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	MRPT_LOAD_CONFIG_VAR(search_radius_px, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(search_radius_lost_px, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(max_hamming, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(match_ratio, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(refine_min_zncc, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(refine_radius, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(refine_iterations, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(min_stereo, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(min_matches, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(min_inliers, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(near_min_disparity, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(near_min_matches, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(ransac_threshold_px, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(ransac_iterations, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(sigma_px, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(huber_k, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(kf_translation, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(kf_rotation_deg, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(kf_min_tracked_fraction, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(kf_min_inliers, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(max_step_translation, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(max_step_rotation_deg, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(max_lost_frames, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(constant_velocity, bool, c, s);
-	MRPT_LOAD_CONFIG_VAR(two_view_ba, bool, c, s);
-	MRPT_LOAD_CONFIG_VAR(ransac_prediction, bool, c, s);
-	MRPT_LOAD_CONFIG_VAR(ransac_prior_sigma_m, double, c, s);
+	core::SettingsSection r(c, s);
+	r.renamed(kRenamedVOKeys);
+	// Read from [vo] by the channel selection (vo::ChannelConverter::FromConfig).
+	r.alsoKnown({"channel", "channel_order"});
+	r.read("search_radius_px", search_radius_px);
+	r.read("search_radius_lost_px", search_radius_lost_px);
+	r.read("max_hamming", max_hamming);
+	r.read("match_ratio", match_ratio);
+	r.read("refine_min_zncc", refine_min_zncc);
+	r.read("refine_radius_px", refine_radius);
+	r.read("refine_iterations", refine_iterations);
+	r.read("min_stereo", min_stereo);
+	r.read("min_matches", min_matches);
+	r.read("min_inliers", min_inliers);
+	r.read("near_min_disparity_px", near_min_disparity);
+	r.read("near_min_matches", near_min_matches);
+	r.read("ransac_threshold_px", ransac_threshold_px);
+	r.read("ransac_iterations", ransac_iterations);
+	r.read("sigma_px", sigma_px);
+	r.read("huber_k", huber_k);
+	r.read("kf_translation_m", kf_translation);
+	r.read("kf_rotation_deg", kf_rotation_deg);
+	r.read("kf_min_tracked_fraction", kf_min_tracked_fraction);
+	r.read("kf_min_inliers", kf_min_inliers);
+	r.read("max_step_translation_m", max_step_translation);
+	r.read("max_step_rotation_deg", max_step_rotation_deg);
+	r.read("max_lost_frames", max_lost_frames);
+	r.read("constant_velocity", constant_velocity);
+	r.read("two_view_ba", two_view_ba);
+	r.read("ransac_prediction", ransac_prediction);
+	r.read("ransac_prior_sigma_m", ransac_prior_sigma_m);
+	r.finish();
 	try
 	{
 		validate();
 	}
 	catch (const std::exception& e)
 	{
-		throw std::invalid_argument("[" + s + "] " + e.what());
+		throw core::SettingsError(r.where() + " " + e.what());
 	}
 }
 
 void TStereoVOOptions::dumpToTextStream(std::ostream& o) const
 {
-	o << "search_radius_px = " << search_radius_px << "   ; BRIEF window [px]\n"
-	  << "search_radius_lost_px = " << search_radius_lost_px << "   ; window after a failure [px]\n"
-	  << "max_hamming = " << max_hamming << "   ; [bits]\n"
-	  << "match_ratio = " << match_ratio << "   ; best/second best distance\n"
-	  << "refine_min_zncc = " << refine_min_zncc << "   ; patch refinement correlation\n"
-	  << "refine_radius = " << refine_radius << "   ; [px]\n"
-	  << "refine_iterations = " << refine_iterations << "   ; Gauss-Newton steps, 0 = parabola only\n"
-	  << "min_stereo = " << min_stereo << "\n"
-	  << "min_matches = " << min_matches << "\n"
-	  << "min_inliers = " << min_inliers << "\n"
-	  << "near_min_disparity = " << near_min_disparity << "   ; far landmarks left out of the solve when enough near ones, 0 = off [px]\n"
-	  << "near_min_matches = " << near_min_matches << "\n"
-	  << "ransac_threshold_px = " << ransac_threshold_px << "   ; [px]\n"
-	  << "ransac_iterations = " << ransac_iterations << "\n"
-	  << "sigma_px = " << sigma_px << "   ; [px]\n"
-	  << "huber_k = " << huber_k << "   ; [sigmas]\n"
-	  << "kf_translation = " << kf_translation << "   ; [m]\n"
-	  << "kf_rotation_deg = " << kf_rotation_deg << "   ; [deg]\n"
-	  << "kf_min_tracked_fraction = " << kf_min_tracked_fraction << "\n"
-	  << "kf_min_inliers = " << kf_min_inliers << "\n"
-	  << "max_step_translation = " << max_step_translation << "   ; [m]\n"
-	  << "max_step_rotation_deg = " << max_step_rotation_deg << "   ; [deg]\n"
-	  << "max_lost_frames = " << max_lost_frames << "\n"
-	  << "constant_velocity = " << (constant_velocity ? "true" : "false") << "\n"
-	  << "two_view_ba = " << (two_view_ba ? "true" : "false") << "   ; solve by two-view bundle adjustment\n"
-	  << "ransac_prediction = " << (ransac_prediction ? "true" : "false") << "   ; the prediction is a RANSAC hypothesis\n"
-	  << "ransac_prior_sigma_m = " << ransac_prior_sigma_m << "   ; preference for hypotheses near the prediction, 0 = off [m]\n";
+	core::SettingsWriter w(o);
+	w.value("search_radius_px", search_radius_px, "BRIEF search window around each predicted projection [px]");
+	w.value("search_radius_lost_px", search_radius_lost_px, "window after a failure [px]");
+	w.value("max_hamming", max_hamming, "largest BRIEF distance of a match [bits of 256]");
+	w.value("match_ratio", match_ratio, "best < ratio * second best distance");
+	w.value("refine_min_zncc", refine_min_zncc, "patch refinement correlation");
+	w.value("refine_radius_px", refine_radius, "[px]");
+	w.value("refine_iterations", refine_iterations, "Gauss-Newton steps, 0 = parabola only");
+	w.value("min_stereo", min_stereo);
+	w.value("min_matches", min_matches);
+	w.value("min_inliers", min_inliers);
+	w.value("near_min_disparity_px", near_min_disparity,
+			"far landmarks left out of the solve when enough near ones, 0 = off [px]");
+	w.value("near_min_matches", near_min_matches);
+	w.value("ransac_threshold_px", ransac_threshold_px, "[px]");
+	w.value("ransac_iterations", ransac_iterations);
+	w.value("sigma_px", sigma_px, "[px]");
+	w.value("huber_k", huber_k, "[sigmas]");
+	w.value("kf_translation_m", kf_translation, "[m]");
+	w.value("kf_rotation_deg", kf_rotation_deg, "[deg]");
+	w.value("kf_min_tracked_fraction", kf_min_tracked_fraction);
+	w.value("kf_min_inliers", kf_min_inliers);
+	w.value("max_step_translation_m", max_step_translation, "[m]");
+	w.value("max_step_rotation_deg", max_step_rotation_deg, "[deg]");
+	w.value("max_lost_frames", max_lost_frames);
+	w.value("constant_velocity", constant_velocity, "predict with the last motion (else identity)");
+	w.value("two_view_ba", two_view_ba, "solve by two-view bundle adjustment");
+	w.value("ransac_prediction", ransac_prediction, "the prediction is a RANSAC hypothesis");
+	w.value("ransac_prior_sigma_m", ransac_prior_sigma_m,
+			"preference for hypotheses near the prediction, 0 = off [m]");
 }
 
 void TStereoVOOptions::validate() const
 {
+	// Messages use the .ini key names.
 	auto bad = [](const std::string& w) { throw std::invalid_argument("option " + w); };
 	if (!(search_radius_px > 0) || search_radius_lost_px < search_radius_px)
 		bad("search_radius_px must be > 0 and <= search_radius_lost_px");
 	if (max_hamming < 1 || max_hamming > 256) bad("max_hamming must be in [1,256]");
 	if (!(match_ratio > 0 && match_ratio <= 1)) bad("match_ratio must be in (0,1]");
-	if (refine_radius < 0 || refine_radius > 4) bad("refine_radius must be in [0,4]");
+	if (refine_radius < 0 || refine_radius > 4) bad("refine_radius_px must be in [0,4]");
 	if (refine_iterations < 0 || refine_iterations > 20) bad("refine_iterations must be in [0,20]");
 	if (min_inliers < 3 || min_matches < min_inliers) bad("need 3 <= min_inliers <= min_matches");
 	if (!(near_min_disparity >= 0) || near_min_matches < min_matches)
-		bad("near_min_disparity must be >= 0 and near_min_matches >= min_matches");
+		bad("near_min_disparity_px must be >= 0 and near_min_matches >= min_matches");
 	if (!(ransac_threshold_px > 0) || ransac_iterations < 1) bad("ransac_threshold_px/iterations must be > 0");
 	if (!(sigma_px > 0) || !(huber_k > 0)) bad("sigma_px and huber_k must be > 0");
-	if (!(kf_translation > 0) || !(kf_rotation_deg > 0)) bad("kf_translation/kf_rotation_deg must be > 0");
-	if (!(max_step_translation > 0) || !(max_step_rotation_deg > 0)) bad("max_step_* must be > 0");
+	if (!(kf_translation > 0) || !(kf_rotation_deg > 0)) bad("kf_translation_m/kf_rotation_deg must be > 0");
+	if (!(max_step_translation > 0) || !(max_step_rotation_deg > 0))
+		bad("max_step_translation_m/max_step_rotation_deg must be > 0");
 	if (max_lost_frames < 0) bad("max_lost_frames must be >= 0");
 	if (!(ransac_prior_sigma_m >= 0)) bad("ransac_prior_sigma_m must be >= 0 (0 = off)");
+}
+
+// ---- the config file ------------------------------------------------------------
+const std::vector<std::string>& voConfigSections()
+{
+	static const std::vector<std::string> s = {
+		"vo", "vo.mono", "vo.invariant", "features", "features.mono", "features.invariant", "invariant"};
+	return s;
+}
+
+void checkVOConfigSections(const mrpt::config::CConfigFileBase& cfg)
+{
+	core::checkSections(cfg, voConfigSections(), "VO config");
 }
 
 }  // namespace shadyloc::vo

@@ -33,8 +33,8 @@ void makeFolders(const std::string& dir, int n, int w = 48, int h = 32)
 		cv::imwrite(dir + "/R/right_" + std::to_string(100 + i) + ".png", b);
 	}
 	std::ofstream f(dir + "/calib.ini");
-	f << "[left]\nfx=400\nfy=401\ncx=24.5\ncy=16.25\n[right]\ncx=26\n[stereo]\nbaseline_m=0.25\n"
-	  << "width=" << w << "\nheight=" << h << "\n";
+	f << "[left]\nfx_px=400\nfy_px=401\ncx_px=24.5\ncy_px=16.25\n[right]\ncx_px=26\n[stereo]\nbaseline_m=0.25\n"
+	  << "width_px=" << w << "\nheight_px=" << h << "\n";
 }
 
 }  // namespace
@@ -132,7 +132,7 @@ TEST(DatasetsFolder, BadInputNamesTheCulpritAndLeavesNothing)
 	// Missing calibration key.
 	{
 		std::ofstream f(dir + "/calib.ini");
-		f << "[left]\nfx=400\nfy=400\ncx=24\ncy=16\n[stereo]\nwidth=48\nheight=32\n";
+		f << "[left]\nfx_px=400\nfy_px=400\ncx_px=24\ncy_px=16\n[stereo]\nwidth_px=48\nheight_px=32\n";
 	}
 	expectError("[stereo] baseline_m: missing", [](FolderImporter&) {});
 	makeFolders(dir, 3);  // good again

@@ -25,8 +25,8 @@ std::string tinyConfig(const std::string& dir, const std::string& from = "", con
 	std::stringstream ss;
 	ss << in.rdbuf();
 	std::string s = ss.str();
-	s = std::regex_replace(s, std::regex("\nwidth = 512"), "\nwidth = 96");
-	s = std::regex_replace(s, std::regex("\nheight = 384"), "\nheight = 72");
+	s = std::regex_replace(s, std::regex("\nwidth_px = 512"), "\nwidth_px = 96");
+	s = std::regex_replace(s, std::regex("\nheight_px = 384"), "\nheight_px = 72");
 	s = std::regex_replace(s, std::regex("\nframes = 80"), "\nframes = 3");
 	if (!from.empty())
 	{
@@ -96,7 +96,7 @@ TEST(SimApp, BadOptionNamesFileSectionKey)
 	std::string out;
 	EXPECT_NE(runCommand(appPath() + " sim -q -c " + cfg + " -o " + dir + "/out", &out), 0);
 	EXPECT_NE(out.find("sim.ini"), std::string::npos) << out;
-	EXPECT_NE(out.find("[sim.camera] unknown option 'hfov_dgr'"), std::string::npos) << out;
+	EXPECT_NE(out.find("[sim.camera] hfov_dgr: unknown key; did you mean 'hfov_deg'?"), std::string::npos) << out;
 	EXPECT_EQ(filesIn(dir + "/out"), 0u);
 }
 
@@ -104,7 +104,7 @@ TEST(SimApp, BadValueIsRejected)
 {
 	const std::string dir = tempDir("sim_app_badvalue");
 	for (const auto& [from, to, msg] : std::vector<std::tuple<std::string, std::string, std::string>>{
-			 {"\nbaseline_m = 0.12", "\nbaseline_m = twelve", "baseline_m = 'twelve': expected a number"},
+			 {"\nbaseline_m = 0.12", "\nbaseline_m = twelve", "[sim.camera] baseline_m: 'twelve' is not a number"},
 			 {"\nsensitivity_sigma_nm = 30", "\nsensitivity_sigma_nm = -3", "sensitivity_sigma_nm"},
 			 {"\nsun_elevation_deg = 55", "\nsun_elevation_deg = 95", "[traversal.noon] sun_elevation_deg"},
 			 {"traversals = morning_low_sun", "traversals = dusk morning_low_sun", "'dusk' has no section"}})

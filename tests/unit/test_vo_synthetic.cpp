@@ -352,7 +352,7 @@ TEST(VOSynthetic, NearLandmarkPreferenceTracksAndKeepsAccuracy)
 TEST(VOSynthetic, PerChannelVOOptionsOverrideTheBaseSection)
 {
 	mrpt::config::CConfigFileMemory cfg(
-		"[vo]\nnear_min_disparity = 0\nmax_hamming = 70\n[vo.mono]\nnear_min_disparity = 3\n");
+		"[vo]\nnear_min_disparity_px = 0\nmax_hamming = 70\n[vo.mono]\nnear_min_disparity_px = 3\n");
 	const auto m = vo::voOptionsFor(cfg, vo::Channel::Mono);
 	const auto i = vo::voOptionsFor(cfg, vo::Channel::Invariant);
 	EXPECT_EQ(m.near_min_disparity, 3.0);

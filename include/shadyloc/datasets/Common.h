@@ -17,7 +17,8 @@ class DatasetError : public std::runtime_error
 	using std::runtime_error::runtime_error;
 };
 
-/** Options common to all importers (section [import] in an .ini file). */
+/** Options common to all importers (section [import] in an .ini file;
+ * keys sensor_label, external_images, max_frames, progress_every). */
 struct TImportOptions : public mrpt::config::CLoadableOptions
 {
 	std::string sensorLabel = "CAMERA";	 //!< label of the stereo observations

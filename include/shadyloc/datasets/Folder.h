@@ -11,10 +11,13 @@
 
 namespace shadyloc::datasets
 {
-/** Rectified stereo calibration from an .ini file:
- *   [left]   fx fy cx cy   [px]
- *   [right]  fx fy cx cy   [px] (any key missing here: the left value)
- *   [stereo] baseline_m [m], width height [px]
+/** Rectified stereo calibration from an .ini file, read strictly (unknown
+ * sections and keys are errors):
+ *   [left]   fx_px fy_px cx_px cy_px
+ *   [right]  fx_px fy_px cx_px cy_px  (any key missing here: the left value)
+ *   [stereo] baseline_m, width_px, height_px
+ * The keys fx, fy, cx, cy, width, height of earlier versions are refused
+ * with their new names.
  */
 struct TFolderCalib : public mrpt::config::CLoadableOptions
 {
@@ -24,9 +27,11 @@ struct TFolderCalib : public mrpt::config::CLoadableOptions
 	uint32_t width = 0, height = 0;	 //!< image size every image must have [px]
 
 	/** `section` is ignored (the file has its own sections); throws
-	 * DatasetError naming the section/key that is missing or invalid. */
+	 * core::SettingsError naming the file, section and key that is missing,
+	 * unknown or invalid. */
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& section) override;
 	void dumpToTextStream(std::ostream& out) const override;
+	/** Loads a file; DatasetError naming the file, section and key. */
 	static TFolderCalib FromFile(const std::string& iniPath);
 };
 

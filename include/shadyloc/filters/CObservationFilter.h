@@ -9,6 +9,7 @@
  */
 #pragma once
 
+#include <shadyloc/core/Settings.h>
 #include <shadyloc/io/BoundedReader.h>
 
 #include <mrpt/config/CConfigFileBase.h>
@@ -41,10 +42,13 @@ class CObservationFilter : public mrpt::serialization::CSerializable
 	};
 	TCommonOptions common;
 
-	/** Loads this filter's options from `section` (missing keys keep their
-	 * defaults); throws naming the section and key on a bad value. */
+	/** Loads this filter's options from `section` strictly (core::SettingsSection:
+	 * missing keys keep their defaults; a bad value or a key no filter option
+	 * reads throws core::SettingsError naming the file, section and key). The
+	 * key `class` is allowed: the pipeline reads it. */
 	void loadFromConfig(const mrpt::config::CConfigFileBase& cfg, const std::string& section);
-	/** Writes every option (with units) as "key = value" lines. */
+	/** Every option as "key = value" lines (comments on their own lines) that
+	 * loadFromConfig() reads back to the same values. */
 	std::string optionsAsIni() const;
 
 	/** True if obs is a camera observation this filter should process. */
@@ -63,8 +67,8 @@ class CObservationFilter : public mrpt::serialization::CSerializable
 	virtual void transformImage(const cv::Mat& in, cv::Mat& out) const = 0;
 
    protected:
-	virtual void loadSpecificOptions(
-		const mrpt::config::CConfigFileBase& cfg, const std::string& section) = 0;
+	/** Reads the derived filter's keys from s (the caller finishes s). */
+	virtual void loadSpecificOptions(core::SettingsSection& s) = 0;
 	virtual void specificOptionsAsIni(std::ostream& out) const = 0;
 	/** Called after options change (to rebuild tables and the like). */
 	virtual void onOptionsChanged() {}

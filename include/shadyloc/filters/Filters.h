@@ -19,7 +19,7 @@ class CFilterMonochrome : public CObservationFilter
 	void transformImage(const cv::Mat& in, cv::Mat& out) const override;
 
    protected:
-	void loadSpecificOptions(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
+	void loadSpecificOptions(core::SettingsSection& s) override;
 	void specificOptionsAsIni(std::ostream& out) const override;
 };
 
@@ -38,7 +38,7 @@ class CFilterInvariant : public CObservationFilter
 	void transformImage(const cv::Mat& in, cv::Mat& out) const override;
 
    protected:
-	void loadSpecificOptions(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
+	void loadSpecificOptions(core::SettingsSection& s) override;
 	void specificOptionsAsIni(std::ostream& out) const override;
 	void onOptionsChanged() override;
 
@@ -59,7 +59,7 @@ class CFilterLinearise : public CObservationFilter
 	void transformImage(const cv::Mat& in, cv::Mat& out) const override;
 
    protected:
-	void loadSpecificOptions(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
+	void loadSpecificOptions(core::SettingsSection& s) override;
 	void specificOptionsAsIni(std::ostream& out) const override;
 };
 

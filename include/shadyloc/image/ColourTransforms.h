@@ -19,7 +19,18 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include <iosfwd>
 #include <string>
+
+namespace mrpt::config
+{
+class CConfigFileBase;
+}
+namespace shadyloc::core
+{
+class SettingsSection;
+class SettingsWriter;
+}  // namespace shadyloc::core
 
 namespace shadyloc::image
 {
@@ -82,6 +93,19 @@ struct InvariantParams
 	/** Same image from the same input: every field that changes a pixel agrees
 	 * (gamma only with gamma linearisation; reals within 1e-9). */
 	bool sameImageAs(const InvariantParams& o) const;
+
+	/** Reads the keys of a section strictly (src/image/InvariantParamsSettings.cpp):
+	 * alpha and beta, or peak_wavelength_{blue,green,red}_nm (then beta =
+	 * 1 - alpha), channel_order, linearisation, gamma, scale and offset
+	 * (absent: defaultOffset() of the new alpha, beta). Absent keys keep their
+	 * values; validates. Declares its keys known in `s`; the caller finishes it. */
+	void readFrom(core::SettingsSection& s);
+	/** Writes every key readFrom() reads back to these exact values. */
+	void writeTo(core::SettingsWriter& w) const;
+	/** A whole section: readFrom() and no other key; errors name file, section, key. */
+	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& section);
+	/** writeTo() on a stream (no section header). */
+	void dumpToTextStream(std::ostream& out) const;
 };
 
 /** Linear response in (0,1] of an 8-bit code value under a linearisation.
