@@ -6,6 +6,7 @@
 #include <shadyloc/filters/Filters.h>
 #include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/io/Rawlog.h>
+#include <shadyloc/io/Tum.h>
 #include <shadyloc/vo/Channel.h>
 #include <shadyloc/vo/StereoVO.h>
 
@@ -215,7 +216,7 @@ int run(int argc, char** argv)
 		throw std::runtime_error(
 			in.getValue() + ": no stereo observations" +
 			(useLabel.empty() ? std::string() : " labelled '" + useLabel + "'"));
-	eval::writeTum(out.getValue(), traj);
+	io::writeTum(out.getValue(), traj);
 	if (stats.isSet())
 		io::writeAtomically(stats.getValue(), [&](const std::string& tmp) {
 			std::ofstream f(tmp);
