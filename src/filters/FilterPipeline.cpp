@@ -24,6 +24,7 @@ FilterPipeline FilterPipeline::Default()
 	FilterPipeline p;
 	p.filters.push_back(CFilterMonochrome::Create());
 	p.filters.push_back(CFilterInvariant::Create());
+	p.labels = {"mono", "invariant"};
 	return p;
 }
 
@@ -44,6 +45,12 @@ FilterPipeline FilterPipeline::FromConfig(
 			"'" + what + "': [" + kPipelineSection + "] pipeline: missing or empty");
 	std::vector<std::string> sections;
 	mrpt::system::tokenize(list, ", \t", sections);
+	return FromSections(cfg, sections, what);
+}
+
+FilterPipeline FilterPipeline::FromSections(
+	const mrpt::config::CConfigFileBase& cfg, const std::vector<std::string>& sections, const std::string& what)
+{
 	FilterPipeline p;
 	for (const auto& sect : sections)
 	{
@@ -67,6 +74,7 @@ FilterPipeline FilterPipeline::FromConfig(
 			throw std::invalid_argument("'" + what + "': " + e.what());
 		}
 		p.filters.push_back(f);
+		p.labels.push_back(sect);
 	}
 	return p;
 }
@@ -76,11 +84,16 @@ std::string FilterPipeline::asIni() const
 	std::ostringstream s, list;
 	for (size_t i = 0; i < filters.size(); i++)
 	{
-		const std::string sect = "filter" + std::to_string(i);
+		const std::string sect = label(i);
 		list << (i ? " " : "") << sect;
 		s << "\n[" << sect << "]\n" << filters[i]->optionsAsIni();
 	}
 	return "[" + std::string(kPipelineSection) + "]\npipeline = " + list.str() + "\n" + s.str();
+}
+
+std::string FilterPipeline::label(size_t i) const
+{
+	return i < labels.size() && !labels[i].empty() ? labels[i] : "filter" + std::to_string(i);
 }
 
 RawlogFilterProcessor::RawlogFilterProcessor() : mrpt::system::COutputLogger("shadyloc.filter") {}

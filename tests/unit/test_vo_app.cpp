@@ -3,7 +3,7 @@
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/io/Tum.h>
-#include <shadyloc/vo/SyntheticCorridor.h>
+#include <shadyloc/sim/SyntheticCorridor.h>
 
 #include "../support/TestSupport.h"
 
@@ -21,14 +21,14 @@ namespace
 /** A colour stereo rawlog of the corridor, and its ground truth (TUM). */
 void writeCorridorRawlog(const std::string& rawlog, const std::string& gtTum, int n)
 {
-	vo::SyntheticCorridor corridor;
+	sim::SyntheticCorridor corridor;
 	const auto c = corridor.calib();
 	io::RawlogWriter w(rawlog);
 	eval::Trajectory gt;
-	const Eigen::Isometry3d T0inv = vo::SyntheticCorridor::examplePose(0).inverse();
+	const Eigen::Isometry3d T0inv = sim::SyntheticCorridor::examplePose(0).inverse();
 	for (int k = 0; k < n; k++)
 	{
-		const Eigen::Isometry3d T = vo::SyntheticCorridor::examplePose(k);
+		const Eigen::Isometry3d T = sim::SyntheticCorridor::examplePose(k);
 		cv::Mat l, r;
 		corridor.render(T, l, r, k);
 		mrpt::obs::CObservationStereoImages obs;
