@@ -3,13 +3,14 @@
  * (mono + invariant) on two threads. Goals: one channel >= 50 Hz; both
  * channels together <= 1.3x one channel's wall time.
  *
- * Frames: the ray-cast corridor (vo::SyntheticCorridor), 24 frames played
+ * Frames: the ray-cast corridor (sim::SyntheticCorridor), 24 frames played
  * forwards and backwards so the motion stays continuous while looping. */
 #include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/filters/Channel.h>
+#include <shadyloc/filters/Filters.h>
 #include <shadyloc/geometry/PoseSolver.h>
-#include <shadyloc/vo/Channel.h>
+#include <shadyloc/sim/SyntheticCorridor.h>
 #include <shadyloc/vo/StereoVO.h>
-#include <shadyloc/vo/SyntheticCorridor.h>
 
 #include <benchmark/benchmark.h>
 #include <opencv2/imgcodecs.hpp>
@@ -38,18 +39,18 @@ const TData& data()
 {
 	static const TData d = [] {
 		TData d;
-		vo::TCorridorOptions o;
+		sim::TCorridorOptions o;
 		o.width = 512;
 		o.height = 384;
 		o.fx = 400;
 		o.baseline = 0.12;	// Bumblebee2
-		vo::SyntheticCorridor c(o);
+		sim::SyntheticCorridor c(o);
 		d.calib = c.calib();
-		const vo::ChannelConverter mono(vo::Channel::Mono), inv(vo::Channel::Invariant);
+		const auto mono = filters::defaultChannel("mono"), inv = filters::defaultChannel("invariant");
 		for (int k = 0; k < kFrames; k++)
 		{
 			cv::Mat l, r, a, b;
-			c.render(vo::SyntheticCorridor::examplePose(k), l, r, k);
+			c.render(sim::SyntheticCorridor::examplePose(k), l, r, k);
 			d.colourL.push_back(l);
 			d.colourR.push_back(r);
 			mono.convert(l, a);
@@ -93,7 +94,10 @@ const TRealData& realData()
 		d.fopt.max_disparity = 125;
 		auto ip = image::InvariantParams::FromAlphaBeta(0.48, 0.5065);
 		ip.linearisation = image::Linearisation::SRGB;
-		const vo::ChannelConverter mono(vo::Channel::Mono), inv(vo::Channel::Invariant, ip);
+		const auto mono = filters::defaultChannel("mono");
+		auto invFilter = CFilterInvariant::Create();
+		invFilter->setParams(ip);
+		const filters::TChannel inv{"invariant", invFilter};
 		cv::Mat ml, mr, il, ir;
 		mono.convert(l, ml);
 		mono.convert(r, mr);
@@ -349,7 +353,7 @@ BENCHMARK(BM_StageStereoMeasurements)->Unit(benchmark::kMicrosecond);
 void BM_ChannelConversionPair(benchmark::State& st, bool invariant)
 {
 	const auto& d = data();
-	const vo::ChannelConverter c(invariant ? vo::Channel::Invariant : vo::Channel::Mono);
+	const auto c = filters::defaultChannel(invariant ? "invariant" : "mono");
 	cv::Mat a, b;
 	for (auto _ : st)
 	{

@@ -3,6 +3,7 @@
 #include "Command.h"
 
 #include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/io/Tum.h>
 #include <shadyloc/render/TrajectorySnapshot.h>
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
@@ -33,7 +34,7 @@ int run(int argc, char** argv)
 	static const mrpt::img::TColor palette[] = {
 		{0, 0, 0}, {215, 40, 40}, {30, 90, 210}, {40, 160, 60}, {230, 140, 0}, {140, 60, 170}};
 	std::vector<shadyloc::render::TrajectoryLayer> layers;
-	shadyloc::eval::Trajectory reference;  // the first trajectory, for --align
+	shadyloc::io::Trajectory reference;  // the first trajectory, for --align
 	for (const auto& spec : trajs.getValue())
 	{
 		auto colon = spec.rfind(':');
@@ -43,7 +44,8 @@ int run(int argc, char** argv)
 		shadyloc::render::TrajectoryLayer l;
 		l.name = name;
 		l.colour = palette[layers.size() % std::size(palette)];
-		const auto traj = shadyloc::eval::readTum(file);
+		auto traj = shadyloc::io::readTum(file);
+		shadyloc::io::sortByTime(traj);
 		Eigen::Isometry3d T_ref_this = Eigen::Isometry3d::Identity();
 		if (align.getValue() && !reference.empty())
 		{

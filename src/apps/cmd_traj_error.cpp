@@ -2,6 +2,7 @@
 #include "Command.h"
 
 #include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/io/Tum.h>
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 
@@ -22,8 +23,10 @@ int run(int argc, char** argv)
 	TCLAP::ValueArg<double> maxDt(
 		"", "max-dt", "largest timestamp difference of an associated pair [s]", false, 0.02, "s", cmd);
 	cmd.parse(argc, argv);
-	const auto g = shadyloc::eval::readTum(gt.getValue());
-	const auto e = shadyloc::eval::readTum(est.getValue());
+	auto g = shadyloc::io::readTum(gt.getValue());
+	auto e = shadyloc::io::readTum(est.getValue());
+	shadyloc::io::sortByTime(g);
+	shadyloc::io::sortByTime(e);
 	const auto r = shadyloc::eval::computeErrors(g, e, maxDt.getValue());
 	std::cout << "ground truth: " << gt.getValue() << " (" << g.size() << " poses)\n"
 			  << "estimate:     " << est.getValue() << " (" << e.size() << " poses)\n"

@@ -1,69 +1,25 @@
 /* shadyloc vo: stereo visual odometry over a rawlog, on one image channel. */
 #include "Command.h"
 
-#include <shadyloc/eval/TrajectoryError.h>
-#include <shadyloc/filters/FilterPipeline.h>
-#include <shadyloc/filters/Filters.h>
-#include <shadyloc/io/AtomicFile.h>
-#include <shadyloc/io/Rawlog.h>
-#include <shadyloc/vo/Channel.h>
+#include <shadyloc/filters/Channel.h>
+#include <shadyloc/io/Csv.h>
+#include <shadyloc/io/StereoFrameSource.h>
+#include <shadyloc/io/Tum.h>
+#include <shadyloc/vo/ChannelOptions.h>
 #include <shadyloc/vo/StereoVO.h>
 #include <shadyloc/vo/VOConfig.h>
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
-#include <mrpt/obs/CObservationStereoImages.h>
 
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
-#include <optional>
-#include <sstream>
 
 namespace
 {
 using namespace shadyloc;
-
-bool endsWith(const std::string& s, const std::string& suf)
-{
-	return s.size() >= suf.size() && s.compare(s.size() - suf.size(), suf.size(), suf) == 0;
-}
-bool isDerivedLabel(const std::string& l)
-{
-	return endsWith(l, "_mono") || endsWith(l, "_inv") || endsWith(l, "_lin");
-}
-
-/** The invariant parameters `shadyloc filter` recorded at the head of a
- * filtered rawlog, if it holds such a record with an invariant filter. */
-std::optional<image::InvariantParams> recordedInvariantParams(const std::string& path)
-{
-	const std::string rec = filters::readPipelineRecord(path);
-	if (rec.empty()) return std::nullopt;
-	mrpt::config::CConfigFileMemory cfg(rec);
-	const auto pipeline = filters::FilterPipeline::FromConfig(cfg, path + " (filter record)");
-	for (const auto& f : pipeline.filters)
-		if (const auto inv = std::dynamic_pointer_cast<CFilterInvariant>(f)) return inv->params();
-	return std::nullopt;
-}
-
-/** Label of an already-filtered stereo stream for this channel in the first
- * objects of the rawlog, or "" if there is none (then colour is converted). */
-std::string findFilteredLabel(const std::string& path, const std::string& suffix, const std::string& base)
-{
-	io::RawlogReader rd(path);
-	for (int i = 0; i < 200; i++)
-	{
-		const auto obj = rd.next();
-		if (!obj) break;
-		for (const auto& o : io::observationsIn(obj))
-			if (IS_CLASS(*o, mrpt::obs::CObservationStereoImages) && endsWith(o->sensorLabel, suffix) &&
-				(base.empty() || o->sensorLabel == base + suffix))
-				return o->sensorLabel;
-	}
-	return "";
-}
 
 int run(int argc, char** argv)
 {
@@ -104,144 +60,107 @@ int run(int argc, char** argv)
 	if (!std::filesystem::exists(in.getValue()))
 		throw std::runtime_error("input rawlog '" + in.getValue() + "' does not exist");
 
-	const auto conv = vo::ChannelConverter::FromConfig(*cfg, channel.getValue());
+	// The channel is the filter that makes its images: a section of the
+	// config (class = CFilterInvariant, ...) or a built-in one.
+	const std::string cfgName = cfgArg.isSet() ? cfgArg.getValue() : std::string("(no config)");
+	if (cfg->keyExists("vo", "channel_order"))
+		throw std::invalid_argument(
+			"'" + cfgName + "': [vo] channel_order: moved to the channel's filter section "
+			"([mono] class = CFilterMonochrome, channel_order = ...)");
+	const filters::TChannel ch = filters::channelFromConfig(
+		*cfg, channel.isSet() ? channel.getValue() : cfg->read_string("vo", "channel", "mono"), cfgName);
 	// [vo] / [features], then the channel's overrides ([vo.mono], [features.invariant]).
-	const vo::TStereoVOOptions vopt = vo::voOptionsFor(*cfg, conv.channel());
-	const features::TStereoFeatureOptions fopt = vo::featureOptionsFor(*cfg, conv.channel());
+	const vo::TStereoVOOptions vopt = vo::voOptionsFor(*cfg, ch.label);
+	const features::TStereoFeatureOptions fopt = vo::featureOptionsFor(*cfg, ch.label);
 	vo::StereoVO vo(vopt, fopt);
 	vo.setMinLoggingLevel(quiet.getValue() ? mrpt::system::LVL_ERROR : mrpt::system::LVL_WARN);
 
-	const std::string suffix = vo::channelSuffix(conv.channel());
-	const std::string filtered = findFilteredLabel(in.getValue(), suffix, label.getValue());
+	const filters::TChannelInput input = filters::resolveChannelInput(in.getValue(), ch, label.getValue());
 	if (!quiet.getValue())
 	{
-		std::cout << "channel: " << conv.asString() << "\n"
-				  << (filtered.empty() ? "input: colour stereo, converted on the fly\n"
-									   : "input: filtered observations '" + filtered + "'\n")
+		std::cout << "channel: " << ch.asString() << "\n"
+				  << (input.filtered ? "input: filtered observations '" + input.sensorLabel + "'\n"
+									 : "input: colour stereo, converted on the fly\n")
 				  << "[vo]\n";
 		vopt.dumpToTextStream(std::cout);
 		std::cout << "[features]\n";
 		fopt.dumpToTextStream(std::cout);
 	}
-	if (!filtered.empty() && conv.channel() == vo::Channel::Invariant)
+	if (input.filtered)
 	{
-		// The images are used as they are; say which transform made them, and
+		// The images are used as they are; say which filter made them, and
 		// warn when the config describes another one (a map and a live run
-		// must use the same, or their invariant images are not comparable).
-		const auto rec = recordedInvariantParams(in.getValue());
-		if (!rec)
-			std::cerr << "warning: " << in.getValue()
-					  << ": no filter record; the parameters of its invariant images are unknown\n";
-		else if (!rec->sameImageAs(conv.invariantParams()))
-			std::cerr << "warning: " << in.getValue() << ": its invariant images were made with "
-					  << rec->asString() << " (filter record), not with the config's [invariant] "
-					  << conv.invariantParams().asString() << "; the recorded images are used\n";
+		// must use the same, or their channel images are not comparable).
+		if (!input.recorded)
+			std::cerr << "warning: " << in.getValue() << ": no filter record"
+					  << (input.hasRecord ? " of suffix " + ch.suffix() : std::string()) << "; the parameters of its "
+					  << ch.label << " images are unknown\n";
+		else if (!input.recorded->sameImagesAs(*ch.filter))
+			std::cerr << "warning: " << in.getValue() << ": its " << ch.label << " images were made with "
+					  << input.recorded->describe() << " (filter record), not with the config's [" << ch.label
+					  << "] " << ch.filter->describe() << "; the recorded images are used\n";
 		else if (!quiet.getValue())
-			std::cout << "invariant images made with the config's parameters (filter record)\n";
+			std::cout << ch.label << " images made with the config's parameters (filter record)\n";
 	}
 
-	io::RawlogReader rd(in.getValue());
-	std::string useLabel = filtered.empty() ? label.getValue() : filtered;
-	eval::Trajectory traj;
-	std::ostringstream csv;
-	csv << "frame,timestamp,features,stereo_matches,tracked,inliers,keyframe,status,rms_px,"
-		   "ms_detect,ms_stereo,ms_describe,ms_match,ms_ransac,ms_solve,ms_total\n";
-	csv << std::fixed;
-	geometry::TStereoCalib calib;
-	cv::Size size;
+	io::StereoFrameSource source(in.getValue(), input.sourceOptions);
+	io::Trajectory traj;
+	std::unique_ptr<io::CsvWriter> csv;
+	if (stats.isSet())
+	{
+		csv = std::make_unique<io::CsvWriter>(
+			stats.getValue(),
+			"frame,timestamp,features,stereo_matches,tracked,inliers,keyframe,status,rms_px,"
+			"ms_detect,ms_stereo,ms_describe,ms_match,ms_ransac,ms_solve,ms_total");
+		csv->out() << std::fixed;
+	}
 	size_t nTracked = 0;
 	double msSum = 0;
-	while (const auto obj = rd.next())
+	io::TStereoFrame fr;
+	while (source.next(fr))
 	{
-		for (const auto& o : io::observationsIn(obj))
-		{
-			auto st = std::dynamic_pointer_cast<mrpt::obs::CObservationStereoImages>(o);
-			if (!st) continue;
-			if (useLabel.empty())
-			{
-				if (isDerivedLabel(st->sensorLabel)) continue;
-				useLabel = st->sensorLabel;
-			}
-			if (st->sensorLabel != useLabel) continue;
-			if (!st->hasImageRight)
-				throw std::runtime_error(
-					rd.where("stereo observation '" + st->sensorLabel + "'") + ": has no right image");
-			io::loadExternalImages(*st);
-			const cv::Mat& L = st->imageLeft.asCvMatRef();
-			const cv::Mat& R = st->imageRight.asCvMatRef();
-			const std::string where = rd.where("stereo observation '" + st->sensorLabel + "'");
-			if (L.empty() || R.empty() || L.size() != R.size())
-				throw std::runtime_error(where + ": empty or mismatched left/right images");
-			if (traj.empty())
-			{
-				calib = geometry::TStereoCalib::FromObservation(*st);
-				size = L.size();
-				if (!quiet.getValue()) std::cout << "calibration: " << calib.asString() << "\n";
-			}
-			else if (L.size() != size)
-				throw std::runtime_error(where + ": image size changed within the run");
-			cv::Mat l8, r8;
-			if (L.type() == CV_8UC1 && (!filtered.empty() || conv.channel() == vo::Channel::Mono))
-			{
-				l8 = L;
-				r8 = R;
-			}
-			else
-			{
-				try
-				{
-					conv.convert(L, l8);
-					conv.convert(R, r8);
-				}
-				catch (const std::exception& e)
-				{
-					throw std::runtime_error(where + ": " + e.what());
-				}
-			}
-			const double t = mrpt::Clock::toDouble(st->timestamp);
-			const auto res = vo.process(l8, r8, calib, t);
-			traj.push_back({t, res.T_world_curr});
-			nTracked += vo::isTracked(res.status);
-			msSum += res.ms.total;
-			csv << res.frame << ',' << std::setprecision(6) << res.timestamp << ',' << res.features << ','
-				<< res.stereo << ',' << res.tracked << ',' << res.inliers << ',' << int(res.keyframe) << ','
-				<< vo::toString(res.status) << ',' << std::setprecision(3) << res.rms_px << ','
-				<< res.ms.detect << ',' << res.ms.stereo << ',' << res.ms.describe << ',' << res.ms.match
-				<< ',' << res.ms.ransac << ',' << res.ms.solve << ',' << res.ms.total << '\n';
-			if (!quiet.getValue() && res.frame % 100 == 0)
-				std::cout << "frame " << res.frame << " (" << std::setprecision(0) << 100 * rd.progress()
-						  << "%)\n";
-		}
+		if (fr.index == 0 && !quiet.getValue()) std::cout << "calibration: " << fr.calib.asString() << "\n";
+		if (fr.left.type() != CV_8UC1)
+			throw std::runtime_error(
+				source.reader().where(
+					"frame " + std::to_string(fr.index) + ": channel '" + ch.label + "' gives " +
+					std::to_string(fr.left.channels()) + "-channel images; the VO needs a grey channel"));
+		const auto res = vo.process(fr.left, fr.right, fr.calib, fr.timestamp);
+		traj.push_back({fr.timestamp, res.T_world_curr});
+		nTracked += vo::isTracked(res.status);
+		msSum += res.ms.total;
+		if (csv)
+			csv->out() << res.frame << ',' << std::setprecision(6) << res.timestamp << ',' << res.features << ','
+					   << res.stereo << ',' << res.tracked << ',' << res.inliers << ',' << int(res.keyframe) << ','
+					   << vo::toString(res.status) << ',' << std::setprecision(3) << res.rms_px << ','
+					   << res.ms.detect << ',' << res.ms.stereo << ',' << res.ms.describe << ',' << res.ms.match
+					   << ',' << res.ms.ransac << ',' << res.ms.solve << ',' << res.ms.total << '\n';
+		if (!quiet.getValue() && res.frame % 100 == 0)
+			std::cout << "frame " << res.frame << " (" << std::setprecision(0) << 100 * source.progress()
+					  << "%)\n";
 	}
-	if (traj.empty())
-		throw std::runtime_error(
-			in.getValue() + ": no stereo observations" +
-			(useLabel.empty() ? std::string() : " labelled '" + useLabel + "'"));
-	eval::writeTum(out.getValue(), traj);
-	if (stats.isSet())
-		io::writeAtomically(stats.getValue(), [&](const std::string& tmp) {
-			std::ofstream f(tmp);
-			f << csv.str();
-			if (!f) throw std::runtime_error("cannot write '" + tmp + "'");
-		});
+	if (traj.empty()) throw std::runtime_error(source.noFramesMessage());
+	io::writeTum(out.getValue(), traj);
+	if (csv) csv->commit();
 	if (kfOut.isSet())
-		io::writeAtomically(kfOut.getValue(), [&](const std::string& tmp) {
-			std::ofstream f(tmp);
-			f << "id,frame,timestamp,tx,ty,tz,qx,qy,qz,qw,chain_break,landmarks,"
-				 "var_x,var_y,var_z,var_rx,var_ry,var_rz\n"
-			  << std::setprecision(9);
-			for (const auto& k : vo.keyframes())
-			{
-				const Eigen::Quaterniond q(k.T_prevkf_kf.linear());
-				const auto& p = k.T_prevkf_kf.translation();
-				f << k.id << ',' << k.frame << ',' << k.timestamp << ',' << p.x() << ',' << p.y() << ','
-				  << p.z() << ',' << q.x() << ',' << q.y() << ',' << q.z() << ',' << q.w() << ','
-				  << int(k.chain_break) << ',' << k.meas.size();
-				for (int i = 0; i < 6; i++) f << ',' << k.cov(i, i);
-				f << '\n';
-			}
-			if (!f) throw std::runtime_error("cannot write '" + tmp + "'");
-		});
+	{
+		io::CsvWriter f(
+			kfOut.getValue(),
+			"id,frame,timestamp,tx,ty,tz,qx,qy,qz,qw,chain_break,landmarks,"
+			"var_x,var_y,var_z,var_rx,var_ry,var_rz");
+		f.out() << std::setprecision(9);
+		for (const auto& k : vo.keyframes())
+		{
+			const Eigen::Quaterniond q(k.T_prevkf_kf.linear());
+			const auto& p = k.T_prevkf_kf.translation();
+			f.out() << k.id << ',' << k.frame << ',' << k.timestamp << ',' << p.x() << ',' << p.y() << ','
+					<< p.z() << ',' << q.x() << ',' << q.y() << ',' << q.z() << ',' << q.w() << ','
+					<< int(k.chain_break) << ',' << k.meas.size();
+			for (int i = 0; i < 6; i++) f.out() << ',' << k.cov(i, i);
+			f.out() << '\n';
+		}
+		f.commit();
+	}
 	std::cout << std::setprecision(2) << std::fixed << "frames: " << traj.size() << ", tracked: " << nTracked
 			  << ", keyframes: " << vo.keyframes().size() << ", mean " << msSum / traj.size()
 			  << " ms/frame; trajectory -> " << out.getValue() << "\n";

@@ -183,7 +183,7 @@ TImportResult StereoSink::commit()
 	std::error_code ec;
 	if (!groundTruth.empty())
 	{
-		writeTum(gtPath, groundTruth, "ground truth of '" + fs::path(m_result.rawlogPath).filename().string() + "'");
+		io::writeTum(gtPath, groundTruth, "ground truth of '" + fs::path(m_result.rawlogPath).filename().string() + "'");
 		m_result.groundTruthPath = gtPath;
 	}
 	try

@@ -2,8 +2,8 @@
 #pragma once
 
 #include <shadyloc/datasets/Common.h>
-#include <shadyloc/datasets/Tum.h>
 #include <shadyloc/io/Rawlog.h>
+#include <shadyloc/io/Tum.h>
 
 #include <mrpt/core/Clock.h>
 #include <mrpt/system/COutputLogger.h>
@@ -47,7 +47,7 @@ class StereoSink
 	void add(const cv::Mat& left, const cv::Mat& right, double t, const std::string& frameName);
 
 	/** Ground truth to write on commit() (empty: none). */
-	TTrajectory groundTruth;
+	io::Trajectory groundTruth;
 
 	/** Writes the ground truth (if any), then renames the rawlog into place. */
 	TImportResult commit();

@@ -2,6 +2,7 @@
 #include <shadyloc/datasets/Folder.h>
 #include <shadyloc/datasets/Kitti.h>
 #include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/io/StereoFrameSource.h>
 
 #include "Detail.h"
 
@@ -19,7 +20,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <set>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -165,13 +165,14 @@ std::vector<mrpt::poses::CPose3D> readKittiPoses(const std::string& path)
 	return out;
 }
 
-std::string poseTo34(const mrpt::poses::CPose3D& p)
+std::string poseTo34(const Eigen::Isometry3d& T)
 {
-	const auto& R = p.getRotationMatrix();
+	const Eigen::Matrix3d R = T.linear();
+	const Eigen::Vector3d t = T.translation();
 	char buf[512];
 	std::snprintf(
 		buf, sizeof(buf), "%.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e %.9e", R(0, 0),
-		R(0, 1), R(0, 2), p.x(), R(1, 0), R(1, 1), R(1, 2), p.y(), R(2, 0), R(2, 1), R(2, 2), p.z());
+		R(0, 1), R(0, 2), t.x(), R(1, 0), R(1, 1), R(1, 2), t.y(), R(2, 0), R(2, 1), R(2, 2), t.z());
 	return buf;
 }
 
@@ -273,7 +274,7 @@ TImportResult KittiImporter::run(
 		if (!T_world_cam0.empty())
 			sink.groundTruth.push_back(
 				{mrpt::Clock::toDouble(detail::timestampFromSeconds(times[i])),
-				 T_world_cam0[i] + T_cam0_left});
+				 io::toIsometry(T_world_cam0[i] + T_cam0_left)});
 	}
 	auto res = sink.commit();
 	MRPT_LOG_INFO_FMT(
@@ -349,21 +350,22 @@ void createDirs(const fs::path& p, std::vector<fs::path>& created)
 
 KittiExporter::TResult KittiExporter::run(const std::string& inRawlog, const std::string& outRoot)
 {
-	using mrpt::obs::CObservationStereoImages;
 	mrpt::system::CTicTac timer;
 	TResult res;
 
-	TTrajectory gt;
+	io::Trajectory gt;
 	if (!options.groundTruthTum.empty())
 	{
 		if (!fs::is_regular_file(options.groundTruthTum))
 			throw DatasetError("'" + options.groundTruthTum + "': no such ground-truth file");
-		gt = readTum(options.groundTruthTum);
+		gt = io::readTum(options.groundTruthTum);
 		if (gt.empty()) throw DatasetError("'" + options.groundTruthTum + "': no poses");
-		std::stable_sort(gt.begin(), gt.end(), [](auto& a, auto& b) { return a.t < b.t; });
+		io::sortByTime(gt);
 	}
 
-	io::RawlogReader reader(inRawlog);	// throws naming the file if missing
+	io::TStereoFrameSourceOptions sourceOpts;
+	sourceOpts.sensorLabel = options.sensorLabel;
+	io::StereoFrameSource source(inRawlog, sourceOpts);  // throws naming the file if missing
 	const fs::path seqDir = fs::path(outRoot) / "sequences" / options.sequence;
 	StagingGuard guard;
 	createDirs(seqDir.parent_path(), guard.created);
@@ -376,77 +378,44 @@ KittiExporter::TResult KittiExporter::run(const std::string& inRawlog, const std
 	mrpt::img::TCamera left, right;
 	double baseline = 0;
 	std::vector<double> times;
-	std::set<std::string> otherLabels;
 	MRPT_LOG_INFO_STREAM(
 		"Exporting '" << inRawlog << "' (sensor '" << options.sensorLabel << "') to '"
 					  << seqDir.string() << "'");
 
-	while (auto obj = reader.next())
+	// The frame source checks that the calibration stays that of frame 0 (a
+	// KITTI sequence has one calib.txt) and that the pair is rectified
+	// (KITTI's P matrices describe a rectified pair); its errors name the
+	// object and frame.
+	io::TStereoFrame fr;
+	while (source.next(fr))
 	{
-		for (const auto& o : io::observationsIn(obj))
+		const size_t i = fr.index;
+		const std::string where = source.reader().where("frame " + std::to_string(i) + ": ");
+		if (i == 0)
 		{
-			auto st = std::dynamic_pointer_cast<CObservationStereoImages>(o);
-			if (!st || st->sensorLabel != options.sensorLabel)
-			{
-				otherLabels.insert(o->sensorLabel);
-				continue;
-			}
-			const size_t i = times.size();
-			const std::string where = reader.where("frame " + std::to_string(i) + ": ");
-			if (!st->hasImageRight) throw DatasetError(where + "stereo observation without a right image");
-			io::loadExternalImages(*st);
-			const auto& rp = st->rightCameraPose;
-			if (i == 0)
-			{
-				left = st->leftCamera;
-				right = st->rightCamera;
-				baseline = rp.x();
-				if (std::abs(rp.y()) > 1e-6 || std::abs(rp.z()) > 1e-6 ||
-					std::abs(std::abs(rp.quat().r()) - 1.0) > 1e-9)
-					MRPT_LOG_WARN_STREAM(
-						where << "right camera pose " << rp
-							  << " is not a pure x translation: KITTI keeps only the baseline " << baseline);
-				if (!(baseline > 0))
-					throw DatasetError(where + "right camera is not to the right of the left one (x = " +
-									   std::to_string(baseline) + " m)");
-			}
-			else if (
-				st->leftCamera.intrinsicParams != left.intrinsicParams ||
-				st->rightCamera.intrinsicParams != right.intrinsicParams ||
-				st->leftCamera.ncols != left.ncols || st->leftCamera.nrows != left.nrows ||
-				rp.x() != baseline)
-				throw DatasetError(
-					where + "calibration differs from frame 0 (a KITTI sequence has one calibration)");
-			const cv::Mat& L = st->imageLeft.asCvMatRef();
-			const cv::Mat& R = st->imageRight.asCvMatRef();
-			if (uint32_t(L.cols) != left.ncols || uint32_t(L.rows) != left.nrows ||
-				L.size() != R.size())
-				throw DatasetError(
-					where + "image sizes " + std::to_string(L.cols) + "x" + std::to_string(L.rows) + " / " +
-					std::to_string(R.cols) + "x" + std::to_string(R.rows) + " do not match the calibration " +
-					std::to_string(left.ncols) + "x" + std::to_string(left.nrows));
-			char name[32];
-			std::snprintf(name, sizeof(name), "%06zu.png", i);
-			for (auto [img, sub] : {std::pair{&L, "image_2"}, std::pair{&R, "image_3"}})
-			{
-				const std::string file = (staging / sub / name).string();
-				if (!cv::imwrite(file, *img))
-					throw DatasetError(where + "cannot write '" + file + "'");
-			}
-			times.push_back(mrpt::Clock::toDouble(st->timestamp));
-			if (options.progressEvery > 0 && times.size() % options.progressEvery == 0)
-				MRPT_LOG_INFO_FMT(
-					"  %5.1f%%  %zu frames exported", 100.0 * reader.progress(), times.size());
+			left = fr.camera.leftCamera;
+			right = fr.camera.rightCamera;
+			baseline = fr.calib.baseline;
 		}
+		const cv::Mat& L = fr.left;
+		const cv::Mat& R = fr.right;
+		if (uint32_t(L.cols) != left.ncols || uint32_t(L.rows) != left.nrows)
+			throw DatasetError(
+				where + "image size " + std::to_string(L.cols) + "x" + std::to_string(L.rows) +
+				" does not match the calibration " + std::to_string(left.ncols) + "x" +
+				std::to_string(left.nrows));
+		char name[32];
+		std::snprintf(name, sizeof(name), "%06zu.png", i);
+		for (auto [img, sub] : {std::pair{&L, "image_2"}, std::pair{&R, "image_3"}})
+		{
+			const std::string file = (staging / sub / name).string();
+			if (!cv::imwrite(file, *img)) throw DatasetError(where + "cannot write '" + file + "'");
+		}
+		times.push_back(fr.timestamp);
+		if (options.progressEvery > 0 && times.size() % options.progressEvery == 0)
+			MRPT_LOG_INFO_FMT("  %5.1f%%  %zu frames exported", 100.0 * source.progress(), times.size());
 	}
-	if (times.empty())
-	{
-		std::string labels;
-		for (const auto& l : otherLabels) labels += (labels.empty() ? "" : ", ") + ("'" + l + "'");
-		throw DatasetError(
-			"'" + inRawlog + "': no stereo observations labelled '" + options.sensorLabel +
-			"' (other labels: " + (labels.empty() ? "none" : labels) + ")");
-	}
+	if (times.empty()) throw DatasetError(source.noFramesMessage());
 
 	// Poses: the ground-truth pose nearest in time to each frame.
 	std::string poses;
@@ -455,8 +424,8 @@ KittiExporter::TResult KittiExporter::run(const std::string& inRawlog, const std
 		for (size_t i = 0; i < times.size(); i++)
 		{
 			auto it = std::lower_bound(
-				gt.begin(), gt.end(), times[i], [](const TTimedPose& p, double t) { return p.t < t; });
-			const TTimedPose* best = nullptr;
+				gt.begin(), gt.end(), times[i], [](const io::TStampedPose& p, double t) { return p.t < t; });
+			const io::TStampedPose* best = nullptr;
 			if (it != gt.end()) best = &*it;
 			if (it != gt.begin() && (!best || times[i] - std::prev(it)->t < best->t - times[i]))
 				best = &*std::prev(it);
@@ -468,7 +437,7 @@ KittiExporter::TResult KittiExporter::run(const std::string& inRawlog, const std
 					options.gtTimeTolerance);
 				throw DatasetError(std::string(msg) + "'" + options.groundTruthTum + "'");
 			}
-			poses += poseTo34(best->pose) + "\n";
+			poses += poseTo34(best->T) + "\n";
 		}
 	}
 

@@ -1,46 +1,15 @@
 /* ShadyLoc — trajectory error metrics. */
-#include <shadyloc/datasets/Tum.h>
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/geometry/PoseSolver.h>
-#include <shadyloc/io/AtomicFile.h>
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
 namespace shadyloc::eval
 {
-// TUM parsing and writing live in datasets/Tum; here only the conversion
-// between MRPT poses and the Eigen isometries the metrics use.
-Trajectory readTum(const std::string& path)
-{
-	Trajectory out;
-	for (const auto& p : datasets::readTum(path))
-	{
-		TStampedPose s;
-		s.t = p.t;
-		s.T.matrix() = p.pose.getHomogeneousMatrixVal<mrpt::math::CMatrixDouble44>().asEigen();
-		out.push_back(s);
-	}
-	std::stable_sort(out.begin(), out.end(), [](const auto& a, const auto& b) { return a.t < b.t; });
-	return out;
-}
-
-void writeTum(const std::string& path, const Trajectory& traj)
-{
-	datasets::TTrajectory out;
-	for (const auto& s : traj)
-	{
-		mrpt::math::CMatrixDouble44 m;
-		m.asEigen() = s.T.matrix();
-		out.push_back({s.t, mrpt::poses::CPose3D(m)});
-	}
-	datasets::writeTum(path, out);
-}
-
 std::vector<std::pair<size_t, size_t>> associate(const Trajectory& gt, const Trajectory& est, double maxDt)
 {
 	std::vector<std::pair<size_t, size_t>> out;

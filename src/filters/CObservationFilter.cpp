@@ -6,6 +6,7 @@
 #include <mrpt/serialization/CArchive.h>
 #include <mrpt/system/string_utils.h>
 
+#include <algorithm>
 #include <sstream>
 #include <stdexcept>
 
@@ -43,6 +44,32 @@ std::string CObservationFilter::optionsAsIni() const
 	w.value("sensor_labels", common.sensor_labels);
 	specificOptionsAsIni(s);
 	return s.str();
+}
+
+std::string CObservationFilter::describe() const
+{
+	// The specific options, comments dropped, on one line.
+	std::ostringstream s;
+	specificOptionsAsIni(s);
+	std::istringstream in(s.str());
+	std::string line, out;
+	while (std::getline(in, line))
+	{
+		line = mrpt::system::trim(line);
+		if (line.empty() || line[0] == ';' || line[0] == '#') continue;
+		line.erase(std::remove(line.begin(), line.end(), ' '), line.end());
+		out += (out.empty() ? "" : " ") + line;
+	}
+	return out;
+}
+
+bool CObservationFilter::sameImagesAs(const CObservationFilter& o) const
+{
+	if (GetRuntimeClass() != o.GetRuntimeClass()) return false;
+	std::ostringstream a, b;
+	specificOptionsAsIni(a);
+	o.specificOptionsAsIni(b);
+	return a.str() == b.str();
 }
 
 bool CObservationFilter::accepts(const mrpt::obs::CObservation& obs) const

@@ -25,6 +25,7 @@ FilterPipeline FilterPipeline::Default()
 	FilterPipeline p;
 	p.filters.push_back(CFilterMonochrome::Create());
 	p.filters.push_back(CFilterInvariant::Create());
+	p.labels = {"mono", "invariant"};
 	return p;
 }
 
@@ -39,6 +40,7 @@ FilterPipeline FilterPipeline::FromConfigFile(const std::string& iniPath)
 FilterPipeline FilterPipeline::FromConfig(
 	const mrpt::config::CConfigFileBase& cfg, const std::string& what)
 {
+	std::vector<std::string> sections;
 	try
 	{
 		core::SettingsSection top(cfg, kPipelineSection, what);
@@ -46,12 +48,24 @@ FilterPipeline FilterPipeline::FromConfig(
 		top.read("pipeline", list);
 		top.finish();
 		if (list.empty()) top.fail("pipeline", "missing or empty");
-		std::vector<std::string> sections;
 		mrpt::system::tokenize(list, ", \t", sections);
 		// A section not in the pipeline would be ignored whole: a misspelling.
 		std::vector<std::string> known = {kPipelineSection};
 		known.insert(known.end(), sections.begin(), sections.end());
 		core::checkSections(cfg, known, "filter config (sections must be listed in [filters] pipeline)");
+	}
+	catch (const std::exception& e)
+	{
+		throw core::SettingsError(core::withSource(what, e.what()));
+	}
+	return FromSections(cfg, sections, what);
+}
+
+FilterPipeline FilterPipeline::FromSections(
+	const mrpt::config::CConfigFileBase& cfg, const std::vector<std::string>& sections, const std::string& what)
+{
+	try
+	{
 		FilterPipeline p;
 		for (const auto& sect : sections)
 		{
@@ -65,6 +79,7 @@ FilterPipeline FilterPipeline::FromConfig(
 			if (!f) s.fail("class", "'" + cls + "' is not a registered observation filter");
 			f->loadFromConfig(cfg, sect);
 			p.filters.push_back(f);
+			p.labels.push_back(sect);
 		}
 		return p;
 	}
@@ -79,11 +94,16 @@ std::string FilterPipeline::asIni() const
 	std::ostringstream s, list;
 	for (size_t i = 0; i < filters.size(); i++)
 	{
-		const std::string sect = "filter" + std::to_string(i);
+		const std::string sect = label(i);
 		list << (i ? " " : "") << sect;
 		s << "\n[" << sect << "]\n" << filters[i]->optionsAsIni();
 	}
 	return "[" + std::string(kPipelineSection) + "]\npipeline = " + list.str() + "\n" + s.str();
+}
+
+std::string FilterPipeline::label(size_t i) const
+{
+	return i < labels.size() && !labels[i].empty() ? labels[i] : "filter" + std::to_string(i);
 }
 
 RawlogFilterProcessor::RawlogFilterProcessor() : mrpt::system::COutputLogger("shadyloc.filter") {}

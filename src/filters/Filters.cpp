@@ -88,6 +88,12 @@ void CFilterInvariant::onOptionsChanged()
 	m_transform = std::make_shared<image::InvariantTransform>(m_params);
 }
 
+bool CFilterInvariant::sameImagesAs(const CObservationFilter& o) const
+{
+	const auto* other = dynamic_cast<const CFilterInvariant*>(&o);
+	return other && m_params.sameImageAs(other->m_params);
+}
+
 void CFilterInvariant::transformImage(const cv::Mat& in, cv::Mat& out) const
 {
 	requireColour(in);

@@ -29,7 +29,8 @@ RawlogReader::RawlogReader(const std::string& path) : m_path(path)
 	m_totalBytes = fs::file_size(path, ec);
 	std::string err;
 	if (!m_in.open(path, err)) throw RawlogError("'" + path + "': cannot open: " + err);
-	mrpt::img::CImage::setImagesPathBase(imagesDirFor(path));
+	// Not CImage::setImagesPathBase(): that is one folder for the whole process.
+	m_imagesDir = fs::absolute(imagesDirFor(path), ec).lexically_normal().string();
 }
 
 std::string RawlogReader::where(const std::string& what) const
@@ -51,6 +52,7 @@ mrpt::serialization::CSerializable::Ptr RawlogReader::next()
 		auto arch = mrpt::serialization::archiveFrom(m_in);
 		auto obj = arch.ReadObject();
 		if (!obj) throw RawlogError(where("null object stored"));
+		for (const auto& o : observationsIn(obj)) resolveExternalImages(*o, m_imagesDir);
 		return obj;
 	}
 	catch (const mrpt::serialization::CExceptionEOF&)
@@ -101,6 +103,25 @@ std::vector<mrpt::obs::CObservation::Ptr> observationsIn(
 	else if (auto o = std::dynamic_pointer_cast<CObservation>(obj))
 		out.push_back(o);
 	return out;
+}
+
+void resolveExternalImages(mrpt::obs::CObservation& obs, const std::string& imagesDir)
+{
+	using namespace mrpt::obs;
+	auto resolve = [&](mrpt::img::CImage& img) {
+		if (!img.isExternallyStored()) return;
+		const std::string name = img.getExternalStorageFile();
+		if (name.empty() || fs::path(name).is_absolute()) return;
+		img.setExternalStorage((fs::path(imagesDir) / name).lexically_normal().string());
+	};
+	if (auto* st = dynamic_cast<CObservationStereoImages*>(&obs))
+	{
+		resolve(st->imageLeft);
+		resolve(st->imageRight);
+		resolve(st->imageDisparity);
+	}
+	else if (auto* im = dynamic_cast<CObservationImage*>(&obs))
+		resolve(im->image);
 }
 
 void loadExternalImages(mrpt::obs::CObservation& obs)

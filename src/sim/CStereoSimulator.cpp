@@ -1,7 +1,7 @@
 /* ShadyLoc simulator — rendering, exposure, noise, rawlog output. */
-#include <shadyloc/datasets/Tum.h>
 #include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/io/Rawlog.h>
+#include <shadyloc/io/Tum.h>
 #include <shadyloc/sim/CStereoSimulator.h>
 #include <shadyloc/sim/Noise.h>
 
@@ -350,7 +350,7 @@ void CStereoSimulator::generate(const std::string& rawlogPath, const std::string
 	const int n = frames > 0 ? frames : m_trav.frames;
 	m_prevGain = 0;
 	io::RawlogWriter writer(rawlogPath);
-	datasets::TTrajectory groundTruth;
+	io::Trajectory groundTruth;
 	const auto t0 = std::chrono::steady_clock::now();
 	// Compressing and writing frame i (~20 ms, one thread) overlaps with
 	// rendering frame i+1; at most one write is in flight (the writer is not
@@ -362,7 +362,7 @@ void CStereoSimulator::generate(const std::string& rawlogPath, const std::string
 		auto obs = makeObservation(f);
 		if (pending.valid()) pending.get();
 		pending = std::async(std::launch::async, [&writer, obs] { writer.write(*obs); });
-		groundTruth.push_back({f.timestamp, f.T_world_left});
+		groundTruth.push_back({f.timestamp, io::toIsometry(f.T_world_left)});
 		if (onFrame) onFrame(f);
 		const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 		MRPT_LOG_THROTTLE_INFO_STREAM(
@@ -370,7 +370,7 @@ void CStereoSimulator::generate(const std::string& rawlogPath, const std::string
 							 << " frames/s)");
 	}
 	if (pending.valid()) pending.get();
-	datasets::writeTum(
+	io::writeTum(
 		tumPath, groundTruth,
 		"ground truth of " + std::filesystem::path(rawlogPath).filename().string() + " (traversal " + m_trav.name +
 			"): T_world_left, pose of the LEFT camera (z forward, x right, y down) in the world (x east, y north, "

@@ -4,7 +4,7 @@
 #include "TestSupport.h"
 
 #include <shadyloc/io/AtomicFile.h>
-#include <shadyloc/vo/SyntheticCorridor.h>
+#include <shadyloc/sim/SyntheticCorridor.h>
 
 #include <cmath>
 #include <cstdint>
@@ -34,12 +34,12 @@ std::string corridorFile(const std::string& dir, int frames, double speed)
 
 TStereoSequence renderCorridor(int frames, double speed)
 {
-	const vo::SyntheticCorridor corridor;
+	const sim::SyntheticCorridor corridor;
 	TStereoSequence s;
 	s.calib = corridor.calib();
 	for (int k = 0; k < frames; k++)
 	{
-		const Eigen::Isometry3d T = vo::SyntheticCorridor::examplePose(k, speed);
+		const Eigen::Isometry3d T = sim::SyntheticCorridor::examplePose(k, speed);
 		cv::Mat l, r;
 		corridor.render(T, l, r, static_cast<uint32_t>(k));
 		s.left.push_back(l);
@@ -82,7 +82,7 @@ TStereoSequence readCorridorFile(const std::string& path, int frames, double spe
 			"'" + path + "': missing or not a corridor fixture of " + std::to_string(frames) +
 			" frames (its ctest fixture setup, TestFixtures.WriteCorridorSequences, did not run?)");
 	TStereoSequence s;
-	s.calib = vo::SyntheticCorridor().calib();
+	s.calib = sim::SyntheticCorridor().calib();
 	for (int k = 0; k < frames; k++)
 	{
 		cv::Mat l(hdr[2], hdr[1], CV_8UC3), r(hdr[2], hdr[1], CV_8UC3);
@@ -92,7 +92,7 @@ TStereoSequence readCorridorFile(const std::string& path, int frames, double spe
 		s.left.push_back(l);
 		s.right.push_back(r);
 		s.t.push_back(0.1 * k);
-		s.T_world_left.push_back(vo::SyntheticCorridor::examplePose(k, speed));
+		s.T_world_left.push_back(sim::SyntheticCorridor::examplePose(k, speed));
 	}
 	return s;
 }

@@ -30,7 +30,7 @@ struct TStereoSequence
 /** SHADYLOC_FIXTURE_DIR, or "" outside ctest. */
 std::string fixtureDir();
 
-/** The synthetic corridor (vo::SyntheticCorridor, default options) along
+/** The synthetic corridor (sim::SyntheticCorridor, default options) along
  * examplePose(k, speed), k < frames, pixel noise seeded by k. t[k] = 0.1 k. */
 const TStereoSequence& corridorSequence(int frames, double speed);
 /** Writes the corridor sequences the fixture provides into `dir` (the

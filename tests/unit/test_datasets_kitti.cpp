@@ -1,7 +1,7 @@
 /* ShadyLoc tests: KITTI layout -> rawlog -> KITTI layout, and bad input. */
 #include <shadyloc/datasets/Kitti.h>
-#include <shadyloc/datasets/Tum.h>
 #include <shadyloc/io/Rawlog.h>
+#include <shadyloc/io/Tum.h>
 
 #include "../support/TestSupport.h"
 
@@ -289,12 +289,16 @@ TEST_P(DatasetsKittiRoundTrip, ImagesBitExactPosesToPrintPrecision)
 	// the left camera, so no offset is added the second time.
 	const std::string rawlog2 = dir + "/seq2.rawlog";
 	const auto res2 = imp.run(rootB, "00", rawlog2);
-	const auto g1 = readTum(res.groundTruthPath), g2 = readTum(res2.groundTruthPath);
+	const auto g1 = shadyloc::io::readTum(res.groundTruthPath), g2 = shadyloc::io::readTum(res2.groundTruthPath);
 	ASSERT_EQ(g1.size(), g2.size());
 	for (size_t i = 0; i < g1.size(); i++)
 	{
 		EXPECT_NEAR(g1[i].t, g2[i].t, 5e-8);	// 100 ns clock ticks
-		for (int k = 0; k < 3; k++) EXPECT_NEAR(g1[i].pose[k], g2[i].pose[k], 2e-9 * (1 + std::abs(g1[i].pose[k])));
+		for (int k = 0; k < 3; k++)
+		{
+			const double a = g1[i].T.translation()[k], b = g2[i].T.translation()[k];
+			EXPECT_NEAR(a, b, 2e-9 * (1 + std::abs(a)));
+		}
 	}
 }
 INSTANTIATE_TEST_SUITE_P(InlineAndExternalImages, DatasetsKittiRoundTrip, ::testing::Bool());
@@ -309,12 +313,12 @@ TEST(DatasetsKitti, KittiPrintPrecisionPosesSurvive)
 	KittiImporter imp;
 	imp.setMinLoggingLevel(mrpt::system::LVL_WARN);
 	const auto res = imp.run(dir + "/A", "00", dir + "/s.rawlog");
-	const auto gt = readTum(res.groundTruthPath);
+	const auto gt = shadyloc::io::readTum(res.groundTruthPath);
 	ASSERT_EQ(gt.size(), 3u);
 	for (size_t i = 0; i < gt.size(); i++)
 		for (int r = 0; r < 3; r++)
 			for (int c = 0; c < 3; c++)
-				EXPECT_NEAR(gt[i].pose.getRotationMatrix()(r, c), g_poses[i][r * 4 + c], 3e-6);
+				EXPECT_NEAR(gt[i].T.linear()(r, c), g_poses[i][r * 4 + c], 3e-6);
 }
 
 TEST(DatasetsKitti, BadInputNamesTheCulpritAndLeavesNothing)
@@ -415,7 +419,7 @@ TEST(DatasetsKitti, ExportErrorsLeaveNoSequence)
 	EXPECT_FALSE(fs::exists(dir + "/out"));
 
 	// Ground truth that does not cover frame 2 (t = 1000.2 s).
-	TTrajectory gt = {{1000.0, {}}, {1000.1, {}}};
+	shadyloc::io::Trajectory gt = {{1000.0, {}}, {1000.1, {}}};
 	writeTum(dir + "/gt.tum", gt);
 	exp.options.sensorLabel = "CAMERA";
 	exp.options.groundTruthTum = dir + "/gt.tum";
@@ -432,7 +436,7 @@ TEST(DatasetsKitti, ExportErrorsLeaveNoSequence)
 
 	// Complete ground truth: 3 frames, poses written; the synthetic images
 	// (BGR in the rawlog) come out as the same decoded pixels.
-	gt.push_back({1000.2, mrpt::poses::CPose3D(1, 0, 0, 0, 0, 0)});
+	gt.push_back({1000.2, shadyloc::io::toIsometry(mrpt::poses::CPose3D(1, 0, 0, 0, 0, 0))});
 	writeTum(dir + "/gt.tum", gt);
 	const auto r = exp.run(rawlog, dir + "/out");
 	EXPECT_EQ(r.frames, 3u);

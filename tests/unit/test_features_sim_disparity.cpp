@@ -3,9 +3,10 @@
  * them), and the known high bias of far landmarks must not grow
  * (docs/vo.md, "The scale bias: far landmarks' disparity is biased high"). */
 #include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/filters/Channel.h>
 #include <shadyloc/sim/CStereoSimulator.h>
 #include <shadyloc/sim/SimOptions.h>
-#include <shadyloc/vo/Channel.h>
+#include <shadyloc/vo/ChannelOptions.h>
 
 #include "../support/TestSupport.h"
 
@@ -23,8 +24,8 @@ TEST(FeaturesSimDisparity, NearDisparityUnbiasedAgainstRenderedDepth)
 	sim::CStereoSimulator s(o);
 	s.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	mrpt::config::CConfigFile cfg(std::string(SHADYLOC_SOURCE_DIR) + "/config/vo_sim.ini");
-	const auto conv = vo::ChannelConverter::FromConfig(cfg, "mono");
-	const features::StereoFeatureExtractor ex(vo::featureOptionsFor(cfg, vo::Channel::Mono));
+	const auto conv = filters::channelFromConfig(cfg, "mono", "config/vo_sim.ini");
+	const features::StereoFeatureExtractor ex(vo::featureOptionsFor(cfg, "mono"));
 	// Sums over measurements within 1 px of the truth, near (D >= 4 px, Z < 12 m) and far (D < 4 px).
 	double sumNear = 0, sumSqNear = 0, sumFar = 0;
 	int nNear = 0, nFar = 0, nAll = 0, nGross = 0;

@@ -3,7 +3,7 @@
 #include <shadyloc/features/Brief.h>
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/image/ColourTransforms.h>
-#include <shadyloc/vo/SyntheticCorridor.h>
+#include <shadyloc/sim/SyntheticCorridor.h>
 
 #include "../support/TestSupport.h"
 
@@ -293,8 +293,8 @@ TEST(FeaturesStereo, SyntheticDisparityHonoursPrincipalPointOffset)
 	// by s px to the right, as if its principal point were at cx + s (doffs = s,
 	// Middlebury's convention): measured uL - uR shrink by s, some turn
 	// negative, yet the true disparity D = uL - uR + doffs must come out.
-	const vo::SyntheticCorridor corridor;
-	const Eigen::Isometry3d T = vo::SyntheticCorridor::examplePose(0);
+	const sim::SyntheticCorridor corridor;
+	const Eigen::Isometry3d T = sim::SyntheticCorridor::examplePose(0);
 	cv::Mat l, r, l8, r8;
 	corridor.render(T, l, r, 0);
 	image::toMonochrome(l, l8, image::ChannelOrder::BGR);

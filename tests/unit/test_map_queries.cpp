@@ -6,7 +6,7 @@
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/map/SurveyBuilder.h>
-#include <shadyloc/vo/SyntheticCorridor.h>
+#include <shadyloc/sim/SyntheticCorridor.h>
 
 #include "../support/TestSupport.h"
 #include "test_map_support.h"
@@ -254,13 +254,13 @@ namespace
 {
 void writeCorridorRawlog(const std::string& rawlog, const std::string& gtTum, int n)
 {
-	vo::SyntheticCorridor corridor;
+	sim::SyntheticCorridor corridor;
 	const auto c = corridor.calib();
 	io::RawlogWriter w(rawlog);
 	eval::Trajectory gt;
 	for (int k = 0; k < n; k++)
 	{
-		const Eigen::Isometry3d T = vo::SyntheticCorridor::examplePose(k, 0.25);
+		const Eigen::Isometry3d T = sim::SyntheticCorridor::examplePose(k, 0.25);
 		cv::Mat l, r;
 		corridor.render(T, l, r, k);
 		mrpt::obs::CObservationStereoImages obs;

@@ -4,7 +4,7 @@
 #include "../support/TestSupport.h"
 
 #include <shadyloc/io/Rawlog.h>
-#include <shadyloc/datasets/Tum.h>
+#include <shadyloc/io/Tum.h>
 #include <shadyloc/sim/CStereoSimulator.h>
 
 #include <gtest/gtest.h>
@@ -83,7 +83,7 @@ TEST(SimGeometry, MarkersProjectWhereGroundTruthSays)
 	CStereoSimulator sim(o);
 	sim.generate(dir + "/g.rawlog", dir + "/g.tum");
 
-	const auto tum = shadyloc::datasets::readTum(dir + "/g.tum");
+	const auto tum = shadyloc::io::readTum(dir + "/g.tum");
 	ASSERT_EQ(tum.size(), 6u);
 	shadyloc::io::RawlogReader reader(dir + "/g.rawlog");
 	mrpt::obs::CObservationStereoImages::Ptr obs;
@@ -102,7 +102,7 @@ TEST(SimGeometry, MarkersProjectWhereGroundTruthSays)
 	const cv::Mat right = obs->imageRight.asCvMat<cv::Mat>(mrpt::img::SHALLOW_COPY);
 	ASSERT_EQ(left.type(), CV_8UC3);
 
-	const mrpt::poses::CPose3D T_world_left = tum[kFrame].pose;
+	const mrpt::poses::CPose3D T_world_left = shadyloc::io::toCPose3D(tum[kFrame].T);
 	// The renderer's own material labels, rendered from the pose read back
 	// from the TUM file: free of the shading of the marker (its shadowed
 	// lower half is darker, which biases the colour detection below by a

@@ -2,7 +2,8 @@
  * trajectory error metrics. */
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/io/Rawlog.h>
-#include <shadyloc/vo/SyntheticCorridor.h>
+#include <shadyloc/io/Tum.h>
+#include <shadyloc/sim/SyntheticCorridor.h>
 
 #include "../support/Sequences.h"
 #include "../support/TestSupport.h"
@@ -25,10 +26,10 @@ void writeCorridorRawlog(const std::string& rawlog, const std::string& gtTum, in
 	const auto& c = seq.calib;
 	io::RawlogWriter w(rawlog);
 	eval::Trajectory gt;
-	const Eigen::Isometry3d T0inv = vo::SyntheticCorridor::examplePose(0).inverse();
+	const Eigen::Isometry3d T0inv = sim::SyntheticCorridor::examplePose(0).inverse();
 	for (int k = 0; k < n; k++)
 	{
-		const Eigen::Isometry3d T = vo::SyntheticCorridor::examplePose(k);
+		const Eigen::Isometry3d T = sim::SyntheticCorridor::examplePose(k);
 		const cv::Mat &l = seq.left.at(k), &r = seq.right.at(k);
 		mrpt::obs::CObservationStereoImages obs;
 		obs.sensorLabel = "CAMERA";
@@ -46,7 +47,7 @@ void writeCorridorRawlog(const std::string& rawlog, const std::string& gtTum, in
 		gt.push_back({t, T0inv * T});
 	}
 	w.commit();
-	eval::writeTum(gtTum, gt);
+	io::writeTum(gtTum, gt);
 }
 
 double extract(const std::string& text, const std::string& re)
@@ -75,7 +76,7 @@ TEST(VOApp, VoAndTrajErrorOnRawlogBothChannels)
 			0)
 			<< out;
 		EXPECT_NE(out.find("converted on the fly"), std::string::npos) << out;
-		const auto est = eval::readTum(traj);
+		const auto est = io::readTum(traj);
 		ASSERT_EQ(est.size(), 30u);
 		// The stats CSV: a header and one line per frame, all tracked here.
 		std::ifstream f(stats);
@@ -115,7 +116,7 @@ TEST(VOApp, UsesFilteredChannelWhenPresent)
 		test::runCommand(test::appPath() + " vo -i " + filt + " --channel invariant -o " + dir + "/t.tum", &out), 0)
 		<< out;
 	EXPECT_NE(out.find("filtered observations 'CAMERA_inv'"), std::string::npos) << out;
-	EXPECT_EQ(eval::readTum(dir + "/t.tum").size(), 8u);
+	EXPECT_EQ(io::readTum(dir + "/t.tum").size(), 8u);
 	// The filter record says which transform made the images: the same one as
 	// the (default) config here, so no warning ...
 	EXPECT_NE(out.find("invariant images made with the config's parameters"), std::string::npos) << out;

@@ -4,10 +4,10 @@
  * once made the simulator's morning_low_sun mono run give 1.11 % in one run
  * and 1.86 % in another; these tests compare whole runs exactly. */
 #include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/filters/Channel.h>
 #include <shadyloc/io/Rawlog.h>
-#include <shadyloc/vo/Channel.h>
+#include <shadyloc/sim/SyntheticCorridor.h>
 #include <shadyloc/vo/StereoVO.h>
-#include <shadyloc/vo/SyntheticCorridor.h>
 
 #include "../support/Sequences.h"
 #include "../support/TestSupport.h"
@@ -59,10 +59,10 @@ __attribute__((noinline)) void poisonStack(uint8_t byte)
 
 /** The whole sequence; the stack is poisoned with `poison` right before every
  * frame, where process()'s locals will live. */
-std::vector<vo::TFrameResult> run(vo::Channel ch, uint8_t poison)
+std::vector<vo::TFrameResult> run(const std::string& ch, uint8_t poison)
 {
 	const auto& s = frames();
-	const vo::ChannelConverter conv(ch);
+	const auto conv = filters::defaultChannel(ch);
 	vo::StereoVO v;
 	v.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	std::vector<vo::TFrameResult> out;
@@ -88,7 +88,7 @@ std::string slurp(const std::string& path)
 
 TEST(VODeterminism, SameInputGivesBitIdenticalPosesInProcess)
 {
-	for (const auto ch : {vo::Channel::Mono, vo::Channel::Invariant})
+	for (const std::string ch : {"mono", "invariant"})
 	{
 		// Different garbage on the stack in each run: 0xFF bytes are NaN
 		// floats, 0x00 bytes zeros, 0x7F huge values; an uninitialised read
@@ -104,17 +104,17 @@ TEST(VODeterminism, SameInputGivesBitIdenticalPosesInProcess)
 			for (const auto* o : {&b[k], &c[k]})
 			{
 				// Exact equality: the same arithmetic on the same data.
-				EXPECT_EQ(a[k].status, o->status) << vo::toString(ch) << " frame " << k;
-				EXPECT_EQ(a[k].stereo, o->stereo) << vo::toString(ch) << " frame " << k;
-				EXPECT_EQ(a[k].tracked, o->tracked) << vo::toString(ch) << " frame " << k;
-				EXPECT_EQ(a[k].inliers, o->inliers) << vo::toString(ch) << " frame " << k;
+				EXPECT_EQ(a[k].status, o->status) << ch << " frame " << k;
+				EXPECT_EQ(a[k].stereo, o->stereo) << ch << " frame " << k;
+				EXPECT_EQ(a[k].tracked, o->tracked) << ch << " frame " << k;
+				EXPECT_EQ(a[k].inliers, o->inliers) << ch << " frame " << k;
 				EXPECT_TRUE(a[k].T_world_curr.matrix() == o->T_world_curr.matrix())
-					<< vo::toString(ch) << " frame " << k << ": max difference "
+					<< ch << " frame " << k << ": max difference "
 					<< (a[k].T_world_curr.matrix() - o->T_world_curr.matrix()).cwiseAbs().maxCoeff();
 			}
 		}
 		// The comparison means something only if the VO actually tracked.
-		EXPECT_GE(tracked, a.size() - 1) << vo::toString(ch);
+		EXPECT_GE(tracked, a.size() - 1) << ch;
 	}
 }
 

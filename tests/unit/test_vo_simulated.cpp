@@ -3,9 +3,10 @@
  * exposure, ~0.8 m per frame): KITTI-style drift of both channels with the
  * configuration made for the simulator's camera (config/vo_sim.ini). */
 #include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/filters/Channel.h>
 #include <shadyloc/sim/CStereoSimulator.h>
 #include <shadyloc/sim/SimOptions.h>
-#include <shadyloc/vo/Channel.h>
+#include <shadyloc/vo/ChannelOptions.h>
 #include <shadyloc/vo/StereoVO.h>
 
 #include "../support/Sequences.h"
@@ -39,10 +40,10 @@ TSimSequence render(const std::string& traversal)
 	return seq;
 }
 
-eval::TTrajectoryErrors runVO(const TSimSequence& seq, vo::Channel ch, size_t* tracked)
+eval::TTrajectoryErrors runVO(const TSimSequence& seq, const std::string& ch, size_t* tracked)
 {
 	mrpt::config::CConfigFile cfg(std::string(SHADYLOC_SOURCE_DIR) + "/config/vo_sim.ini");
-	const auto conv = vo::ChannelConverter::FromConfig(cfg, vo::toString(ch));
+	const auto conv = filters::channelFromConfig(cfg, ch, "config/vo_sim.ini");
 	vo::StereoVO v(vo::voOptionsFor(cfg, ch), vo::featureOptionsFor(cfg, ch));
 	v.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	eval::Trajectory est;
@@ -81,8 +82,8 @@ TEST_P(VOSimulated, ShortTraversalDriftBothChannels)
 	const std::string trav = GetParam();
 	const auto seq = render(trav);
 	size_t trMono = 0, trInv = 0;
-	const auto em = runVO(seq, vo::Channel::Mono, &trMono);
-	const auto ei = runVO(seq, vo::Channel::Invariant, &trInv);
+	const auto em = runVO(seq, "mono", &trMono);
+	const auto ei = runVO(seq, "invariant", &trInv);
 	std::printf(
 		"[ sim VO ] %s 512x384, %.1f m: mono %.2f %% %.4f deg/m (%zu tracked), invariant %.2f %% "
 		"%.4f deg/m (%zu tracked)\n",

@@ -1,9 +1,10 @@
 /* Tests of the stereo VO on a ray-cast textured corridor with known poses:
  * accuracy on both channels, keyframe chain, and robustness to a blank frame. */
 #include <shadyloc/eval/TrajectoryError.h>
-#include <shadyloc/vo/Channel.h>
+#include <shadyloc/filters/Channel.h>
+#include <shadyloc/sim/SyntheticCorridor.h>
+#include <shadyloc/vo/ChannelOptions.h>
 #include <shadyloc/vo/StereoVO.h>
-#include <shadyloc/vo/SyntheticCorridor.h>
 
 #include "../support/Sequences.h"
 #include "../support/TestSupport.h"
@@ -54,11 +55,11 @@ struct TRun
 
 /** Runs the VO on the sequence in one channel; `blank` frames get a flat grey pair. */
 TRun runVO(
-	vo::Channel ch, const std::vector<int>& blank = {}, const vo::TStereoVOOptions& opts = {})
+	const std::string& ch, const std::vector<int>& blank = {}, const vo::TStereoVOOptions& opts = {})
 {
 	const auto& s = sequence();
 	// Synthetic colours are linear already: no linearisation.
-	const vo::ChannelConverter conv(ch);
+	const auto conv = filters::defaultChannel(ch);
 	vo::StereoVO vo(opts);
 	vo.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	TRun run;
@@ -99,7 +100,7 @@ void printRun(const char* name, const TRun& run, const eval::TTrajectoryErrors& 
 
 TEST(VOSynthetic, MonoTranslationalErrorBelowOnePercent)
 {
-	const TRun run = runVO(vo::Channel::Mono);
+	const TRun run = runVO("mono");
 	for (const auto& f : run.frames)
 		EXPECT_TRUE(vo::isTracked(f.status)) << "frame " << f.frame << ": " << vo::toString(f.status);
 	const auto e = eval::computeErrors(sequence().gt, run.est);
@@ -136,7 +137,7 @@ TEST(VOSynthetic, MonoTranslationalErrorBelowOnePercent)
 
 TEST(VOSynthetic, InvariantTranslationalErrorBelowThreePercent)
 {
-	const TRun run = runVO(vo::Channel::Invariant);
+	const TRun run = runVO("invariant");
 	int tracked = 0;
 	for (const auto& f : run.frames) tracked += vo::isTracked(f.status);
 	const auto e = eval::computeErrors(sequence().gt, run.est);
@@ -149,7 +150,7 @@ TEST(VOSynthetic, InvariantTranslationalErrorBelowThreePercent)
 TEST(VOSynthetic, BlankFrameIsReportedAndTrackingResumes)
 {
 	// Frame 20 blank (lens cap, dropped exposure): no features at all.
-	const TRun run = runVO(vo::Channel::Mono, {20});
+	const TRun run = runVO("mono", {20});
 	const auto& f20 = run.frames[20];
 	EXPECT_EQ(f20.status, vo::FrameStatus::FewFeatures);
 	EXPECT_EQ(f20.stereo, 0u);
@@ -172,7 +173,7 @@ TEST(VOSynthetic, LongBlankGapIsBridgedByPrediction)
 	// Five blank frames in a row: each is reported; the next good frame is
 	// matched to the old keyframe in the wide window around the
 	// constant-velocity prediction.
-	const TRun run = runVO(vo::Channel::Mono, {10, 11, 12, 13, 14});
+	const TRun run = runVO("mono", {10, 11, 12, 13, 14});
 	for (int k = 10; k <= 14; k++) EXPECT_EQ(run.frames[k].status, vo::FrameStatus::FewFeatures) << k;
 	for (int k = 15; k < kFrames; k++) EXPECT_TRUE(vo::isTracked(run.frames[k].status)) << k;
 	// No wild pose anywhere: predictions over 0.5 m of travel stay within a
@@ -190,14 +191,14 @@ TEST(VOSynthetic, SceneChangeReinitialisesAChainSegment)
 	// cannot track, then starts a new keyframe (chain break) at the predicted
 	// pose and tracks on from it.
 	const auto& s = sequence();
-	vo::TCorridorOptions o;
+	sim::TCorridorOptions o;
 	o.seed = 2;
-	const vo::SyntheticCorridor other(o);
-	const vo::ChannelConverter conv(vo::Channel::Mono);
+	const sim::SyntheticCorridor other(o);
+	const auto conv = filters::defaultChannel("mono");
 	vo::StereoVO vo;
 	vo.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	std::vector<vo::TFrameResult> res;
-	const Eigen::Isometry3d T0 = vo::SyntheticCorridor::examplePose(0, kSpeed);
+	const Eigen::Isometry3d T0 = sim::SyntheticCorridor::examplePose(0, kSpeed);
 	for (int k = 0; k < 30; k++)
 	{
 		cv::Mat cl = s.left[k], cr = s.right[k], l, r;
@@ -243,7 +244,7 @@ TEST(VOSynthetic, MotionPriorReplacesConstantVelocity)
 	// identity prediction misses most landmarks (near wall points move tens
 	// of px per 0.3 m step); given the true motion as the prior, every frame tracks.
 	const auto& s = sequence();
-	const vo::ChannelConverter conv(vo::Channel::Invariant);
+	const auto conv = filters::defaultChannel("invariant");
 	vo::TStereoVOOptions o;
 	o.constant_velocity = false;
 	o.search_radius_px = o.search_radius_lost_px = 4;
@@ -281,23 +282,23 @@ TEST(VOSynthetic, LongerRunAtBumblebeeResolution)
 	// 20 m at 512x384 (f = 400 px, b = 0.12 m: the paper's Bumblebee2), 0.2 m
 	// per frame, both channels. Drift must stay under the goals over dozens
 	// of keyframes (about 0.1 % measured; the bounds are the task's goals).
-	vo::TCorridorOptions co;
+	sim::TCorridorOptions co;
 	co.width = 512;
 	co.height = 384;
 	co.fx = 400;
 	co.baseline = 0.12;
 	co.length = 100;
-	const vo::SyntheticCorridor corridor(co);
-	const vo::ChannelConverter cm(vo::Channel::Mono), ci(vo::Channel::Invariant);
+	const sim::SyntheticCorridor corridor(co);
+	const auto cm = filters::defaultChannel("mono"), ci = filters::defaultChannel("invariant");
 	vo::StereoVO vm, vi;
 	vm.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	vi.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	eval::Trajectory gt, em, ei;
-	const Eigen::Isometry3d T0inv = vo::SyntheticCorridor::examplePose(0, 0.2).inverse();
+	const Eigen::Isometry3d T0inv = sim::SyntheticCorridor::examplePose(0, 0.2).inverse();
 	int untracked = 0;
 	for (int k = 0; k < 100; k++)
 	{
-		const Eigen::Isometry3d T = vo::SyntheticCorridor::examplePose(k, 0.2);
+		const Eigen::Isometry3d T = sim::SyntheticCorridor::examplePose(k, 0.2);
 		cv::Mat l, r, a, b;
 		corridor.render(T, l, r, static_cast<uint32_t>(k));
 		cm.convert(l, a);
@@ -331,8 +332,8 @@ TEST(VOSynthetic, NearLandmarkPreferenceTracksAndKeepsAccuracy)
 	vo::TStereoVOOptions o;
 	o.near_min_disparity = 5;
 	o.near_min_matches = 40;
-	const TRun run = runVO(vo::Channel::Mono, {}, o);
-	const TRun all = runVO(vo::Channel::Mono);
+	const TRun run = runVO("mono", {}, o);
+	const TRun all = runVO("mono");
 	size_t used = 0, usedAll = 0;
 	for (size_t k = 0; k < run.frames.size(); k++)
 	{
@@ -353,8 +354,8 @@ TEST(VOSynthetic, PerChannelVOOptionsOverrideTheBaseSection)
 {
 	mrpt::config::CConfigFileMemory cfg(
 		"[vo]\nnear_min_disparity_px = 0\nmax_hamming = 70\n[vo.mono]\nnear_min_disparity_px = 3\n");
-	const auto m = vo::voOptionsFor(cfg, vo::Channel::Mono);
-	const auto i = vo::voOptionsFor(cfg, vo::Channel::Invariant);
+	const auto m = vo::voOptionsFor(cfg, "mono");
+	const auto i = vo::voOptionsFor(cfg, "invariant");
 	EXPECT_EQ(m.near_min_disparity, 3.0);
 	EXPECT_EQ(i.near_min_disparity, 0.0);
 	EXPECT_EQ(m.max_hamming, 70);  // base keys reach both channels
@@ -363,7 +364,7 @@ TEST(VOSynthetic, PerChannelVOOptionsOverrideTheBaseSection)
 	mrpt::config::CConfigFileMemory bad("[vo]\n[vo.mono]\nnear_min_matches = 2\n");
 	try
 	{
-		vo::voOptionsFor(bad, vo::Channel::Mono);
+		vo::voOptionsFor(bad, "mono");
 		ADD_FAILURE() << "near_min_matches < min_matches accepted";
 	}
 	catch (const std::invalid_argument& e)

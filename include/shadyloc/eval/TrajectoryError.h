@@ -6,6 +6,8 @@
  */
 #pragma once
 
+#include <shadyloc/io/Trajectory.h>
+
 #include <Eigen/Geometry>
 
 #include <string>
@@ -13,21 +15,14 @@
 
 namespace shadyloc::eval
 {
-struct TStampedPose
-{
-	double t = 0;  //!< [s]
-	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();  //!< pose of the sensor in the trajectory's frame
-};
-using Trajectory = std::vector<TStampedPose>;
-
-/** Reads a TUM file (`t tx ty tz qx qy qz qw`, '#' comments); throws naming
- * the file and line on a malformed line. */
-Trajectory readTum(const std::string& path);
-/** Writes a TUM file atomically (no half-written output). */
-void writeTum(const std::string& path, const Trajectory& traj);
+// The metrics work on the library's one trajectory type (io/Trajectory.h);
+// TUM files are read and written by io/Tum.h.
+using io::TStampedPose;
+using io::Trajectory;
 
 /** Pairs (gt index, est index) with |t_gt - t_est| <= maxDt, each estimate to
- * its nearest ground-truth stamp, in time order, one-to-one. */
+ * its nearest ground-truth stamp, in time order, one-to-one. Both must be in
+ * time order (io::sortByTime). */
 std::vector<std::pair<size_t, size_t>> associate(const Trajectory& gt, const Trajectory& est, double maxDt);
 
 struct TSegmentError

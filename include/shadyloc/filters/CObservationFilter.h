@@ -51,6 +51,13 @@ class CObservationFilter : public mrpt::serialization::CSerializable
 	 * loadFromConfig() reads back to the same values. */
 	std::string optionsAsIni() const;
 
+	/** One line: the options that decide the images (for logs and warnings). */
+	virtual std::string describe() const;
+	/** True if this filter makes the same images as `o` from the same input:
+	 * same class and image options (suffix, sensor labels, threading aside).
+	 * A map and a live run must agree on this, or their channels differ. */
+	virtual bool sameImagesAs(const CObservationFilter& o) const;
+
 	/** True if obs is a camera observation this filter should process. */
 	bool accepts(const mrpt::obs::CObservation& obs) const;
 

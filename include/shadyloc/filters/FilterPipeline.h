@@ -29,14 +29,25 @@ class FilterPipeline
 {
    public:
 	std::vector<CObservationFilter::Ptr> filters;
+	/** Each filter's .ini section: the name of the channel it makes
+	 * (filters/Channel.h). Empty, or one per filter. */
+	std::vector<std::string> labels;
 
-	/** The default: monochrome and invariant (paper's alpha, beta). */
+	/** The default: monochrome and invariant (paper's alpha, beta), labelled
+	 * "mono" and "invariant" as in config/filters.ini. */
 	static FilterPipeline Default();
 	/** Builds from an .ini file; throws naming the file, section and key. */
 	static FilterPipeline FromConfigFile(const std::string& iniPath);
 	static FilterPipeline FromConfig(const mrpt::config::CConfigFileBase& cfg, const std::string& what);
-	/** The exact options of every filter, as an .ini text FromConfig() reads. */
+	/** Builds the filters of the given sections, each by its `class` key. */
+	static FilterPipeline FromSections(
+		const mrpt::config::CConfigFileBase& cfg, const std::vector<std::string>& sections,
+		const std::string& what);
+	/** The exact options of every filter, as an .ini text FromConfig() reads
+	 * (sections named by the labels). */
 	std::string asIni() const;
+	/** labels[i], or "filter<i>" where there is none. */
+	std::string label(size_t i) const;
 };
 
 /** What a run of the processor did. */

@@ -34,6 +34,10 @@ class CFilterInvariant : public CObservationFilter
 	void setParams(const image::InvariantParams& p);
 	bool parallel_eyes = true;	//!< transform left and right on two threads
 
+	std::string describe() const override { return m_params.asString(); }
+	/** Same class and InvariantParams::sameImageAs (parallel_eyes aside). */
+	bool sameImagesAs(const CObservationFilter& o) const override;
+
 	void transformImages(const std::vector<cv::Mat>& in, std::vector<cv::Mat>& out) const override;
 	void transformImage(const cv::Mat& in, cv::Mat& out) const override;
 

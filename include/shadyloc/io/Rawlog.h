@@ -32,17 +32,26 @@ class RawlogError : public std::runtime_error
 std::string imagesDirFor(const std::string& rawlogPath);
 
 /** Reads top-level objects of a rawlog (either style: bare observations, or
- * CActionCollection/CSensoryFrame pairs) one at a time. */
+ * CActionCollection/CSensoryFrame pairs) one at a time.
+ *
+ * External images: each reader resolves the relative image names of its own
+ * objects against its own imagesDirFor(path), made absolute as each object is
+ * read (resolveExternalImages). MRPT's process-wide CImage images path is
+ * neither used nor changed, so two readers open at once (a survey and a live
+ * rawlog) never look up each other's images. */
 class RawlogReader
 {
    public:
-	/** Opens the file; sets CImage's external-image base to imagesDirFor(path)
-	 * (MRPT 2.5.8's own detection drops the separator). Throws RawlogError. */
+	/** Opens the file. Throws RawlogError. */
 	explicit RawlogReader(const std::string& path);
 
-	/** The next object, or nullptr at a clean end of file. Throws RawlogError
-	 * on an unregistered class, a truncated or corrupt object. */
+	/** The next object, or nullptr at a clean end of file; its observations'
+	 * external image names are absolute paths in imagesDir(). Throws
+	 * RawlogError on an unregistered class, a truncated or corrupt object. */
 	mrpt::serialization::CSerializable::Ptr next();
+
+	/** Absolute imagesDirFor(path()): where relative image names resolve. */
+	const std::string& imagesDir() const { return m_imagesDir; }
 
 	/** Index (0-based) of the object last returned by next(). */
 	size_t index() const { return m_count == 0 ? 0 : m_count - 1; }
@@ -54,7 +63,7 @@ class RawlogReader
 	std::string where(const std::string& what) const;
 
    private:
-	std::string m_path;
+	std::string m_path, m_imagesDir;
 	mrpt::io::CFileGZInputStream m_in;
 	size_t m_count = 0;
 	uint64_t m_totalBytes = 0;
@@ -64,6 +73,11 @@ class RawlogReader
  * is an observation, the members of a sensory frame, none for actions. */
 std::vector<mrpt::obs::CObservation::Ptr> observationsIn(
 	const mrpt::serialization::CSerializable::Ptr& obj);
+
+/** Rewrites every relative external image name of a camera observation
+ * (stereo: left, right, disparity; single image) to an absolute path in
+ * `imagesDir`; absolute names and inline images are left alone. */
+void resolveExternalImages(mrpt::obs::CObservation& obs, const std::string& imagesDir);
 
 /** Loads every image an observation stores externally, so a missing file
  * shows up here (with its path) rather than deep inside a filter. */

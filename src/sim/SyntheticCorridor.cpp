@@ -1,13 +1,13 @@
 /* ShadyLoc — ray-cast textured corridor for VO tests. */
 #include <shadyloc/sim/Noise.h>
-#include <shadyloc/vo/SyntheticCorridor.h>
+#include <shadyloc/sim/SyntheticCorridor.h>
 
 #include <opencv2/core.hpp>
 
 #include <cmath>
 #include <limits>
 
-namespace shadyloc::vo
+namespace shadyloc::sim
 {
 namespace
 {
@@ -136,4 +136,4 @@ Eigen::Isometry3d SyntheticCorridor::examplePose(int k, double speed)
 	return T;
 }
 
-}  // namespace shadyloc::vo
+}  // namespace shadyloc::sim

@@ -14,7 +14,7 @@
 
 #include <cstdint>
 
-namespace shadyloc::vo
+namespace shadyloc::sim
 {
 struct TCorridorOptions
 {
@@ -58,4 +58,4 @@ class SyntheticCorridor
 	TCorridorOptions m_o;
 };
 
-}  // namespace shadyloc::vo
+}  // namespace shadyloc::sim

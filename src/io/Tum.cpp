@@ -1,10 +1,10 @@
 /* ShadyLoc — TUM trajectory files. */
-#include <shadyloc/datasets/Tum.h>
 #include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/io/Tum.h>
 
+#include <mrpt/math/CMatrixFixed.h>
 #include <mrpt/math/CQuaternion.h>
-
-#include <Eigen/Geometry>
+#include <mrpt/poses/CPose3D.h>
 
 #include <cmath>
 #include <cstdio>
@@ -12,13 +12,13 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace shadyloc::datasets
+namespace shadyloc::io
 {
-TTrajectory readTum(const std::string& path)
+Trajectory readTum(const std::string& path)
 {
 	std::ifstream f(path);
 	if (!f) throw std::runtime_error("'" + path + "': cannot open TUM trajectory file");
-	TTrajectory out;
+	Trajectory out;
 	std::string line;
 	for (size_t n = 1; std::getline(f, line); n++)
 	{
@@ -41,30 +41,33 @@ TTrajectory readTum(const std::string& path)
 			throw std::runtime_error(
 				"'" + path + "':" + std::to_string(n) + ": quaternion norm " + std::to_string(norm) +
 				" is not 1 (is the order qx qy qz qw?)");
-		mrpt::math::CQuaternionDouble q(v[7] / norm, v[4] / norm, v[5] / norm, v[6] / norm);
-		out.push_back({v[0], mrpt::poses::CPose3D(q, v[1], v[2], v[3])});
+		// Through MRPT's quaternion-to-matrix, as the library always read TUM
+		// files: the same rotation bits as before the trajectory types merged.
+		const mrpt::math::CQuaternionDouble q(v[7] / norm, v[4] / norm, v[5] / norm, v[6] / norm);
+		const mrpt::poses::CPose3D pose(q, v[1], v[2], v[3]);
+		out.push_back({v[0], toIsometry(pose)});
 	}
 	return out;
 }
 
-std::string tumLine(const TTimedPose& p)
+std::string tumLine(const TStampedPose& p)
 {
 	// Straight from the rotation matrix (Eigen's Shepperd method), not via
 	// yaw/pitch/roll, which loses precision near pitch = +-90 deg.
-	const Eigen::Matrix3d R = p.pose.getRotationMatrix().asEigen();
-	Eigen::Quaterniond q(R);
+	Eigen::Quaterniond q(Eigen::Matrix3d(p.T.linear()));
 	q.normalize();
 	const double s = q.w() < 0 ? -1.0 : 1.0;	// q and -q: same rotation; print qw >= 0
+	const Eigen::Vector3d x = p.T.translation();
 	char buf[256];
 	std::snprintf(
-		buf, sizeof(buf), "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f", p.t, p.pose.x(), p.pose.y(),
-		p.pose.z(), s * q.x(), s * q.y(), s * q.z(), s * q.w());
+		buf, sizeof(buf), "%.9f %.9f %.9f %.9f %.9f %.9f %.9f %.9f", p.t, x.x(), x.y(), x.z(), s * q.x(),
+		s * q.y(), s * q.z(), s * q.w());
 	return buf;
 }
 
-void writeTum(const std::string& path, const TTrajectory& traj, const std::string& comment)
+void writeTum(const std::string& path, const Trajectory& traj, const std::string& comment)
 {
-	io::writeAtomically(path, [&](const std::string& tmp) {
+	writeAtomically(path, [&](const std::string& tmp) {
 		std::ofstream f(tmp);
 		if (!f) throw std::runtime_error("'" + path + "': cannot create TUM file");
 		if (!comment.empty()) f << "# " << comment << "\n";
@@ -75,4 +78,4 @@ void writeTum(const std::string& path, const TTrajectory& traj, const std::strin
 	});
 }
 
-}  // namespace shadyloc::datasets
+}  // namespace shadyloc::io

@@ -1,0 +1,107 @@
+/* ShadyLoc — the stereo frames of a rawlog, one at a time: the loop every
+ * command that walks a rawlog's stereo observations shares (VO, exporters,
+ * and later the survey and the localisers).
+ *
+ * It reads either rawlog style (bare observations, or sensory frames), picks
+ * one sensor label, loads external images (from this rawlog's own images
+ * folder), checks that the calibration and image size stay those of the first
+ * frame, and yields typed frames. Every error names the file, the object and
+ * the frame.
+ */
+#pragma once
+
+#include <shadyloc/geometry/StereoCamera.h>
+#include <shadyloc/io/Rawlog.h>
+
+#include <mrpt/img/TStereoCamera.h>
+#include <mrpt/obs/CObservationStereoImages.h>
+
+#include <opencv2/core/mat.hpp>
+
+#include <functional>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace shadyloc::io
+{
+/** One stereo frame. The images share pixels with the observation (no copy)
+ * unless a transform made new ones. */
+struct TStereoFrame
+{
+	size_t index = 0;  //!< 0-based among the frames of the chosen label
+	size_t object = 0;	//!< index of the rawlog object that held it
+	double timestamp = 0;  //!< [s] since the Unix epoch (mrpt::Clock::toDouble)
+	std::string sensorLabel;  //!< the observation's label
+	cv::Mat left, right;  //!< CV_8UC1 grey or CV_8UC3 colour (BGR, as MRPT stores it)
+	geometry::TStereoCalib calib;  //!< the rectified stereo model of the pair
+	mrpt::img::TStereoCamera camera;  //!< the calibration as stored (intrinsics, distortion, size, right pose)
+	mrpt::obs::CObservationStereoImages::Ptr obs;  //!< the observation itself
+};
+
+/** Which stereo observations to read, and what to do with their images. */
+struct TStereoFrameSourceOptions
+{
+	/** Read this label only. Empty: the label of the first stereo observation
+	 * that acceptLabel accepts (every label if acceptLabel is empty). */
+	std::string sensorLabel;
+	std::function<bool(const std::string& label)> acceptLabel;
+	/** Applied to (left, right) of every frame: in -> out, e.g. a channel's
+	 * filter run on the fly. An exception is rethrown naming the frame. */
+	std::function<void(const std::vector<cv::Mat>& in, std::vector<cv::Mat>& out)> transform;
+};
+
+/** Accepts labels ending in `suffix` and, if `base` is given, equal to
+ * base + suffix: picks a derived channel ("CAMERA_inv") by its suffix. */
+std::function<bool(const std::string&)> labelWithSuffix(const std::string& suffix, const std::string& base = "");
+/** Accepts labels that end in none of `suffixes`: the source cameras of a
+ * filtered rawlog, not their derived channels. */
+std::function<bool(const std::string&)> labelWithoutSuffixes(const std::vector<std::string>& suffixes);
+
+/** The label of the first stereo observation `accept` accepts within the
+ * first `maxObjects` objects of a rawlog, or "" if there is none. */
+std::string findStereoLabel(
+	const std::string& rawlogPath, const std::function<bool(const std::string&)>& accept,
+	size_t maxObjects = 200);
+
+class StereoFrameSource
+{
+   public:
+	/** Opens the rawlog (throws RawlogError naming it if missing). */
+	explicit StereoFrameSource(const std::string& rawlogPath, const TStereoFrameSourceOptions& opts = {});
+
+	/** The next frame into f; false at the end of the rawlog. Throws
+	 * RawlogError "'<file>': object #<k>: frame <i> (sensor '<label>'): ..."
+	 * on a missing right image, empty or mismatched images, a calibration or
+	 * image size other than the first frame's, a pair that is not rectified,
+	 * a failing transform, or any error of the reader. */
+	bool next(TStereoFrame& f);
+
+	/** The label being read ("" before the first frame if none was given). */
+	const std::string& sensorLabel() const { return m_label; }
+	size_t frames() const { return m_frames; }	//!< frames yielded so far
+	/** Labels of the other observations seen (for "no frames" messages). */
+	const std::set<std::string>& otherLabels() const { return m_otherLabels; }
+	double progress() const { return m_reader.progress(); }	 //!< fraction of the file read
+	const std::string& path() const { return m_reader.path(); }
+	const RawlogReader& reader() const { return m_reader; }
+
+	/** "'<path>': no stereo observations [labelled 'X'] (other labels: ...)":
+	 * the message for a rawlog that gave no frames. */
+	std::string noFramesMessage() const;
+
+   private:
+	RawlogReader m_reader;
+	TStereoFrameSourceOptions m_opts;
+	std::string m_label;
+	size_t m_frames = 0;
+	std::set<std::string> m_otherLabels;
+	std::vector<mrpt::obs::CObservation::Ptr> m_pending;  //!< rest of the current sensory frame
+	size_t m_pendingObject = 0;
+	// The first frame's, which every later frame must match.
+	mrpt::img::TStereoCamera m_camera;
+	geometry::TStereoCalib m_calib;
+	cv::Size m_size;
+};
+
+}  // namespace shadyloc::io

@@ -1,0 +1,62 @@
+/* ShadyLoc tests: the area graph of docs/architecture.md. Every
+ * `#include <shadyloc/<area>/...>` in include/shadyloc/<a>/ and src/<a>/ must
+ * name <a> itself or an area <a> may use; a new dependency is a decision to
+ * write into the document (and here), not an accident. */
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <string>
+
+namespace fs = std::filesystem;
+
+TEST(ArchitectureAreaGraph, OnlyAllowedIncludes)
+{
+	// docs/architecture.md, "Area graph".
+	const std::map<std::string, std::set<std::string>> allowed = {
+		{"image", {}},
+		{"geometry", {}},
+		{"io", {"geometry"}},
+		{"features", {"geometry"}},
+		{"filters", {"image", "io"}},
+		{"vo", {"features", "geometry"}},
+		{"eval", {"geometry", "io"}},
+		{"sim", {"geometry", "io"}},
+		{"datasets", {"io"}},
+		{"render", {"io"}},
+		{"core", {"filters"}},
+	};
+	const fs::path root(SHADYLOC_SOURCE_DIR);
+	const std::regex inc(R"(^\s*#\s*include\s*<shadyloc/([a-z_]+)/)");
+	size_t files = 0;
+	for (const auto& dir : {root / "include" / "shadyloc", root / "src"})
+		for (const auto& areaDir : fs::directory_iterator(dir))
+		{
+			if (!areaDir.is_directory()) continue;
+			const std::string area = areaDir.path().filename().string();
+			if (area == "apps") continue;  // the apps wire every area
+			const auto it = allowed.find(area);
+			ASSERT_NE(it, allowed.end()) << "area '" << area << "' is not in docs/architecture.md's area graph";
+			for (const auto& f : fs::recursive_directory_iterator(areaDir.path()))
+			{
+				if (!f.is_regular_file()) continue;
+				files++;
+				std::ifstream in(f.path());
+				std::string line;
+				for (int n = 1; std::getline(in, line); n++)
+				{
+					std::smatch m;
+					if (!std::regex_search(line, m, inc)) continue;
+					const std::string to = m[1];
+					// core (registration, library-wide services) is there for every area.
+					EXPECT_TRUE(to == area || to == "core" || it->second.count(to))
+						<< f.path().string() << ":" << n << ": area '" << area << "' includes '" << to
+						<< "', which docs/architecture.md's area graph does not allow";
+				}
+			}
+		}
+	EXPECT_GT(files, 50u);	// the walk found the sources
+}
