@@ -13,6 +13,7 @@ packages=(
   mrpt-apps                      # rawlog-edit, RawLogViewer (integration tests)
   libopencv-dev libeigen3-dev
   libgtest-dev libbenchmark-dev
+  gnuplot-nox                    # calibrate-alpha draws its curve with it
   libegl-mesa0 libgl1-mesa-dri   # headless offscreen rendering (EGL/Mesa)
 )
 

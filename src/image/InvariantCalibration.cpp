@@ -473,7 +473,7 @@ TAlphaCurve alphaFromSameView(
 	s.validate();
 	TAlphaCurve out;
 	out.method = "same-view";
-	out.costName = "step between the two lights relative to texture (geometric mean over pairs)";
+	out.costName = "median change of the unit-norm invariant between the lights (geometric mean over pairs)";
 	out.alpha = s.grid();
 	const auto L = logTable(in);
 	const auto ci = indices(in.order);
@@ -509,9 +509,22 @@ TAlphaCurve alphaFromSameView(
 					p.name + " (" + std::to_string(xa.size()) + " trusted pixels changed colour; need 500)");
 			continue;
 		}
-		const size_t every = (xa.size() + kMaxPixelsPerItem - 1) / kMaxPixelsPerItem;
-		thin(xa, every), thin(ya, every), thin(xb, every), thin(yb, every);
-		perPair.push_back(relativeStepCurve(xa, ya, xb, yb, out.alpha));
+		// Distance of each change (dx, dy) from the line through the origin
+		// along (1, alpha): |dy - alpha dx| / sqrt(1 + alpha^2), the change of
+		// the unit-norm invariant. Its median over the pixels is a robust
+		// line fit. Unlike a step relative to texture it is not biased
+		// towards alphas that happen to show more texture, and isotropic
+		// noise weighs the same at every alpha.
+		std::vector<float> d(xa.size());
+		std::vector<double> curve(out.alpha.size());
+		for (size_t j = 0; j < out.alpha.size(); j++)
+		{
+			const float al = float(out.alpha[j]), norm = 1.0f / std::sqrt(1.0f + al * al);
+			for (size_t i = 0; i < xa.size(); i++)
+				d[i] = std::abs((yb[i] - ya[i]) - al * (xb[i] - xa[i])) * norm;
+			curve[j] = std::log(std::max(1e-9, quantile(d, 0.5)));
+		}
+		perPair.push_back(std::move(curve));
 	}
 	if (perPair.empty())
 		throw std::invalid_argument(

@@ -26,9 +26,11 @@
  *    middle 90 % of the data, as they do.
  *  - same view, different light: image pairs of one view under two lights
  *    (two traversals of a route at the same pose, a stereo eye re-shot under
- *    another lamp). alpha making the two invariant images agree, measured as
- *    the step between them relative to texture over the pixels whose
- *    chromaticity changed.
+ *    another lamp). alpha making the two invariant images agree: the median
+ *    change of the unit-norm invariant over the pixels whose chromaticity
+ *    changed.
+ *  - edges (unsupervised, ours): the direction in which edges move the
+ *    chromaticity as they get darker; see alphaByEdgeDirections().
  * And the 8-bit mapping (scale, offset): robust percentiles of I over the
  * calibration images (calibrateMapping()).
  */
@@ -176,13 +178,14 @@ struct TSameViewPair
 	cv::Mat a, b;  //!< 8-bit colour, same size
 };
 
-/** alpha minimising the geometric mean over pairs of the step between the two
- * invariant images relative to the texture of the first
- * (relativeShadowStepOfValues() on I * 255) over the pixels trusted in both
- * whose log-chromaticity (x, y) moved by more than minChromaChange (log
- * units): pixels whose light did not change carry no information. Intensity
- * changes (exposure) cancel in I and need no care. Pairs with fewer than 500
- * such pixels are skipped (named in *skipped). */
+/** alpha minimising the geometric mean over pairs of the median change of
+ * the unit-norm invariant (y - alpha x) / sqrt(1 + alpha^2) between the two
+ * images: the perpendicular distance of each pixel's chromaticity change
+ * from the illuminant line (1, alpha), a robust line fit through the origin.
+ * Pixels: trusted in both images, chromaticity (x, y) moved by more than
+ * minChromaChange (log units; those whose light did not change carry no
+ * information). Intensity changes (exposure) cancel in I. Pairs with fewer
+ * than 500 such pixels are skipped (named in *skipped). */
 TAlphaCurve alphaFromSameView(
 	const std::vector<TSameViewPair>& pairs, const TCalibrationInput& in, const TAlphaSearch& s = {},
 	double minChromaChange = 0.03, std::vector<std::string>* skipped = nullptr);
