@@ -409,7 +409,7 @@ TAlphaCurve alphaByEdgeDirections(const TEdgeSamples& smp, const TAlphaSearch& s
 	s.validate();
 	TAlphaCurve out;
 	out.method = "edges";
-	out.costName = "-(density of edge chromaticity-step directions at (1, alpha)) (mean over images)";
+	out.costName = "-(density of edge directions at (1, alpha)), mean over images";
 	out.alpha = s.grid();
 	// Direction of the chromaticity step, signed so that it points the way
 	// the brightness drops: across a shadow edge it is +(1, alpha) (darker =
