@@ -14,6 +14,7 @@ packages=(
   libopencv-dev libeigen3-dev
   libzstd-dev                    # keyframe map compression
   libgtest-dev libbenchmark-dev
+  gnuplot-nox                    # calibrate-alpha draws its curve with it
   libegl-mesa0 libgl1-mesa-dri   # headless offscreen rendering (EGL/Mesa)
 )
 

@@ -53,16 +53,24 @@ ShadowStep relativeShadowStep(const cv::Mat& chFree, const cv::Mat& chShadow, co
 {
 	if (chFree.type() != CV_8U || chShadow.type() != CV_8U || mask.type() != CV_8U)
 		throw std::invalid_argument("relativeShadowStep: needs 8-bit single-channel images");
-	std::vector<double> steps, values;
+	std::vector<double> freeValues, shadowValues;
 	for (int y = 0; y < mask.rows; y++)
 		for (int x = 0; x < mask.cols; x++)
 			if (mask.at<uint8_t>(y, x))
 			{
-				const double f = chFree.at<uint8_t>(y, x), s = chShadow.at<uint8_t>(y, x);
-				steps.push_back(std::abs(s - f));
-				values.push_back(f);
+				freeValues.push_back(chFree.at<uint8_t>(y, x));
+				shadowValues.push_back(chShadow.at<uint8_t>(y, x));
 			}
+	return relativeShadowStepOfValues(freeValues, shadowValues);
+}
+
+ShadowStep relativeShadowStepOfValues(const std::vector<double>& values, const std::vector<double>& shadow)
+{
+	if (values.size() != shadow.size())
+		throw std::invalid_argument("relativeShadowStep: free and shadow value counts differ");
 	if (values.size() < 100) throw std::invalid_argument("relativeShadowStep: shadow mask too small");
+	std::vector<double> steps(values.size());
+	for (size_t i = 0; i < values.size(); i++) steps[i] = std::abs(shadow[i] - values[i]);
 	const double med = median(values);
 	std::vector<double> dev(values.size());
 	for (size_t i = 0; i < values.size(); i++) dev[i] = std::abs(values[i] - med);

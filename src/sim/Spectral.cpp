@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 namespace shadyloc::sim
 {
@@ -105,6 +106,37 @@ Rgb response(
 {
 	return {integrate3(sens[0], E, rho, step), integrate3(sens[1], E, rho, step),
 			integrate3(sens[2], E, rho, step)};
+}
+
+double blackBodyReferenceAlpha(
+	const std::array<Spectrum, 3>& sens, const WavelengthGrid& g, const std::vector<Spectrum>& reflectances,
+	double T_min, double T_max, int n)
+{
+	if (!(T_min > 500 && T_min < T_max && n >= 2))
+		throw std::invalid_argument("reference alpha: need 500 < T_min < T_max and n >= 2");
+	std::vector<Spectrum> refl = reflectances;
+	if (refl.empty()) refl.emplace_back(g.size(), 1.0);
+	std::vector<Spectrum> E;
+	for (int i = 0; i < n; i++)
+	{
+		const double mired = 1.0 / T_max + (1.0 / T_min - 1.0 / T_max) * i / (n - 1);
+		E.push_back(planckian(g, 1.0 / mired));
+	}
+	double cxy = 0, cxx = 0;
+	for (const auto& rho : refl)
+	{
+		std::vector<double> xs, ys;
+		for (const auto& e : E)
+		{
+			const Rgb r = response(sens, e, rho, g.step_nm);
+			xs.push_back(std::log(r[0] / r[2]));
+			ys.push_back(std::log(r[1] / r[2]));
+		}
+		double mx = 0, my = 0;
+		for (int i = 0; i < n; i++) mx += xs[i] / n, my += ys[i] / n;
+		for (int i = 0; i < n; i++) cxy += (xs[i] - mx) * (ys[i] - my), cxx += (xs[i] - mx) * (xs[i] - mx);
+	}
+	return cxy / cxx;
 }
 
 }  // namespace shadyloc::sim

@@ -6,6 +6,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include <algorithm>
+#include <vector>
 
 namespace shadyloc::image
 {
@@ -37,5 +38,10 @@ struct ShadowStep
 	double relative() const { return step / std::max(1.0, spread); }
 };
 ShadowStep relativeShadowStep(const cv::Mat& channelFree, const cv::Mat& channelShadow, const cv::Mat& mask);
+
+/** The same metric on the channel's values at the mask pixels (free[i] and
+ * shadow[i] at one pixel), for channels that are not 8-bit images (the alpha
+ * calibration evaluates it on float invariants). Needs >= 100 values. */
+ShadowStep relativeShadowStepOfValues(const std::vector<double>& freeValues, const std::vector<double>& shadowValues);
 
 }  // namespace shadyloc::image

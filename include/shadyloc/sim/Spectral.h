@@ -85,4 +85,17 @@ Rgb response(
 	const std::array<Spectrum, 3>& sens, const Spectrum& illuminant, const Spectrum& reflectance,
 	double step_nm);
 
+/** Reference alpha of a camera for the invariant I = log R2 - alpha log R1 -
+ * (1 - alpha) log R3 (beta = 1 - alpha): the alpha minimising the variance of
+ * I over black-body illuminants from T_min to T_max (Planck's law, n
+ * temperatures uniform in reciprocal temperature, the scale on which the
+ * Wien term moves log responses), pooled over the given reflectances (their
+ * within-reflectance variances summed; a flat reflectance if none). Closed
+ * form: with x = log(R1/R3), y = log(R2/R3), I = y - alpha x, so
+ * alpha = sum cov(x, y) / sum var(x). Unlike the peak-wavelength formula it
+ * accounts for the sensors' bandwidth. */
+double blackBodyReferenceAlpha(
+	const std::array<Spectrum, 3>& sens, const WavelengthGrid& g, const std::vector<Spectrum>& reflectances = {},
+	double T_min_K = 2500.0, double T_max_K = 20000.0, int n = 64);
+
 }  // namespace shadyloc::sim

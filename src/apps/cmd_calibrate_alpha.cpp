@@ -1,0 +1,415 @@
+/* shadyloc calibrate-alpha: alpha (beta = 1 - alpha) and the 8-bit mapping of
+ * the invariant transform from data (docs/calibration.md). */
+#include "Command.h"
+
+#include <shadyloc/filters/Filters.h>
+#include <shadyloc/image/InvariantCalibration.h>
+#include <shadyloc/io/Rawlog.h>
+
+#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <mrpt/obs/CObservationImage.h>
+#include <mrpt/obs/CObservationStereoImages.h>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <regex>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using namespace shadyloc::image;
+
+namespace
+{
+cv::Mat readColour(const std::string& path)
+{
+	if (!fs::is_regular_file(path)) throw std::runtime_error("'" + path + "': no such image file");
+	const cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
+	if (img.empty()) throw std::runtime_error("'" + path + "': cannot read image");
+	if (img.type() != CV_8UC3)
+		throw std::runtime_error(
+			"'" + path + "': needs an 8-bit 3-channel colour image (got " + std::to_string(img.channels()) +
+			" channel(s), depth " + std::to_string(img.depth()) + ")");
+	return img;
+}
+
+std::pair<std::string, std::string> splitComma(const std::string& s, const std::string& opt)
+{
+	const auto c = s.find(',');
+	if (c == std::string::npos || c == 0 || c + 1 == s.size())
+		throw std::invalid_argument(opt + ": expected two paths separated by ',', got '" + s + "'");
+	return {s.substr(0, c), s.substr(c + 1)};
+}
+
+bool isImageFile(const fs::path& p)
+{
+	auto e = p.extension().string();
+	std::transform(e.begin(), e.end(), e.begin(), [](unsigned char c) { return std::tolower(c); });
+	return e == ".png" || e == ".jpg" || e == ".jpeg" || e == ".ppm" || e == ".bmp" || e == ".tif" || e == ".tiff";
+}
+
+/** <stem>_free.<ext> with <stem>_shadow*.<ext> beside it. */
+std::vector<TShadowPair> pairsInDir(const std::string& dir)
+{
+	if (!fs::is_directory(dir)) throw std::runtime_error("--pairs '" + dir + "': not a directory");
+	std::vector<fs::path> files;
+	for (const auto& e : fs::directory_iterator(dir))
+		if (e.is_regular_file() && isImageFile(e.path())) files.push_back(e.path());
+	std::sort(files.begin(), files.end());
+	const std::regex re("(.+)_shadow[^.]*");
+	std::vector<TShadowPair> pairs;
+	for (const auto& f : files)
+	{
+		std::smatch m;
+		const std::string stem = f.stem().string();
+		if (!std::regex_match(stem, m, re)) continue;
+		const fs::path freePath = f.parent_path() / (m[1].str() + "_free" + f.extension().string());
+		if (!fs::exists(freePath))
+			throw std::runtime_error("--pairs: '" + f.string() + "' has no '" + freePath.filename().string() + "' beside it");
+		pairs.push_back({stem, readColour(freePath.string()), readColour(f.string())});
+	}
+	if (pairs.empty())
+		throw std::runtime_error("--pairs '" + dir + "': no <name>_free.<ext> / <name>_shadow*.<ext> image pairs");
+	return pairs;
+}
+
+std::vector<cv::Mat> framesOfRawlog(const std::string& path, const std::string& label, int maxFrames, int every)
+{
+	std::vector<cv::Mat> out;
+	shadyloc::io::RawlogReader reader(path);
+	int seen = 0;
+	while (auto obj = reader.next())
+	{
+		for (const auto& obs : shadyloc::io::observationsIn(obj))
+		{
+			if (!label.empty() && obs->sensorLabel != label) continue;
+			std::vector<const mrpt::img::CImage*> eyes;
+			if (auto* st = dynamic_cast<mrpt::obs::CObservationStereoImages*>(obs.get()))
+				eyes.push_back(&st->imageLeft);
+			else if (auto* im = dynamic_cast<mrpt::obs::CObservationImage*>(obs.get()))
+				eyes.push_back(&im->image);
+			else
+				continue;
+			if (seen++ % every != 0) continue;
+			shadyloc::io::loadExternalImages(*obs);
+			const cv::Mat& m = eyes[0]->asCvMatRef();
+			if (m.type() != CV_8UC3)
+				throw std::runtime_error(reader.where(
+					"sensor '" + obs->sensorLabel + "': needs 8-bit colour images, this one has " +
+					std::to_string(m.channels()) + " channel(s)"));
+			out.push_back(m.clone());
+			if (maxFrames > 0 && int(out.size()) >= maxFrames) return out;
+		}
+	}
+	if (out.empty())
+		throw std::runtime_error(
+			"'" + path + "': no camera observations" + (label.empty() ? "" : " labelled '" + label + "'"));
+	return out;
+}
+
+std::string fmt(double v, int prec = 4)
+{
+	std::ostringstream s;
+	s << std::fixed << std::setprecision(prec) << v;
+	return s.str();
+}
+
+/** Files written to temporaries first and renamed into place together at
+ * the end: a failure leaves none of them. */
+class OutputSet
+{
+   public:
+	~OutputSet()
+	{
+		for (const auto& f : m_files)
+		{
+			std::error_code ec;
+			fs::remove(f.first, ec);
+		}
+	}
+	/** Path to write `dst`'s content to now (same directory and extension). */
+	std::string stage(const std::string& dst)
+	{
+		const fs::path d(dst);
+		const auto tmp = (d.parent_path() / (d.stem().string() + ".tmp" + d.extension().string())).string();
+		m_files.emplace_back(tmp, dst);
+		return tmp;
+	}
+	void commit()
+	{
+		for (const auto& [tmp, dst] : m_files)
+			if (!fs::exists(tmp)) throw std::runtime_error("'" + dst + "' was not written");
+		for (const auto& [tmp, dst] : m_files) fs::rename(tmp, dst);
+		m_files.clear();
+	}
+
+   private:
+	std::vector<std::pair<std::string, std::string>> m_files;
+};
+
+void writeText(const std::string& path, const std::string& text)
+{
+	std::ofstream f(path);
+	f << text;
+	f.close();
+	if (!f) throw std::runtime_error("'" + path + "': cannot write");
+}
+
+/** The curves (one panel per method) as a PNG through gnuplot. */
+void plotCurves(
+	const std::vector<TAlphaCurve>& curves, const std::string& csvPath, const std::string& pngPath,
+	const std::string& scriptPath, double defaultAlpha, const std::string& title)
+{
+	std::ostringstream g;
+	g << "set terminal pngcairo size 900," << 300 * curves.size() << " font 'sans,10'\n"
+	  << "set output '" << pngPath << "'\n"
+	  << "set datafile separator ','\n"
+	  << "set multiplot layout " << curves.size() << ",1 title \"" << title << "\"\n"
+	  << "set xlabel 'alpha (beta = 1 - alpha)'\nset grid\nset key top right\n";
+	for (size_t i = 0; i < curves.size(); i++)
+	{
+		const auto& c = curves[i];
+		g << "unset object\nunset arrow\n"
+		  << "set ylabel \"" << c.method << "\"\n"
+		  << "set title \"" << c.method << ": " << c.costName << "; alpha = " << fmt(c.best, 3);
+		if (c.bootstrapRounds > 0) g << ", 95% interval [" << fmt(c.ciLow, 3) << ", " << fmt(c.ciHigh, 3) << "]";
+		g << " (" << c.items << (c.method == "entropy" || c.method == "edges" ? " images" : " pairs") << ")\"\n";
+		if (c.bootstrapRounds > 0 && c.ciHigh > c.ciLow)
+			g << "set object 1 rect from " << c.ciLow << ", graph 0 to " << c.ciHigh
+			  << ", graph 1 fc rgb '#cce0ff' fs solid 0.6 noborder behind\n";
+		g << "set arrow 1 from " << c.best << ", graph 0 to " << c.best << ", graph 1 nohead lc rgb '#0050c0' lw 2\n"
+		  << "set arrow 2 from " << defaultAlpha << ", graph 0 to " << defaultAlpha
+		  << ", graph 1 nohead lc rgb '#c03000' dt 2 lw 1.5\n"
+		  << "plot '" << csvPath << "' using 1:" << (i + 2) << " every ::1 with lines lw 2 lc rgb '#202020' title '"
+		  << c.method << "', NaN with lines lc rgb '#0050c0' lw 2 title 'estimate', "
+		  << "NaN with lines lc rgb '#c03000' dt 2 title 'default alpha " << fmt(defaultAlpha, 3) << "'\n";
+	}
+	g << "unset multiplot\n";
+	writeText(scriptPath, g.str());
+	const std::string cmd = "gnuplot '" + scriptPath + "' 2>&1";
+	std::string output;
+	FILE* p = popen(cmd.c_str(), "r");
+	if (!p) throw std::runtime_error("cannot start gnuplot");
+	char buf[512];
+	while (fgets(buf, sizeof buf, p)) output += buf;
+	const int rc = pclose(p);
+	if (rc != 0)
+	{
+		if (output.find("not found") != std::string::npos || WEXITSTATUS(rc) == 127)
+			throw std::runtime_error(
+				"gnuplot is needed to draw the curve (Debian package gnuplot-nox, installed by "
+				"scripts/setup.sh); or pass --no-plot");
+		throw std::runtime_error("gnuplot failed drawing '" + pngPath + "':\n" + output);
+	}
+}
+
+int run(int argc, char** argv)
+{
+	TCLAP::CmdLine cmd(
+		"Calibrates the illumination-invariant transform of a camera from data: alpha (with beta = 1 - alpha), "
+		"from shadow/no-shadow pairs, from same-view pairs under different light, or unsupervised from ordinary "
+		"images/a rawlog (entropy minimisation); then the 8-bit mapping (scale, offset). Writes OUT.ini (an "
+		"[invariant] section for config/filters.ini), OUT_curve.csv and OUT_curve.png.",
+		' ', "0.1");
+	TCLAP::ValueArg<std::string> pairsDir(
+		"", "pairs", "directory of <name>_free.<ext> / <name>_shadow*.<ext> pairs of one view", false, "", "dir", cmd);
+	TCLAP::MultiArg<std::string> pair("", "pair", "one shadow pair FREE,SHADOW (repeatable)", false, "free,shadow", cmd);
+	TCLAP::MultiArg<std::string> sameView(
+		"", "same-view", "two pixel-aligned images of one view under different light A,B (repeatable)", false, "a,b",
+		cmd);
+	TCLAP::MultiArg<std::string> images("", "image", "an ordinary image (repeatable; entropy method)", false, "file", cmd);
+	TCLAP::ValueArg<std::string> imagesDir("", "images", "a directory of ordinary images (entropy method)", false, "", "dir", cmd);
+	TCLAP::ValueArg<std::string> rawlog("", "rawlog", "a rawlog; left/colour images (entropy method)", false, "", "file", cmd);
+	TCLAP::ValueArg<std::string> sensor("", "sensor", "only this sensor label of --rawlog", false, "", "label", cmd);
+	TCLAP::ValueArg<int> maxFrames("", "max-frames", "at most this many rawlog frames (0 = all)", false, 200, "n", cmd);
+	TCLAP::ValueArg<int> every("", "every", "use every n-th rawlog frame", false, 1, "n", cmd);
+	std::vector<std::string> methods{"auto", "pairs", "same-view", "edges", "entropy"};
+	TCLAP::ValuesConstraint<std::string> methodC(methods);
+	TCLAP::ValueArg<std::string> method(
+		"", "method", "which estimate goes into OUT.ini (auto: pairs, else same-view, else edges)", false, "auto",
+		&methodC, cmd);
+	TCLAP::ValueArg<std::string> lin(
+		"", "linearise", "REQUIRED: the camera's transfer curve, none|srgb|gamma (an input, not estimated)", true, "",
+		"mode", cmd);
+	TCLAP::ValueArg<double> gamma("", "gamma", "exponent for --linearise gamma", false, 2.2, "g", cmd);
+	TCLAP::ValueArg<std::string> order("", "channel-order", "memory order of the images (files: bgr)", false, "bgr", "bgr|rgb", cmd);
+	TCLAP::ValueArg<int> minCode("", "min-code", "skip pixels with a channel below this code (dark)", false, 8, "v", cmd);
+	TCLAP::ValueArg<int> maxCode("", "max-code", "skip pixels with a channel at/above this code (saturated)", false, 250, "v", cmd);
+	TCLAP::ValueArg<double> skipTop("", "skip-top", "fraction of top rows to ignore (sky)", false, 0.0, "f", cmd);
+	TCLAP::ValueArg<int> edgeStep(
+		"", "edge-step", "edges method: pixels between the two sides of an edge (> chroma blur)", false, 4, "px", cmd);
+	TCLAP::ValueArg<int> stride("", "stride", "sample every n-th pixel in x and y", false, 2, "n", cmd);
+	TCLAP::ValueArg<double> aMin("", "alpha-min", "search range, low end", false, 0.05, "a", cmd);
+	TCLAP::ValueArg<double> aMax("", "alpha-max", "search range, high end", false, 0.95, "a", cmd);
+	TCLAP::ValueArg<double> step("", "step", "grid step of alpha", false, 0.005, "s", cmd);
+	TCLAP::ValueArg<int> boot("", "bootstrap", "bootstrap rounds over images for the interval (0 = none)", false, 200, "n", cmd);
+	TCLAP::ValueArg<double> tail("", "tail", "share of pixels clipped at each end of the 8-bit mapping", false, 0.002, "q", cmd);
+	TCLAP::SwitchArg noPlot("", "no-plot", "do not draw OUT_curve.png (no gnuplot needed)", cmd);
+	TCLAP::ValueArg<std::string> out("o", "output", "output prefix: OUT.ini, OUT_curve.csv, OUT_curve.png", true, "", "OUT", cmd);
+	cmd.parse(argc, argv);
+
+	TCalibrationInput in;
+	in.linearisation = parseLinearisation(lin.getValue());
+	in.gamma = gamma.getValue();
+	in.order = parseChannelOrder(order.getValue());
+	in.minCode = minCode.getValue();
+	in.maxCode = maxCode.getValue();
+	in.skipTopFraction = skipTop.getValue();
+	in.stride = stride.getValue();
+	in.validate();
+	TAlphaSearch search;
+	search.alphaMin = aMin.getValue();
+	search.alphaMax = aMax.getValue();
+	search.step = step.getValue();
+	search.bootstrapRounds = boot.getValue();
+	search.validate();
+	if (every.getValue() < 1) throw std::invalid_argument("--every must be >= 1");
+	const fs::path outDir = fs::path(out.getValue()).parent_path();
+	if (!outDir.empty() && !fs::is_directory(outDir))
+		throw std::runtime_error("-o '" + out.getValue() + "': directory '" + outDir.string() + "' does not exist");
+
+	// ---- inputs
+	std::vector<TShadowPair> shadowPairs;
+	if (pairsDir.isSet()) shadowPairs = pairsInDir(pairsDir.getValue());
+	for (const auto& s : pair.getValue())
+	{
+		const auto [f, sh] = splitComma(s, "--pair");
+		shadowPairs.push_back({fs::path(sh).stem().string(), readColour(f), readColour(sh)});
+	}
+	std::vector<TSameViewPair> viewPairs;
+	for (const auto& s : sameView.getValue())
+	{
+		const auto [a, b] = splitComma(s, "--same-view");
+		viewPairs.push_back({fs::path(a).stem().string() + "/" + fs::path(b).stem().string(), readColour(a), readColour(b)});
+	}
+	std::vector<cv::Mat> plain;
+	for (const auto& f : images.getValue()) plain.push_back(readColour(f));
+	if (imagesDir.isSet())
+	{
+		if (!fs::is_directory(imagesDir.getValue()))
+			throw std::runtime_error("--images '" + imagesDir.getValue() + "': not a directory");
+		std::vector<fs::path> files;
+		for (const auto& e : fs::directory_iterator(imagesDir.getValue()))
+			if (e.is_regular_file() && isImageFile(e.path())) files.push_back(e.path());
+		std::sort(files.begin(), files.end());
+		if (files.empty()) throw std::runtime_error("--images '" + imagesDir.getValue() + "': no image files");
+		for (const auto& f : files) plain.push_back(readColour(f.string()));
+	}
+	if (rawlog.isSet())
+		for (auto& m : framesOfRawlog(rawlog.getValue(), sensor.getValue(), maxFrames.getValue(), every.getValue()))
+			plain.push_back(std::move(m));
+	if (shadowPairs.empty() && viewPairs.empty() && plain.empty())
+		throw std::invalid_argument("no data: give --pairs/--pair, --same-view, --image/--images or --rawlog");
+
+	std::cout << "input: linearisation " << toString(in.linearisation)
+			  << (in.linearisation == Linearisation::Gamma ? " (gamma " + fmt(in.gamma, 2) + ")" : "")
+			  << ", channel order " << toString(in.order) << "; " << shadowPairs.size() << " shadow pair(s), "
+			  << viewPairs.size() << " same-view pair(s), " << plain.size() << " ordinary image(s)\n";
+
+	// ---- estimates
+	std::vector<TAlphaCurve> curves;
+	std::vector<std::string> skipped;
+	if (!shadowPairs.empty()) curves.push_back(alphaFromShadowPairs(shadowPairs, in, search, 0.01, &skipped));
+	if (!viewPairs.empty()) curves.push_back(alphaFromSameView(viewPairs, in, search, 0.03, &skipped));
+	// The entropy method runs on every image given (pairs included: they are images too).
+	std::vector<cv::Mat> all = plain;
+	for (const auto& p : shadowPairs) all.push_back(p.free), all.push_back(p.shadow);
+	for (const auto& p : viewPairs) all.push_back(p.a), all.push_back(p.b);
+	curves.push_back(alphaByEdgeDirections(edgeSamples(all, in, edgeStep.getValue()), search));
+	curves.push_back(alphaByEntropy(chromaSamples(all, in), search));
+	for (const auto& s : skipped) std::cout << "skipped: " << s << "\n";
+
+	const TAlphaCurve* chosen = nullptr;
+	const std::string want = method.getValue();
+	for (const auto& c : curves)
+		if (c.method == want) chosen = &c;
+	if (want == "auto") chosen = &curves.front();
+	if (!chosen)
+		throw std::invalid_argument(
+			"--method " + want + ": that method had no data (pairs: --pairs/--pair; same-view: --same-view)");
+
+	std::cout << "\nalpha estimates (beta = 1 - alpha; 95 % bootstrap interval over "
+			  << (search.bootstrapRounds > 0 ? std::to_string(search.bootstrapRounds) + " resamplings" : "none")
+			  << "):\n";
+	for (const auto& c : curves)
+		std::cout << "  " << std::left << std::setw(10) << c.method << " alpha " << fmt(c.best) << "  ["
+				  << fmt(c.ciLow) << ", " << fmt(c.ciHigh) << "]  from " << c.items
+				  << (c.method == "entropy" || c.method == "edges" ? " images" : " pairs") << (&c == chosen ? "   <- used" : "") << "\n";
+
+	// ---- mapping
+	InvariantParams p = in.params(chosen->best);
+	p = calibrateMapping(all, p, tail.getValue(), in.stride);
+	const auto stCal = mappingStats(all, p, in.stride);
+	auto pDef = in.params(chosen->best);  // default mapping at the same alpha
+	const auto stDef = mappingStats(all, pDef, in.stride);
+	auto pPaper = InvariantParams::FromAlphaBeta(0.4800, 0.5065);
+	pPaper.order = in.order, pPaper.linearisation = in.linearisation, pPaper.gamma = in.gamma;
+	const auto stPaper = mappingStats(all, pPaper, in.stride);
+	std::cout << "\nresult: alpha = " << fmt(p.alpha) << ", beta = 1 - alpha = " << fmt(p.beta)
+			  << "\n  wavelength form: 1/l2 = alpha/l1 + beta/l3, e.g. green peak "
+			  << fmt(equivalentGreenPeak(p.alpha, 470, 620), 1) << " nm for blue 470 / red 620 nm"
+			  << "\n  8-bit mapping: scale = " << fmt(p.scale, 3) << " grey levels per log unit, offset = "
+			  << fmt(p.offset) << "\n\nclipping over the " << all.size() << " calibration images (share of pixels at 0 or 255; 1st-99th percentile span):\n"
+			  << "  calibrated mapping          " << fmt(100 * stCal.clipped(), 2) << " %  (low " << fmt(100 * stCal.clipLow, 2)
+			  << ", high " << fmt(100 * stCal.clipHigh, 2) << "), span " << fmt(stCal.span(), 1) << " grey levels\n"
+			  << "  default mapping, this alpha " << fmt(100 * stDef.clipped(), 2) << " %, span " << fmt(stDef.span(), 1) << "\n"
+			  << "  paper's alpha/beta/mapping  " << fmt(100 * stPaper.clipped(), 2) << " %, span "
+			  << fmt(stPaper.span(), 1) << "\n";
+	if (stCal.span() < 200)
+		std::cout << "warning: the 1st-99th percentiles span only " << fmt(stCal.span(), 1)
+				  << " grey levels: the invariant's tails are heavy here (noise in dark pixels?); raise --tail to "
+					 "trade clipping for span\n";
+
+	// ---- outputs
+	shadyloc::CFilterInvariant filter;
+	filter.setParams(p);
+	std::ostringstream ini;
+	ini << "# Calibrated by shadyloc calibrate-alpha (" << chosen->method << " method, " << chosen->items
+		<< (chosen->method == "entropy" || chosen->method == "edges" ? " images" : " pairs") << ", 95% interval of alpha [" << fmt(chosen->ciLow)
+		<< ", " << fmt(chosen->ciHigh) << "]).\n# Input linearisation: " << toString(in.linearisation)
+		<< ". Clipping over the calibration images: " << fmt(100 * stCal.clipped(), 2) << " %.\n"
+		<< "# scale and offset define the descriptors: keep them equal for map and live data.\n"
+		<< "[invariant]\n"
+		<< filter.optionsAsIni();
+	std::ostringstream csv;
+	csv << "alpha";
+	for (const auto& c : curves) csv << "," << c.method;
+	csv << "\n" << std::setprecision(8);
+	// Curves share one grid (one TAlphaSearch).
+	for (size_t j = 0; j < curves.front().alpha.size(); j++)
+	{
+		csv << curves.front().alpha[j];
+		for (const auto& c : curves) csv << "," << c.cost[j];
+		csv << "\n";
+	}
+	OutputSet outputs;
+	const std::string iniPath = out.getValue() + ".ini", csvPath = out.getValue() + "_curve.csv",
+					  pngPath = out.getValue() + "_curve.png";
+	writeText(outputs.stage(iniPath), ini.str());
+	const std::string csvTmp = outputs.stage(csvPath);
+	writeText(csvTmp, csv.str());
+	if (!noPlot.getValue())
+	{
+		const std::string scriptTmp = fs::path(out.getValue()).string() + ".tmp.gp";
+		struct Remove
+		{
+			std::string path;
+			~Remove() { std::error_code ec; fs::remove(path, ec); }
+		} removeScript{scriptTmp};
+		plotCurves(curves, csvTmp, outputs.stage(pngPath), scriptTmp, 0.48,
+			"alpha calibration (linearisation " + toString(in.linearisation) + ")");
+	}
+	outputs.commit();
+	std::cout << "\nwrote " << iniPath << ", " << csvPath << (noPlot.getValue() ? "" : ", " + pngPath)
+			  << "\n\n" << ini.str();
+	return 0;
+}
+shadyloc::apps::RegisterCommand reg(
+	"calibrate-alpha",
+	{"alpha (beta = 1 - alpha) and the 8-bit mapping of the invariant from data (--pairs/--same-view/--images/--rawlog)",
+	 run});
+}  // namespace

@@ -1,0 +1,600 @@
+/* ShadyLoc — calibrating the invariant transform from data (see header and
+ * docs/calibration.md). */
+#include <shadyloc/image/InvariantCalibration.h>
+#include <shadyloc/image/ShadowMetrics.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numeric>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+namespace shadyloc::image
+{
+namespace
+{
+// Grey levels of the default scale per unit of I: the shadow metric's floor
+// of one grey level (ShadowStep::relative()) then means what it means for
+// the 8-bit channel.
+constexpr double kGreyPerLog = 255.0;
+
+struct Idx
+{
+	int b, g, r;
+};
+Idx indices(ChannelOrder o) { return o == ChannelOrder::BGR ? Idx{0, 1, 2} : Idx{2, 1, 0}; }
+
+std::array<float, 256> logTable(const TCalibrationInput& in)
+{
+	std::array<float, 256> t{};
+	for (int v = 0; v < 256; v++) t[v] = float(std::log(linearise(v, in.linearisation, in.gamma)));
+	return t;
+}
+
+void requireColour(const cv::Mat& m, const std::string& what)
+{
+	if (m.empty()) throw std::invalid_argument(what + ": empty image");
+	if (m.type() != CV_8UC3)
+		throw std::invalid_argument(
+			what + ": expected an 8-bit 3-channel colour image, got " + std::to_string(m.channels()) +
+			" channel(s), depth " + std::to_string(m.depth()));
+}
+
+bool trusted(const uint8_t* px, const TCalibrationInput& in)
+{
+	for (int c = 0; c < 3; c++)
+		if (px[c] < in.minCode || px[c] >= in.maxCode) return false;
+	return true;
+}
+
+// Quantile q in [0,1] of v (v is reordered).
+double quantile(std::vector<float>& v, double q)
+{
+	if (v.empty()) return 0;
+	const size_t k = std::min(v.size() - 1, size_t(std::llround(q * double(v.size() - 1))));
+	std::nth_element(v.begin(), v.begin() + long(k), v.end());
+	return v[k];
+}
+
+// Refines the grid minimum by a parabola through it and its neighbours.
+double refinedArgmin(const std::vector<double>& a, const std::vector<double>& c)
+{
+	const size_t i = size_t(std::min_element(c.begin(), c.end()) - c.begin());
+	if (i == 0 || i + 1 >= c.size()) return a[i];
+	const double den = c[i - 1] - 2 * c[i] + c[i + 1];
+	if (!(den > 0)) return a[i];
+	const double t = std::clamp(0.5 * (c[i - 1] - c[i + 1]) / den, -0.5, 0.5);
+	return a[i] + t * (a[i + 1] - a[i]);
+}
+
+// Bootstrap over items for methods whose curve is the mean of per-item curves.
+void bootstrapMeanCurve(const std::vector<std::vector<double>>& perItem, const TAlphaSearch& s, TAlphaCurve& out)
+{
+	const size_t n = perItem.size(), m = out.alpha.size();
+	out.cost.assign(m, 0.0);
+	for (const auto& c : perItem)
+		for (size_t j = 0; j < m; j++) out.cost[j] += c[j] / double(n);
+	out.best = refinedArgmin(out.alpha, out.cost);
+	out.ciLow = out.ciHigh = out.best;
+	out.bootstrapRounds = s.bootstrapRounds;
+	if (s.bootstrapRounds <= 0 || n < 2) return;
+	std::mt19937 rng(s.seed);
+	std::uniform_int_distribution<size_t> pick(0, n - 1);
+	std::vector<float> bests;
+	std::vector<double> cost(m);
+	for (int r = 0; r < s.bootstrapRounds; r++)
+	{
+		std::fill(cost.begin(), cost.end(), 0.0);
+		for (size_t k = 0; k < n; k++)
+		{
+			const auto& c = perItem[pick(rng)];
+			for (size_t j = 0; j < m; j++) cost[j] += c[j];
+		}
+		bests.push_back(float(refinedArgmin(out.alpha, cost)));
+	}
+	out.ciLow = quantile(bests, 0.025);
+	out.ciHigh = quantile(bests, 0.975);
+}
+
+// Per-item curve: log of the relative step between values a and b of I,
+// I = y - alpha x, on the grid.
+std::vector<double> relativeStepCurve(
+	const std::vector<float>& xa, const std::vector<float>& ya, const std::vector<float>& xb,
+	const std::vector<float>& yb, const std::vector<double>& grid)
+{
+	std::vector<double> curve(grid.size()), va(xa.size()), vb(xa.size());
+	for (size_t j = 0; j < grid.size(); j++)
+	{
+		const double al = grid[j];
+		for (size_t i = 0; i < xa.size(); i++)
+		{
+			va[i] = kGreyPerLog * (ya[i] - al * xa[i]);
+			vb[i] = kGreyPerLog * (yb[i] - al * xb[i]);
+		}
+		curve[j] = std::log(relativeShadowStepOfValues(va, vb).relative());
+	}
+	return curve;
+}
+
+// At most maxN elements by a regular stride (deterministic).
+template <typename T>
+void thin(std::vector<T>& v, size_t keepEvery)
+{
+	if (keepEvery <= 1) return;
+	size_t k = 0;
+	for (size_t i = 0; i < v.size(); i += keepEvery) v[k++] = v[i];
+	v.resize(k);
+}
+
+constexpr size_t kMaxPixelsPerItem = 20000;	 // per pair: medians stay cheap, still tight
+constexpr size_t kMinEntropySamples = 2000;
+constexpr size_t kMinEdgeSamples = 200;
+}  // namespace
+
+// ---- options ---------------------------------------------------------------
+void TCalibrationInput::validate() const
+{
+	auto bad = [](const std::string& f, const std::string& why) {
+		throw std::invalid_argument("calibration input '" + f + "': " + why);
+	};
+	if (minCode < 0 || minCode > 254) bad("min_code", "must be in [0,254]");
+	if (maxCode <= minCode || maxCode > 256) bad("max_code", "must be in (min_code, 256]");
+	if (!(skipTopFraction >= 0 && skipTopFraction < 1)) bad("skip_top", "must be in [0,1)");
+	if (stride < 1 || stride > 64) bad("stride", "must be in [1,64]");
+	if (linearisation == Linearisation::Gamma && !(gamma > 0 && gamma < 10)) bad("gamma", "must be in (0,10)");
+}
+
+InvariantParams TCalibrationInput::params(double alpha) const
+{
+	auto p = InvariantParams::FromAlphaBeta(alpha, 1.0 - alpha);
+	p.order = order;
+	p.linearisation = linearisation;
+	p.gamma = gamma;
+	return p;
+}
+
+void TAlphaSearch::validate() const
+{
+	if (!(alphaMin >= 0 && alphaMin < alphaMax && alphaMax <= 1))
+		throw std::invalid_argument("alpha search: need 0 <= alpha_min < alpha_max <= 1");
+	if (!(step > 0 && step <= 0.5 * (alphaMax - alphaMin)))
+		throw std::invalid_argument("alpha search: step must be in (0, (alpha_max - alpha_min)/2]");
+	if (bootstrapRounds < 0 || bootstrapRounds > 100000)
+		throw std::invalid_argument("alpha search: bootstrap rounds must be in [0, 100000]");
+}
+
+std::vector<double> TAlphaSearch::grid() const
+{
+	std::vector<double> g;
+	const int n = int(std::floor((alphaMax - alphaMin) / step + 1e-9));
+	for (int i = 0; i <= n; i++) g.push_back(alphaMin + step * i);
+	return g;
+}
+
+double equivalentGreenPeak(double alpha, double l1, double l3)
+{
+	return 1.0 / (alpha / l1 + (1.0 - alpha) / l3);
+}
+
+// ---- 1. pairs ----------------------------------------------------------------
+cv::Mat shadowMask(const TShadowPair& p, const TCalibrationInput& in, double minLogDrop, int erodeRadius)
+{
+	requireColour(p.free, "shadow pair '" + p.name + "' (free image)");
+	requireColour(p.shadow, "shadow pair '" + p.name + "' (shadow image)");
+	if (p.free.size() != p.shadow.size())
+		throw std::invalid_argument("shadow pair '" + p.name + "': the two images differ in size");
+	const auto L = logTable(in);
+	cv::Mat mask(p.free.size(), CV_8U, cv::Scalar(0));
+	const int top = int(in.skipTopFraction * p.free.rows);
+	for (int y = top; y < p.free.rows; y++)
+	{
+		const uint8_t* f = p.free.ptr<uint8_t>(y);
+		const uint8_t* s = p.shadow.ptr<uint8_t>(y);
+		uint8_t* m = mask.ptr<uint8_t>(y);
+		for (int x = 0; x < p.free.cols; x++)
+		{
+			const uint8_t* fp = f + 3 * x;
+			const uint8_t* sp = s + 3 * x;
+			if (!trusted(fp, in) || !trusted(sp, in)) continue;
+			bool drop = true;
+			for (int c = 0; c < 3 && drop; c++) drop = L[fp[c]] - L[sp[c]] > minLogDrop;
+			m[x] = drop ? 255 : 0;
+		}
+	}
+	if (erodeRadius > 0)
+		cv::erode(
+			mask, mask,
+			cv::getStructuringElement(cv::MORPH_ELLIPSE, cv::Size(2 * erodeRadius + 1, 2 * erodeRadius + 1)));
+	return mask;
+}
+
+TAlphaCurve alphaFromShadowPairs(
+	const std::vector<TShadowPair>& pairs, const TCalibrationInput& in, const TAlphaSearch& s,
+	double minMaskFraction, std::vector<std::string>* skipped)
+{
+	in.validate();
+	s.validate();
+	TAlphaCurve out;
+	out.method = "pairs";
+	out.costName = "relative shadow step (geometric mean over pairs)";
+	out.alpha = s.grid();
+	const auto L = logTable(in);
+	const auto ci = indices(in.order);
+	std::vector<std::vector<double>> perPair;
+	for (const auto& p : pairs)
+	{
+		const cv::Mat mask = shadowMask(p, in);
+		const double frac = cv::countNonZero(mask) / double(mask.total());
+		if (frac < minMaskFraction || cv::countNonZero(mask) < 100)
+		{
+			if (skipped)
+			{
+				std::ostringstream m;
+				m.precision(2);
+				m << p.name << " (shadow mask " << std::fixed << 100 * frac << " % of the image)";
+				skipped->push_back(m.str());
+			}
+			continue;
+		}
+		std::vector<float> xf, yf, xs, ys;
+		for (int y = 0; y < mask.rows; y++)
+		{
+			const uint8_t* m = mask.ptr<uint8_t>(y);
+			const uint8_t* f = p.free.ptr<uint8_t>(y);
+			const uint8_t* sh = p.shadow.ptr<uint8_t>(y);
+			for (int x = 0; x < mask.cols; x++)
+				if (m[x])
+				{
+					const uint8_t* a = f + 3 * x;
+					const uint8_t* b = sh + 3 * x;
+					xf.push_back(L[a[ci.b]] - L[a[ci.r]]);
+					yf.push_back(L[a[ci.g]] - L[a[ci.r]]);
+					xs.push_back(L[b[ci.b]] - L[b[ci.r]]);
+					ys.push_back(L[b[ci.g]] - L[b[ci.r]]);
+				}
+		}
+		const size_t every = (xf.size() + kMaxPixelsPerItem - 1) / kMaxPixelsPerItem;
+		thin(xf, every), thin(yf, every), thin(xs, every), thin(ys, every);
+		perPair.push_back(relativeStepCurve(xf, yf, xs, ys, out.alpha));
+	}
+	if (perPair.empty())
+		throw std::invalid_argument(
+			"alpha from shadow pairs: no pair has a usable shadow mask (>= " + std::to_string(100 * minMaskFraction) +
+			" % of the image darker by e^0.4 in every channel)");
+	out.items = int(perPair.size());
+	bootstrapMeanCurve(perPair, s, out);
+	for (auto& c : out.cost) c = std::exp(c);  // report the geometric mean itself
+	return out;
+}
+
+// ---- 2. entropy ----------------------------------------------------------------
+TChromaSamples chromaSamples(const std::vector<cv::Mat>& images, const TCalibrationInput& in)
+{
+	in.validate();
+	const auto L = logTable(in);
+	const auto ci = indices(in.order);
+	TChromaSamples out;
+	out.imageStart.push_back(0);
+	for (size_t k = 0; k < images.size(); k++)
+	{
+		const cv::Mat& img = images[k];
+		requireColour(img, "calibration image " + std::to_string(k));
+		const int top = int(in.skipTopFraction * img.rows);
+		for (int y = top; y < img.rows; y += in.stride)
+		{
+			const uint8_t* row = img.ptr<uint8_t>(y);
+			for (int x = 0; x < img.cols; x += in.stride)
+			{
+				const uint8_t* px = row + 3 * x;
+				if (!trusted(px, in)) continue;
+				const float lr = L[px[ci.r]];
+				out.x.push_back(L[px[ci.b]] - lr);
+				out.y.push_back(L[px[ci.g]] - lr);
+			}
+		}
+		out.imageStart.push_back(uint32_t(out.x.size()));
+	}
+	return out;
+}
+
+namespace
+{
+// Entropy (nats) of values v over their middle 90 %, bins by Scott's rule
+// (Finlayson, Drew & Lu 2009). v is reordered.
+double scottEntropy(std::vector<float>& v, std::vector<uint32_t>& hist)
+{
+	const size_t n = v.size();
+	const size_t k05 = size_t(0.05 * double(n - 1)), k95 = size_t(0.95 * double(n - 1));
+	std::nth_element(v.begin(), v.begin() + long(k05), v.end());
+	const float lo = v[k05];
+	std::nth_element(v.begin() + long(k05), v.begin() + long(k95), v.end());
+	const float hi = v[k95];
+	double sum = 0, sum2 = 0;
+	for (size_t i = k05; i <= k95; i++) sum += v[i], sum2 += double(v[i]) * v[i];
+	const double cnt = double(k95 - k05 + 1), mean = sum / cnt;
+	const double sigma = std::sqrt(std::max(0.0, sum2 / cnt - mean * mean));
+	const double width = 3.49 * sigma * std::pow(cnt, -1.0 / 3.0);
+	if (!(width > 0) || !(hi > lo)) return 0.0;
+	const int nb = std::clamp(int(std::ceil((hi - lo) / width)), 1, 8192);
+	hist.assign(size_t(nb), 0);
+	const float scale = float(nb / (double(hi) - lo));
+	for (size_t i = k05; i <= k95; i++) hist[size_t(std::min(nb - 1, int((v[i] - lo) * scale)))]++;
+	double H = 0;
+	for (uint32_t c : hist)
+		if (c > 0) H -= (c / cnt) * std::log(c / cnt);
+	return H;
+}
+}  // namespace
+
+TAlphaCurve alphaByEntropy(const TChromaSamples& smp, const TAlphaSearch& s)
+{
+	s.validate();
+	TAlphaCurve out;
+	out.method = "entropy";
+	out.costName = "entropy of the projected values (nats, mean over images)";
+	out.alpha = s.grid();
+	std::vector<std::vector<double>> perImage;
+	std::vector<float> proj;
+	std::vector<uint32_t> hist;
+	for (size_t k = 0; k < smp.images(); k++)
+	{
+		const size_t b = smp.imageStart[k], e = smp.imageStart[k + 1];
+		if (e - b < kMinEntropySamples) continue;  // too few trusted pixels: no shape to measure
+		std::vector<double> curve(out.alpha.size());
+		proj.resize(e - b);
+		for (size_t j = 0; j < out.alpha.size(); j++)
+		{
+			const float al = float(out.alpha[j]);
+			for (size_t i = b; i < e; i++) proj[i - b] = smp.y[i] - al * smp.x[i];
+			curve[j] = scottEntropy(proj, hist);
+		}
+		perImage.push_back(std::move(curve));
+	}
+	if (perImage.empty())
+		throw std::invalid_argument(
+			"alpha by entropy: no image has " + std::to_string(kMinEntropySamples) +
+			" trusted pixels (too dark, saturated or small?)");
+	out.items = int(perImage.size());
+	bootstrapMeanCurve(perImage, s, out);
+	return out;
+}
+
+// ---- 2b. edges -------------------------------------------------------------------
+TEdgeSamples edgeSamples(const std::vector<cv::Mat>& images, const TCalibrationInput& in, int separation, double minLogEdge)
+{
+	in.validate();
+	if (separation < 1 || separation > 64) throw std::invalid_argument("edge samples: separation must be in [1,64] px");
+	const auto L = logTable(in);
+	const auto ci = indices(in.order);
+	const float minEdge = float(minLogEdge);
+	TEdgeSamples out;
+	out.imageStart.push_back(0);
+	const int st = in.stride, sep = separation;
+	for (size_t k = 0; k < images.size(); k++)
+	{
+		const cv::Mat& img = images[k];
+		requireColour(img, "calibration image " + std::to_string(k));
+		const int top = int(in.skipTopFraction * img.rows);
+		auto add = [&](const uint8_t* a, const uint8_t* b) {
+			if (!trusted(a, in) || !trusted(b, in)) return;
+			const float ab = L[a[ci.b]], ag = L[a[ci.g]], ar = L[a[ci.r]];
+			const float bb = L[b[ci.b]], bg = L[b[ci.g]], br = L[b[ci.r]];
+			const float dl = (bb + bg + br - ab - ag - ar) * (1.0f / 3.0f);
+			if (std::abs(dl) < minEdge) return;
+			out.dx.push_back((bb - br) - (ab - ar));
+			out.dy.push_back((bg - br) - (ag - ar));
+			out.dl.push_back(dl);
+		};
+		for (int y = top; y + sep < img.rows; y += st)
+		{
+			const uint8_t* row = img.ptr<uint8_t>(y);
+			const uint8_t* below = img.ptr<uint8_t>(y + sep);
+			for (int x = 0; x + sep < img.cols; x += st)
+			{
+				add(row + 3 * x, row + 3 * (x + sep));
+				add(row + 3 * x, below + 3 * x);
+			}
+		}
+		out.imageStart.push_back(uint32_t(out.dx.size()));
+	}
+	return out;
+}
+
+TAlphaCurve alphaByEdgeDirections(const TEdgeSamples& smp, const TAlphaSearch& s)
+{
+	s.validate();
+	TAlphaCurve out;
+	out.method = "edges";
+	out.costName = "-(density of edge directions at (1, alpha)), mean over images";
+	out.alpha = s.grid();
+	// Direction of the chromaticity step, signed so that it points the way
+	// the brightness drops: across a shadow edge it is +(1, alpha) (darker =
+	// bluer: x = log(B/R) rises, and y = log(G/R) with it by alpha).
+	constexpr int kBins = 1440;	 // 0.25 degree
+	constexpr double kBandwidth = 0.06;	 // kernel width (rad, ~3.4 degrees)
+	constexpr float kMinChromaStep = 0.02f;	 // below: grey texture or noise, no direction
+	std::vector<std::vector<double>> perImage;
+	std::vector<double> hist(kBins);
+	for (size_t k = 0; k < smp.images(); k++)
+	{
+		const size_t b = smp.imageStart[k], e = smp.imageStart[k + 1];
+		std::fill(hist.begin(), hist.end(), 0.0);
+		double total = 0;
+		size_t used = 0;
+		for (size_t i = b; i < e; i++)
+		{
+			const float sgn = smp.dl[i] < 0 ? 1.0f : -1.0f;
+			const float dx = sgn * smp.dx[i], dy = sgn * smp.dy[i];
+			if (dx * dx + dy * dy < kMinChromaStep * kMinChromaStep) continue;
+			const double ang = std::atan2(double(dy), double(dx));	 // (-pi, pi]
+			const int bin = std::clamp(int((ang + M_PI) / (2 * M_PI) * kBins), 0, kBins - 1);
+			const double w = std::abs(smp.dl[i]);
+			hist[size_t(bin)] += w;
+			total += w;
+			used++;
+		}
+		if (used < kMinEdgeSamples) continue;
+		std::vector<double> curve(out.alpha.size());
+		for (size_t j = 0; j < out.alpha.size(); j++)
+		{
+			const double phi = std::atan2(out.alpha[j], 1.0);
+			double d = 0;
+			const int centre = int((phi + M_PI) / (2 * M_PI) * kBins);
+			const int reach = int(4 * kBandwidth / (2 * M_PI) * kBins) + 1;
+			for (int q = centre - reach; q <= centre + reach; q++)
+			{
+				const int qq = (q + kBins) % kBins;
+				const double a = (qq + 0.5) * 2 * M_PI / kBins - M_PI - phi;
+				d += hist[size_t(qq)] * std::exp((std::cos(a) - 1) / (kBandwidth * kBandwidth));
+			}
+			curve[j] = -d / total;
+		}
+		perImage.push_back(std::move(curve));
+	}
+	if (perImage.empty())
+		throw std::invalid_argument(
+			"alpha by edges: no image has " + std::to_string(kMinEdgeSamples) +
+			" trusted coloured edge samples (flat, dark, grey or saturated images?)");
+	out.items = int(perImage.size());
+	bootstrapMeanCurve(perImage, s, out);
+	return out;
+}
+
+// ---- 3. same view, different light ----------------------------------------------
+TAlphaCurve alphaFromSameView(
+	const std::vector<TSameViewPair>& pairs, const TCalibrationInput& in, const TAlphaSearch& s,
+	double minChromaChange, std::vector<std::string>* skipped)
+{
+	in.validate();
+	s.validate();
+	TAlphaCurve out;
+	out.method = "same-view";
+	out.costName = "median change of the unit-norm invariant between the lights (geometric mean over pairs)";
+	out.alpha = s.grid();
+	const auto L = logTable(in);
+	const auto ci = indices(in.order);
+	const float minChange2 = float(minChromaChange * minChromaChange);
+	std::vector<std::vector<double>> perPair;
+	for (const auto& p : pairs)
+	{
+		requireColour(p.a, "same-view pair '" + p.name + "' (first image)");
+		requireColour(p.b, "same-view pair '" + p.name + "' (second image)");
+		if (p.a.size() != p.b.size())
+			throw std::invalid_argument("same-view pair '" + p.name + "': the two images differ in size");
+		std::vector<float> xa, ya, xb, yb;
+		const int top = int(in.skipTopFraction * p.a.rows);
+		for (int y = top; y < p.a.rows; y += in.stride)
+		{
+			const uint8_t* ra = p.a.ptr<uint8_t>(y);
+			const uint8_t* rb = p.b.ptr<uint8_t>(y);
+			for (int x = 0; x < p.a.cols; x += in.stride)
+			{
+				const uint8_t* a = ra + 3 * x;
+				const uint8_t* b = rb + 3 * x;
+				if (!trusted(a, in) || !trusted(b, in)) continue;
+				const float x1 = L[a[ci.b]] - L[a[ci.r]], y1 = L[a[ci.g]] - L[a[ci.r]];
+				const float x2 = L[b[ci.b]] - L[b[ci.r]], y2 = L[b[ci.g]] - L[b[ci.r]];
+				if ((x2 - x1) * (x2 - x1) + (y2 - y1) * (y2 - y1) < minChange2) continue;
+				xa.push_back(x1), ya.push_back(y1), xb.push_back(x2), yb.push_back(y2);
+			}
+		}
+		if (xa.size() < 500)
+		{
+			if (skipped)
+				skipped->push_back(
+					p.name + " (" + std::to_string(xa.size()) + " trusted pixels changed colour; need 500)");
+			continue;
+		}
+		// Distance of each change (dx, dy) from the line through the origin
+		// along (1, alpha): |dy - alpha dx| / sqrt(1 + alpha^2), the change of
+		// the unit-norm invariant. Its median over the pixels is a robust
+		// line fit. Unlike a step relative to texture it is not biased
+		// towards alphas that happen to show more texture, and isotropic
+		// noise weighs the same at every alpha.
+		std::vector<float> d(xa.size());
+		std::vector<double> curve(out.alpha.size());
+		for (size_t j = 0; j < out.alpha.size(); j++)
+		{
+			const float al = float(out.alpha[j]), norm = 1.0f / std::sqrt(1.0f + al * al);
+			for (size_t i = 0; i < xa.size(); i++)
+				d[i] = std::abs((yb[i] - ya[i]) - al * (xb[i] - xa[i])) * norm;
+			curve[j] = std::log(std::max(1e-9, quantile(d, 0.5)));
+		}
+		perPair.push_back(std::move(curve));
+	}
+	if (perPair.empty())
+		throw std::invalid_argument(
+			"alpha from same-view pairs: no pair has enough trusted pixels whose colour changed between the two lights");
+	out.items = int(perPair.size());
+	bootstrapMeanCurve(perPair, s, out);
+	for (auto& c : out.cost) c = std::exp(c);
+	return out;
+}
+
+// ---- 4. mapping -------------------------------------------------------------------
+namespace
+{
+std::vector<float> invariantValues(const std::vector<cv::Mat>& images, const InvariantParams& p, int stride)
+{
+	p.validate();
+	if (stride < 1) throw std::invalid_argument("mapping: stride must be >= 1");
+	std::array<float, 256> L{};
+	for (int v = 0; v < 256; v++) L[v] = float(std::log(linearise(v, p.linearisation, p.gamma)));
+	const auto ci = indices(p.order);
+	const float a = float(p.alpha), b = float(p.beta);
+	std::vector<float> out;
+	for (size_t k = 0; k < images.size(); k++)
+	{
+		requireColour(images[k], "mapping image " + std::to_string(k));
+		for (int y = 0; y < images[k].rows; y += stride)
+		{
+			const uint8_t* row = images[k].ptr<uint8_t>(y);
+			for (int x = 0; x < images[k].cols; x += stride)
+			{
+				const uint8_t* px = row + 3 * x;
+				out.push_back(L[px[ci.g]] - a * L[px[ci.b]] - b * L[px[ci.r]]);
+			}
+		}
+	}
+	if (out.empty()) throw std::invalid_argument("mapping: no images");
+	return out;
+}
+}  // namespace
+
+TMappingStats mappingStats(const std::vector<cv::Mat>& images, const InvariantParams& p, int stride)
+{
+	auto v = invariantValues(images, p, stride);
+	TMappingStats st;
+	size_t lo = 0, hi = 0;
+	for (auto& x : v)
+	{
+		x = float(p.scale * (double(x) + p.offset));
+		// Rounded to the nearest level: below 0.5 is 0, from 254.5 on is 255.
+		lo += x < 0.5f;
+		hi += x >= 254.5f;
+	}
+	st.clipLow = double(lo) / double(v.size());
+	st.clipHigh = double(hi) / double(v.size());
+	st.p1 = quantile(v, 0.01);
+	st.p99 = quantile(v, 0.99);
+	return st;
+}
+
+InvariantParams calibrateMapping(const std::vector<cv::Mat>& images, InvariantParams p, double tailShare, int stride)
+{
+	if (!(tailShare > 0 && tailShare < 0.1)) throw std::invalid_argument("mapping: tail share must be in (0, 0.1)");
+	auto v = invariantValues(images, p, stride);
+	const double lo = quantile(v, tailShare), hi = quantile(v, 1.0 - tailShare);
+	if (!(hi > lo))
+		throw std::invalid_argument("mapping: the invariant is constant over the calibration images (grey scene?)");
+	p.scale = 254.0 / (hi - lo);
+	p.offset = 0.5 / p.scale - lo;
+	p.validate();
+	return p;
+}
+
+}  // namespace shadyloc::image
