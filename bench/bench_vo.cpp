@@ -10,6 +10,8 @@
 #include <shadyloc/filters/Filters.h>
 #include <shadyloc/geometry/PoseSolver.h>
 #include <shadyloc/sim/SyntheticCorridor.h>
+#include <shadyloc/vo/KeyframeMatcher.h>
+#include <shadyloc/vo/RelativePoseEstimator.h>
 #include <shadyloc/vo/StereoVO.h>
 
 #include <benchmark/benchmark.h>
@@ -126,12 +128,14 @@ int pingPong(int64_t i)
 void addStageCounters(benchmark::State& st, const vo::TVOTimings& sum, int64_t n)
 {
 	const double k = 1.0 / std::max<int64_t>(1, n);
-	st.counters["ms_detect"] = sum.detect * k;
-	st.counters["ms_stereo"] = sum.stereo * k;
-	st.counters["ms_describe"] = sum.describe * k;
-	st.counters["ms_match"] = sum.match * k;
-	st.counters["ms_ransac"] = sum.ransac * k;
-	st.counters["ms_solve"] = sum.solve * k;
+	// By stage: the feature extractor (detect, stereo, describe), the
+	// keyframe matcher, the relative-pose estimator (RANSAC, solve).
+	st.counters["ms_extract_detect"] = sum.detect * k;
+	st.counters["ms_extract_stereo"] = sum.stereo * k;
+	st.counters["ms_extract_describe"] = sum.describe * k;
+	st.counters["ms_keyframe_matcher"] = sum.match * k;
+	st.counters["ms_relpose_ransac"] = sum.ransac * k;
+	st.counters["ms_relpose_solve"] = sum.solve * k;
 	st.counters["ms_total"] = sum.total * k;
 }
 void accumulate(vo::TVOTimings& s, const vo::TVOTimings& t)
@@ -349,6 +353,77 @@ void BM_StageStereoMeasurements(benchmark::State& st)
 	st.counters["ms_describe"] = fr.timings.describe_ms;
 }
 BENCHMARK(BM_StageStereoMeasurements)->Unit(benchmark::kMicrosecond);
+
+/** The keyframe matcher and the relative-pose estimator alone: frame 0 is
+ * the keyframe, frame 1 the current frame, the prediction the VO's pose. */
+struct TStageInputs
+{
+	features::TStereoFrame kf, cur;
+	Eigen::Isometry3d T_curr_kf = Eigen::Isometry3d::Identity();
+};
+const TStageInputs& stageInputs()
+{
+	static const TStageInputs s = [] {
+		const auto& d = data();
+		TStageInputs s;
+		features::StereoFeatureExtractor ex;
+		ex.process(d.monoL[0], d.monoR[0], d.calib, s.kf);
+		ex.process(d.monoL[1], d.monoR[1], d.calib, s.cur);
+		vo::StereoVO v;
+		v.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+		v.process(d.monoL[0], d.monoR[0], d.calib, 0.0);
+		s.T_curr_kf = v.process(d.monoL[1], d.monoR[1], d.calib, 0.1).T_kf_curr.inverse();
+		return s;
+	}();
+	return s;
+}
+vo::TKeyframeMatchInput matchInput(const TStageInputs& s)
+{
+	vo::TKeyframeMatchInput in;
+	in.landmarks = &s.kf.meas;
+	in.calib_kf = data().calib;
+	in.frame = &s.cur;
+	in.calib = data().calib;
+	in.T_curr_kf_pred = s.T_curr_kf;
+	// For the gate: a prediction uncertain by 5 cm and 0.5 deg (1 sigma).
+	in.cov_T_curr_kf_pred.diagonal() << 25e-4, 25e-4, 25e-4, 7.6e-5, 7.6e-5, 7.6e-5;
+	return in;
+}
+
+void BM_StageKeyframeMatcher(benchmark::State& st, vo::SearchRegion region)
+{
+	const auto& s = stageInputs();
+	auto o = vo::matcherOptionsFrom(vo::TStereoVOOptions());
+	o.region = region;
+	const vo::CKeyframeMatcher m(o);
+	const auto in = matchInput(s);
+	vo::TKeyframeMatchOutput out;
+	for (auto _ : st) m.match(in, out);
+	st.counters["landmarks"] = static_cast<double>(s.kf.meas.size());
+	st.counters["correspondences"] = static_cast<double>(out.corr.size());
+}
+BENCHMARK_CAPTURE(BM_StageKeyframeMatcher, circle, vo::SearchRegion::Circle)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StageKeyframeMatcher, gate, vo::SearchRegion::Gate)->Unit(benchmark::kMicrosecond);
+
+void BM_StageRelativePoseEstimator(benchmark::State& st, bool withPrior)
+{
+	const auto& s = stageInputs();
+	vo::TKeyframeMatchOutput mo;
+	vo::CKeyframeMatcher(vo::matcherOptionsFrom(vo::TStereoVOOptions())).match(matchInput(s), mo);
+	const vo::CRelativePoseEstimator est(vo::poseEstimatorOptionsFrom(vo::TStereoVOOptions()));
+	vo::TRelativePoseInput in;
+	in.corr = &mo.corr;
+	in.calib = data().calib;
+	in.T_curr_ref_pred = withPrior ? &s.T_curr_kf : nullptr;
+	vo::TRelativePoseOutput out;
+	for (auto _ : st) est.estimate(in, out);
+	st.counters["correspondences"] = static_cast<double>(mo.corr.size());
+	st.counters["inliers"] = static_cast<double>(out.inliers);
+	st.counters["ms_relpose_ransac"] = out.ms_ransac;
+	st.counters["ms_relpose_solve"] = out.ms_solve;
+}
+BENCHMARK_CAPTURE(BM_StageRelativePoseEstimator, with_prior, true)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StageRelativePoseEstimator, without_prior, false)->Unit(benchmark::kMicrosecond);
 
 void BM_ChannelConversionPair(benchmark::State& st, bool invariant)
 {

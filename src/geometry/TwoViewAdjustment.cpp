@@ -19,6 +19,8 @@
 #include <Eigen/LU>
 
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 namespace shadyloc::geometry
 {
@@ -28,6 +30,7 @@ struct TLandmarkBlock
 {
 	int idx;  //!< correspondence index
 	Eigen::Vector3d z_ref;	//!< the landmark's stereo measurement in the reference frame [px]
+	const TStereoCalib* calib_ref;	//!< the reference frame's calibration
 	// Normal-equation blocks at the last linearisation:
 	Eigen::Matrix<double, 6, 3> Hpx = Eigen::Matrix<double, 6, 3>::Zero();  //!< pose-landmark
 	Eigen::Matrix3d Hxx = Eigen::Matrix3d::Zero();	//!< landmark-landmark
@@ -49,13 +52,18 @@ TPoseSolution solveStereoPoseTwoView(
 	for (size_t i = 0; i < c.size(); i++)
 	{
 		if (!use.empty() && !use[i]) continue;
+		// The reference frame's own measurement and calibration: a map's
+		// keyframe may have been made with another camera than the live one.
+		if (!c[i].hasReferenceObservation())
+			throw std::invalid_argument(
+				"solveStereoPoseTwoView: correspondence " + std::to_string(i) +
+				" has no reference observation (z_ref)");
 		// Behind either camera at the start: no projection to adjust.
 		if (!(c[i].P_ref.z() > 1e-3) || !((T_init * c[i].P_ref).z() > 1e-3)) continue;
 		TLandmarkBlock b;
 		b.idx = static_cast<int>(i);
-		// P_ref was triangulated from the reference measurement: projecting it
-		// gives that measurement back exactly.
-		b.z_ref = calib.project(c[i].P_ref);
+		b.z_ref = c[i].z_ref;
+		b.calib_ref = &c[i].calib_ref;
 		L.push_back(b);
 	}
 	if (L.size() < 3) return sol;
@@ -68,7 +76,7 @@ TPoseSolution solveStereoPoseTwoView(
 		for (size_t k = 0; k < L.size(); k++)
 		{
 			if (!(X[k].z() > 1e-3)) return HUGE_VAL;
-			const Eigen::Vector3d rr = calib.project(X[k]) - L[k].z_ref;
+			const Eigen::Vector3d rr = L[k].calib_ref->project(X[k]) - L[k].z_ref;
 			f += huberCost(rr.norm() * sinv, o.huber_k);
 			Eigen::Vector3d r;
 			if (!stereoResidual(calib, T, X[k], c[L[k].idx].z_curr, r)) return HUGE_VAL;
@@ -97,7 +105,7 @@ TPoseSolution solveStereoPoseTwoView(
 		{
 			auto& b = L[k];
 			Eigen::Matrix3d Jk;
-			const Eigen::Vector3d rk = calib.project(X[k], &Jk) - b.z_ref;
+			const Eigen::Vector3d rk = b.calib_ref->project(X[k], &Jk) - b.z_ref;
 			Eigen::Vector3d rc;
 			Matrix36d Jc;
 			stereoResidual(calib, T, X[k], c[b.idx].z_curr, rc, &Jc);

@@ -260,6 +260,8 @@ void CKeyframeMatcher::match(const TKeyframeMatchInput& in, TKeyframeMatchOutput
 		geometry::TStereoCorrespondence k;
 		k.P_ref = kfm[j].P;
 		k.cov_ref = kfm[j].cov;
+		k.z_ref = Eigen::Vector3d(kfm[j].uL, kfm[j].v, kfm[j].uR);
+		k.calib_ref = in.calib_kf;
 		// The disparity measured at the corner carries over to the refined position.
 		const double du = x + ox - m.uL;
 		k.z_curr = Eigen::Vector3d(x + ox, y + oy, m.uR + du);

@@ -114,7 +114,7 @@ void StereoVO::setKeyframePolicy(CKeyframePolicy::Ptr p)
 
 void StereoVO::addKeyframe(
 	size_t frame, double timestamp, const Eigen::Isometry3d& T_world_kf, const Matrix6d& cov, bool chainBreak,
-	std::vector<features::TStereoMeasurement>&& meas)
+	std::vector<features::TStereoMeasurement>&& meas, const geometry::TStereoCalib& calib)
 {
 	TKeyframe kf;
 	kf.id = static_cast<uint32_t>(m_keyframes.size());
@@ -127,6 +127,7 @@ void StereoVO::addKeyframe(
 	kf.chain_break = chainBreak;
 	kf.meas = std::move(meas);
 	m_keyframes.push_back(std::move(kf));
+	m_kfCalib = calib;
 }
 
 TFrameResult StereoVO::process(
@@ -181,7 +182,7 @@ TFrameResult StereoVO::track(
 		{
 			// A chain break: the link is a prediction, with a deliberately large covariance.
 			const Matrix6d big = Matrix6d::Identity() * 1e2;
-			addKeyframe(res.frame, timestamp, T_world_pred, big, true, std::move(fr.meas));
+			addKeyframe(res.frame, timestamp, T_world_pred, big, true, std::move(fr.meas), calib);
 			res.keyframe = true;
 			res.status = FrameStatus::Reinit;
 			res.T_kf_curr.setIdentity();
@@ -195,7 +196,7 @@ TFrameResult StereoVO::track(
 	{
 		if (static_cast<int>(res.stereo) < o.min_stereo) return fail(FrameStatus::FewFeatures);
 		res.status = FrameStatus::First;
-		addKeyframe(res.frame, timestamp, Eigen::Isometry3d::Identity(), Matrix6d::Zero(), false, std::move(fr.meas));
+		addKeyframe(res.frame, timestamp, Eigen::Isometry3d::Identity(), Matrix6d::Zero(), false, std::move(fr.meas), calib);
 		res.keyframe = true;
 		m_lost = 0;
 		return finish(Eigen::Isometry3d::Identity());
@@ -207,6 +208,7 @@ TFrameResult StereoVO::track(
 	const TKeyframe& kf = m_keyframes.back();
 	TKeyframeMatchInput mi;
 	mi.landmarks = &kf.meas;
+	mi.calib_kf = m_kfCalib;
 	mi.frame = &fr;
 	mi.calib = calib;
 	mi.T_curr_kf_pred = T_world_pred.inverse() * kf.T_world_kf;
@@ -260,6 +262,7 @@ TFrameResult StereoVO::track(
 	res.keyframe_wanted = m_policy->wantKeyframe(q);
 	m_pending.candidate = true;
 	m_pending.meas = std::move(fr.meas);
+	m_pending.calib = calib;
 	return finish(T_world_curr);
 }
 
@@ -272,7 +275,7 @@ TFrameResult StereoVO::commit(KeyframeDecision d)
 		const bool make = d == KeyframeDecision::Make || (d == KeyframeDecision::Policy && res.keyframe_wanted);
 		if (make)
 		{
-			addKeyframe(res.frame, res.timestamp, res.T_world_curr, res.cov_kf_curr, false, std::move(m_pending.meas));
+			addKeyframe(res.frame, res.timestamp, res.T_world_curr, res.cov_kf_curr, false, std::move(m_pending.meas), m_pending.calib);
 			res.keyframe = true;
 		}
 	}

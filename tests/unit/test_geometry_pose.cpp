@@ -220,6 +220,8 @@ std::vector<TStereoCorrespondence> makeTwoViewProblem(
 		if (!c.triangulate(zr.x(), zr.y(), zr.z(), k.P_ref, &J)) continue;
 		if (!c.triangulate(k.z_curr.x(), k.z_curr.y(), k.z_curr.z(), k.P_curr)) continue;
 		k.cov_ref = c.triangulationCovariance(J, noise_px);
+		k.z_ref = zr;
+		k.calib_ref = c;
 		out.push_back(k);
 	}
 	return out;
@@ -325,4 +327,59 @@ TEST(GeometryPose, PriorPrefersTheConsensusNearThePrediction)
 	int trueIn = 0;
 	for (int i = 0; i < 12; i++) trueIn += withPrior.inlier[i];
 	EXPECT_GE(trueIn, 10);
+}
+
+TEST(GeometryPose, TwoViewAdjustmentUsesTheReferenceCalibration)
+{
+	// The reference frame (a map's keyframe) was taken with another camera
+	// than the live one: focal length 560 px, principal point moved, baseline
+	// 0.24 m. Each landmark's reference measurement is projected with that
+	// calibration; projecting it with the live one (the former behaviour)
+	// would put every landmark somewhere else.
+	TStereoCalib ref = calib();
+	ref.fx = ref.fy = 560;
+	ref.cx = 300;
+	ref.cxR = 302;
+	ref.cy = 200;
+	ref.baseline = 0.24;
+	const TStereoCalib live = calib();
+	const Eigen::Isometry3d T = somePose();
+	std::mt19937 rng(3);
+	std::uniform_real_distribution<double> ux(-3, 3), uy(-1.5, 1.5), uz(4, 20);
+	std::vector<TStereoCorrespondence> c;
+	while (c.size() < 50)
+	{
+		const Eigen::Vector3d P(ux(rng), uy(rng), uz(rng));
+		const Eigen::Vector3d p = T * P;
+		if (p.z() < 1) continue;
+		TStereoCorrespondence k;
+		k.z_ref = ref.project(P);
+		k.calib_ref = ref;
+		ASSERT_TRUE(ref.triangulate(k.z_ref.x(), k.z_ref.y(), k.z_ref.z(), k.P_ref));
+		k.z_curr = live.project(p);
+		ASSERT_TRUE(live.triangulate(k.z_curr.x(), k.z_curr.y(), k.z_curr.z(), k.P_curr));
+		c.push_back(k);
+	}
+	TPoseSolverOptions so;
+	so.sigma_px = 0.5;
+	Eigen::Isometry3d T0 = T;
+	T0.translation() += Eigen::Vector3d(0.05, -0.03, 0.1);
+	const auto sol = solveStereoPoseTwoView(live, c, {}, T0, so);
+	ASSERT_TRUE(sol.ok);
+	// Noise-free measurements: the exact pose, up to the solver's convergence.
+	EXPECT_LT(transErr(sol.T_curr_ref, T), 1e-6);
+	EXPECT_LT(sol.rms_px, 1e-6);
+	// With the live calibration as the reference's the problem is inconsistent.
+	auto wrong = c;
+	for (auto& k : wrong) k.calib_ref = live;
+	const auto bad = solveStereoPoseTwoView(live, wrong, {}, T0, so);
+	EXPECT_TRUE(!bad.ok || bad.rms_px > 1.0 || transErr(bad.T_curr_ref, T) > 0.05);
+
+	// A used correspondence without a reference observation is an error.
+	auto missing = c;
+	missing[7].z_ref.setConstant(std::numeric_limits<double>::quiet_NaN());
+	EXPECT_THROW(solveStereoPoseTwoView(live, missing, {}, T0, so), std::invalid_argument);
+	std::vector<uint8_t> use(c.size(), 1);
+	use[7] = 0;	 // ... unless it is not used
+	EXPECT_TRUE(solveStereoPoseTwoView(live, missing, use, T0, so).ok);
 }

@@ -96,6 +96,10 @@ TScene makeScene(const Eigen::Isometry3d& T_curr_kf, double depth, uint32_t seed
 			if (!s.calib.triangulate(z.x(), z.y(), z.z(), P_curr)) continue;
 			features::TStereoMeasurement kf;
 			kf.P = T_curr_kf.inverse() * P_curr;
+			const Eigen::Vector3d zk = s.calib.project(kf.P);  // as measured in the keyframe
+			kf.uL = static_cast<float>(zk.x());
+			kf.v = static_cast<float>(zk.y());
+			kf.uR = static_cast<float>(zk.z());
 			kf.cov = 1e-4 * Eigen::Matrix3d::Identity();
 			kf.desc = randomDesc(rng);
 			cv::Mat patch;
@@ -128,6 +132,7 @@ vo::TKeyframeMatchInput inputFor(const TScene& s, const Eigen::Isometry3d& T_pre
 {
 	vo::TKeyframeMatchInput in;
 	in.landmarks = &s.landmarks;
+	in.calib_kf = s.calib;
 	in.frame = &s.frame;
 	in.calib = s.calib;
 	in.T_curr_kf_pred = T_pred;
@@ -168,7 +173,10 @@ TEST(VoKeyframeMatcher, CircleFindsTrueMatchesAndRefinesToSubPixel)
 		// uL and v from the patch; uR follows uL (the corner's disparity carries over).
 		worst = std::max(worst, (o.corr[i].z_curr.head<2>() - t.head<2>()).cwiseAbs().maxCoeff());
 		EXPECT_NEAR(o.corr[i].z_curr.x() - o.corr[i].z_curr.z(), t.x() - t.z(), 1e-4);
-		EXPECT_TRUE(o.corr[i].P_ref.isApprox(s.landmarks[o.landmark[i]].P));
+		const auto& lm = s.landmarks[o.landmark[i]];
+		EXPECT_TRUE(o.corr[i].P_ref.isApprox(lm.P));
+		// The keyframe's own measurement travels with the correspondence.
+		EXPECT_EQ(o.corr[i].z_ref, Eigen::Vector3d(lm.uL, lm.v, lm.uR));
 	}
 	// The corners are up to 0.5 px from the truth; the refinement brings them
 	// within 0.1 px (bilinear template against the cubic-interpolated image).
@@ -316,6 +324,8 @@ std::vector<geometry::TStereoCorrespondence> makeCorr(
 		Eigen::Matrix3d J;
 		if (!c.triangulate(zr.x(), zr.y(), zr.z(), k.P_ref, &J)) continue;
 		k.cov_ref = c.triangulationCovariance(J, 0.3);
+		k.z_ref = zr;
+		k.calib_ref = c;
 		const Eigen::Vector3d p = T_curr_ref * P;
 		if (p.z() < 1) continue;
 		k.z_curr = c.project(p) + Eigen::Vector3d(nz(rng), nz(rng), nz(rng));

@@ -17,6 +17,7 @@
 #include <Eigen/Geometry>
 
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace shadyloc::geometry
@@ -40,8 +41,15 @@ struct TStereoCorrespondence
 {
 	Eigen::Vector3d P_ref;	//!< landmark in the reference (keyframe) left camera [m]
 	Eigen::Matrix3d cov_ref = Eigen::Matrix3d::Zero();	//!< its covariance [m^2]
+	/** The landmark's measurement (uL, v, uR) in the reference frame, from
+	 * which P_ref was triangulated (with calib_ref) [px]; NaN = unknown. The
+	 * two-view adjustment needs it. */
+	Eigen::Vector3d z_ref = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+	TStereoCalib calib_ref;	 //!< the reference frame's calibration (of z_ref)
 	Eigen::Vector3d z_curr;	 //!< measurement (uL, v, uR) in the current frame [px]
 	Eigen::Vector3d P_curr;	 //!< triangulation of z_curr in the current frame [m]
+
+	bool hasReferenceObservation() const { return z_ref.allFinite(); }
 };
 
 /** Residual r = project(T_curr_ref * P_ref) - z and J = dr/dxi (3x6) for the
@@ -116,13 +124,14 @@ TPoseSolution solveStereoPose(
 	const std::vector<uint8_t>& use, const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o);
 
 /** Two-view bundle adjustment from T_init: the pose and every used landmark
- * are unknowns; each landmark has its stereo measurement in the reference
- * frame (recovered by projecting P_ref, which was triangulated from it) and
- * z_curr in the current frame, both with sigma_px noise and a Huber kernel.
+ * are unknowns; each landmark has its stereo measurement z_ref in the
+ * reference frame (projected with calib_ref) and z_curr in the current frame
+ * (with calib), both with sigma_px noise and a Huber kernel.
  * Landmarks are eliminated by the Schur complement; Levenberg-Marquardt
  * steps are accepted only when the cost decreases. cov_T_ref_curr is the
  * inverse of the pose's marginal information. cov_ref and
- * use_landmark_covariance are not used (the landmarks are estimated). */
+ * use_landmark_covariance are not used (the landmarks are estimated).
+ * Throws std::invalid_argument if a used correspondence has no z_ref. */
 TPoseSolution solveStereoPoseTwoView(
 	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c,
 	const std::vector<uint8_t>& use, const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o);

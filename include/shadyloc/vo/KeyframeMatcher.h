@@ -69,6 +69,9 @@ struct TKeyframeMatchInput
 	/** The keyframe's stereo measurements: landmarks P in the keyframe's left
 	 * camera, descriptors, patches (TKeyframe::meas). */
 	const std::vector<features::TStereoMeasurement>* landmarks = nullptr;
+	/** The keyframe's calibration: each correspondence carries it with the
+	 * landmark's measurement there (TStereoCorrespondence::z_ref, calib_ref). */
+	geometry::TStereoCalib calib_kf;
 	/** The current frame's measurements and left image (the one its patches
 	 * were cut from: StereoFeatureExtractor's output). */
 	const features::TStereoFrame* frame = nullptr;

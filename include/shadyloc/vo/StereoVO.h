@@ -183,7 +183,7 @@ class StereoVO : public mrpt::system::COutputLogger
    private:
 	void addKeyframe(
 		size_t frame, double timestamp, const Eigen::Isometry3d& T_world_kf, const geometry::Matrix6d& cov,
-		bool chainBreak, std::vector<features::TStereoMeasurement>&& meas);
+		bool chainBreak, std::vector<features::TStereoMeasurement>&& meas, const geometry::TStereoCalib& calib);
 
 	TOptions m_opts;
 	features::StereoFeatureExtractor m_extractor;
@@ -191,6 +191,7 @@ class StereoVO : public mrpt::system::COutputLogger
 	CRelativePoseEstimator m_poseEstimator;
 	CKeyframePolicy::Ptr m_policy;
 	std::vector<TKeyframe> m_keyframes;
+	geometry::TStereoCalib m_kfCalib;  //!< calibration of the frame m_keyframes.back() was made from
 	size_t m_frame = 0;
 	int m_lost = 0;	 //!< untracked frames in a row
 	Eigen::Isometry3d m_T_world_prev = Eigen::Isometry3d::Identity();
@@ -203,6 +204,7 @@ class StereoVO : public mrpt::system::COutputLogger
 		bool candidate = false;	 //!< a tracked frame that may become a keyframe
 		TFrameResult res;
 		std::vector<features::TStereoMeasurement> meas;
+		geometry::TStereoCalib calib;
 		std::chrono::steady_clock::time_point start;
 	} m_pending;
 };
