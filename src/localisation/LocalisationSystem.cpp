@@ -279,17 +279,16 @@ void CLocalisationSystem::reset()
 	m_frame = 0;
 	m_est = TKeyframePose();
 	m_framesSinceFix = 0;
+	m_searchAmong.clear();
 	m_distance = 0;
 	m_havePrevVO = false;
 }
 
-void CLocalisationSystem::setStartKeyframe(uint32_t id)
+void CLocalisationSystem::setStartKeyframe(uint32_t id, double radius)
 {
 	m_map->keyframe(id);  // throws naming the id
 	m_est = TKeyframePose();
-	m_est.valid = true;
-	m_est.kf = id;
-	m_est.cov = diagCov(std::max(m_opts.global_sigma_m, 0.5), std::max(m_opts.global_sigma_deg, 5.0));
+	m_searchAmong = m_map->keyframesAlongChain(id, radius, radius);
 }
 
 TMotion CLocalisationSystem::motionOf(const vo::TFrameResult& r)
@@ -414,7 +413,9 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 		if (search)
 		{
 			const auto t0 = Clock::now();
-			places[i] = p.localiser->globalSearch(meas[i], calib, static_cast<uint32_t>(u.frame * 7919u + 3));
+			const auto seed = static_cast<uint32_t>(u.frame * 7919u + 3);
+			places[i] = m_searchAmong.empty() ? p.localiser->globalSearch(meas[i], calib, seed)
+											  : p.localiser->globalSearch(meas[i], calib, seed, m_searchAmong);
 			TLocaliserInput in;	 // no prediction: records the failure state
 			in.frame = u.frame;
 			in.timestamp = timestamp;
@@ -457,6 +458,7 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 				m_est = places[i].pose;
 				m_est.cov += diagCov(m_opts.global_sigma_m, m_opts.global_sigma_deg);
 				m_framesSinceFix = 0;
+				m_searchAmong.clear();
 				break;
 			}
 		// The place is a prediction for the next frame, not a fix.

@@ -2,6 +2,7 @@
 #include <shadyloc/localisation/StereoLocaliser.h>
 
 #include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 
 #include <algorithm>
 #include <chrono>
@@ -71,6 +72,13 @@ vo::TKeyframeMatcherOptions matcherOptions(const TLocaliserOptions& o, SearchMod
 	return m;
 }
 
+vo::TKeyframeMatcherOptions placeMatcherOptions(const TLocaliserOptions& o)
+{
+	vo::TKeyframeMatcherOptions m = matcherOptions(o, SearchMode::Window);
+	m.search_radius_px = m.search_radius_lost_px = o.global_window_px;
+	return m;
+}
+
 vo::TRelativePoseOptions estimatorOptions(const TLocaliserOptions& o)
 {
 	vo::TRelativePoseOptions p;
@@ -82,7 +90,7 @@ vo::TRelativePoseOptions estimatorOptions(const TLocaliserOptions& o)
 	// Solved without the motion prior: see the file comment of StereoLocaliser.h.
 	p.ransac_prediction = false;
 	p.ransac_prior_sigma_m = 0;
-	p.min_inliers = std::max(3, std::min(o.min_inliers, o.global_min_inliers));
+	p.min_inliers = 6;	// the localiser's own bounds (min_inliers, global_min_inliers) apply after
 	return p;
 }
 }  // namespace
@@ -110,6 +118,7 @@ std::string toString(LocaliserStatus s)
 		case LocaliserStatus::FewMatches: return "few_matches";
 		case LocaliserStatus::FewInliers: return "few_inliers";
 		case LocaliserStatus::SolverFailed: return "solver_failed";
+		case LocaliserStatus::Uncertain: return "uncertain";
 		case LocaliserStatus::PredictionInconsistent: return "prediction_inconsistent";
 		case LocaliserStatus::MotionInconsistent: return "motion_inconsistent";
 	}
@@ -121,7 +130,8 @@ CStereoLocaliser::CStereoLocaliser(const CKeyframeMap& map, const std::string& c
 	  m_channel(channel),
 	  m_opts(o),
 	  m_matcher(matcherOptions(o, o.search)),
-	  m_globalMatcher(matcherOptions(o, SearchMode::Global)),
+	  m_gateMatcher(matcherOptions(o, SearchMode::Gate)),
+	  m_placeMatcher(placeMatcherOptions(o)),
 	  m_estimator(estimatorOptions(o))
 {
 	m_opts.validate();
@@ -273,16 +283,28 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 	r.solved = true;
 	r.T_kf_live = po.T_curr_ref.inverse();
 	r.cov = o.cov_scale * po.cov_T_ref_curr;
+	{
+		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> et(r.cov.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
+		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> er(r.cov.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
+		r.sigma_m = std::sqrt(std::max(0.0, et.eigenvalues().maxCoeff()));
+		r.sigma_deg = std::sqrt(std::max(0.0, er.eigenvalues().maxCoeff())) / kDeg;
+	}
 
 	// ---- 4. the failure test -------------------------------------------------------------
 	bool consistent = true;
 	LocaliserStatus why = LocaliserStatus::Ok;
+	// (0) a fix too uncertain to be within the accuracy asked of it.
+	if (r.sigma_m > o.max_sigma_m || r.sigma_deg > o.max_sigma_deg)
+	{
+		consistent = false;
+		why = LocaliserStatus::Uncertain;
+	}
 	// (a) the fix against the prediction, both covariances.
 	r.prediction_d2 = mahalanobis2(geometry::localLeft(r.T_kf_live, pred.T_kf_live), pred.cov + r.cov);
 	if (r.prediction_d2 > o.prediction_chi2)
 	{
 		consistent = false;
-		why = LocaliserStatus::PredictionInconsistent;
+		if (why == LocaliserStatus::Ok) why = LocaliserStatus::PredictionInconsistent;
 	}
 	// (b) frame-to-frame motion of the two solves against VO's.
 	bool motionTested = false;
@@ -319,19 +341,27 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 TGlobalPlace CStereoLocaliser::globalSearch(
 	const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed) const
 {
+	std::vector<uint32_t> all(m_map.keyframeCount());
+	for (uint32_t k = 0; k < all.size(); k++) all[k] = k;
+	return globalSearch(meas, calib, seed, all);
+}
+
+TGlobalPlace CStereoLocaliser::globalSearch(
+	const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed,
+	const std::vector<uint32_t>& among) const
+{
 	const auto& o = m_opts;
 	TGlobalPlace out;
-	const size_t n = m_map.keyframeCount();
-	if (n == 0 || meas.meas.empty())
+	if (among.empty() || meas.meas.empty())
 	{
-		out.why = "empty map or frame";
+		out.why = "no keyframes or no measurements";
 		return out;
 	}
 	// ---- BRIEF voting: a map landmark votes for its keyframe when some live
 	// descriptor is within global_vote_hamming of it.
 	std::vector<std::pair<int, uint32_t>> votes;  // (-votes, id): most first, then smaller id
-	votes.reserve(n);
-	for (uint32_t k = 0; k < n; k++)
+	votes.reserve(among.size());
+	for (const uint32_t k : among)
 	{
 		int v = 0;
 		for (const auto& lm : m_map.measurements(k, m_channel))
@@ -360,13 +390,15 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 	{
 		const uint32_t k = votes[c].second;
 		if (-votes[c].first < o.min_matches) break;
+		// (1) the live camera near the keyframe: a window around each
+		// landmark's projection from the keyframe's own pose;
 		vo::TKeyframeMatchInput mi;
 		mi.landmarks = &m_map.measurements(k, m_channel);
 		mi.calib_kf = m_map.calibration();
 		mi.frame = &meas;
 		mi.calib = calib;
 		vo::TKeyframeMatchOutput mo;
-		m_globalMatcher.match(mi, mo);
+		m_placeMatcher.match(mi, mo);
 		if (static_cast<int>(mo.corr.size()) < o.min_matches) continue;
 		vo::TRelativePoseInput pi;
 		pi.corr = &mo.corr;
@@ -376,13 +408,28 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 		m_estimator.estimate(pi, po);
 		out.verified++;
 		if (!po.ok()) continue;
+		// (2) active search around that pose, solved again (without it as prior).
+		TPoseWithCov p1;
+		p1.T = po.T_curr_ref;
+		p1.cov = geometry::invertCovariance(po.T_curr_ref.inverse(), o.cov_scale * po.cov_T_ref_curr);
+		mi.T_curr_kf_pred = p1.T;
+		mi.cov_T_curr_kf_pred = p1.cov;
+		vo::TKeyframeMatchOutput mo2;
+		m_gateMatcher.match(mi, mo2);
+		vo::TRelativePoseOutput po2;
+		if (static_cast<int>(mo2.corr.size()) >= o.min_matches)
+		{
+			pi.corr = &mo2.corr;
+			m_estimator.estimate(pi, po2);
+		}
+		const vo::TRelativePoseOutput& best = po2.ok() && po2.inliers >= po.inliers ? po2 : po;
 		TVerified v;
 		v.kf = k;
-		v.inliers = static_cast<int>(po.inliers);
+		v.inliers = static_cast<int>(best.inliers);
 		v.votes = -votes[c].first;
-		v.T_kf_live = po.T_curr_ref.inverse();
+		v.T_kf_live = best.T_curr_ref.inverse();
 		v.T_map_live = m_map.keyframe(k).T_map_kf * v.T_kf_live;
-		v.cov = o.cov_scale * po.cov_T_ref_curr;
+		v.cov = o.cov_scale * best.cov_T_ref_curr;
 		ver.push_back(v);
 	}
 	if (ver.empty())

@@ -56,8 +56,8 @@ struct TSystemOptions
 	int relocalise_after_frames = 30;
 	/** Added to a global-search place's covariance (one frame's solve,
 	 * unconfirmed) [m], [deg]. */
-	double global_sigma_m = 0.2;
-	double global_sigma_deg = 2.0;
+	double global_sigma_m = 0.1;
+	double global_sigma_deg = 1.0;
 
 	void load(const mrpt::config::CConfigFileBase& c, const std::string& section);
 	void dump(std::ostream& out) const;
@@ -125,9 +125,10 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 		const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::vector<std::string>& localisers,
 		int threads, const std::string& what);
 
-	/** Starts at a keyframe instead of by global search (the live camera at
-	 * the keyframe, with the global search's covariance). */
-	void setStartKeyframe(uint32_t id);
+	/** Starts near a keyframe: the first search for the place looks only at
+	 * the keyframes within start_radius_m along the chain of it (a place is
+	 * still verified geometrically, never assumed). */
+	void setStartKeyframe(uint32_t id, double start_radius_m = 10.0);
 
 	/** One stereo observation (images loaded, rectified). */
 	TLocalisationUpdate processObservation(const mrpt::obs::CObservationStereoImages& obs);
@@ -165,6 +166,7 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	size_t m_frame = 0;
 	TKeyframePose m_est;  //!< the current estimate (valid once a place is known)
 	int m_framesSinceFix = 0;
+	std::vector<uint32_t> m_searchAmong;  //!< keyframes the next global search looks at (empty: all)
 	double m_distance = 0;
 	bool m_havePrevVO = false;
 	vo::TFrameResult m_prevVO;

@@ -105,6 +105,12 @@ struct TLocaliserOptions
 	 * optimistic: correlated errors, model error) [-]. */
 	double cov_scale = 4.0;
 
+	/** A fix whose standard deviation (largest axis of the scaled covariance)
+	 * exceeds these is rejected (status uncertain): it could not meet the
+	 * accuracy a fix is judged by (0.5 m, 2 deg at 3 sigma) [m], [deg]. */
+	double max_sigma_m = 0.25;
+	double max_sigma_deg = 1.0;
+
 	// ---- failure test
 	/** Fix against prediction: Mahalanobis distance^2 bound, chi^2 with 6 dof
 	 * (22.46 = 99.9 %) [-]. */
@@ -116,6 +122,10 @@ struct TLocaliserOptions
 	// ---- global search
 	int global_vote_hamming = 50;  //!< a landmark votes for its keyframe when a live descriptor is this close [bits]
 	int global_candidates = 5;	//!< keyframes verified geometrically, most votes first
+	/** First pass of a verification: BRIEF in a circle this large around each
+	 * landmark's projection from the candidate keyframe's own pose (the live
+	 * camera is near it); the second pass is the gate around that solve [px]. */
+	double global_window_px = 80.0;
 	int global_min_inliers = 30;  //!< a verified place needs this many inliers
 	/** Another verified place at least global_distinct_m away with inliers
 	 * >= ratio * the best's makes the search ambiguous: no place [-]. */
@@ -176,6 +186,7 @@ enum class LocaliserStatus
 	FewMatches,
 	FewInliers,
 	SolverFailed,
+	Uncertain,	//!< the fix's covariance exceeds max_sigma_m / max_sigma_deg
 	PredictionInconsistent,	 //!< the fix disagrees with the prediction
 	MotionInconsistent	//!< its frame-to-frame motion disagrees with VO's
 };
@@ -200,6 +211,7 @@ struct TLocaliserResult
 	int matches = 0;  //!< correspondences after refinement
 	int inliers = 0;
 	double rms_px = 0;
+	double sigma_m = -1, sigma_deg = -1;  //!< largest standard deviation of the fix (scaled) [m], [deg]
 	double prediction_d2 = -1;	//!< Mahalanobis distance^2 of the prediction test (-1: not run)
 	double motion_d2 = -1;	//!< ... of the motion test (-1: not run)
 	int consistent = 0;	 //!< consecutive consistent frames so far
@@ -231,6 +243,10 @@ class CStereoLocaliser
 	/** A place for the live frame with no prior. Const: one instance may run
 	 * it while another thread uses a different localiser. */
 	TGlobalPlace globalSearch(const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed) const;
+	/** The same among the given keyframes only (e.g. around a start keyframe). */
+	TGlobalPlace globalSearch(
+		const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed,
+		const std::vector<uint32_t>& among) const;
 
 	/** Forgets the previous solve and confirmation (a new start). */
 	void reset();
@@ -248,7 +264,9 @@ class CStereoLocaliser
 	const CKeyframeMap& m_map;
 	std::string m_channel;
 	TLocaliserOptions m_opts;
-	vo::CKeyframeMatcher m_matcher, m_globalMatcher;
+	vo::CKeyframeMatcher m_matcher;	 //!< options.search's region
+	vo::CKeyframeMatcher m_gateMatcher;	 //!< global search, second pass
+	vo::CKeyframeMatcher m_placeMatcher;  //!< global search, first pass (window around the keyframe's view)
 	vo::CRelativePoseEstimator m_estimator;
 	// Failure-test state.
 	TKeyframePose m_prevSolve;	//!< the last frame's solve (any status), for the motion test
