@@ -2,20 +2,22 @@
 #include "Command.h"
 
 #include <shadyloc/eval/TrajectoryError.h>
-#include <shadyloc/filters/FilterPipeline.h>
-#include <shadyloc/filters/Filters.h>
-#include <shadyloc/io/Rawlog.h>
+#include <shadyloc/filters/Channel.h>
+#include <shadyloc/io/StereoFrameSource.h>
+#include <shadyloc/io/Tum.h>
 #include <shadyloc/map/CKeyframeMap.h>
-#include <shadyloc/map/SurveyBuilder.h>
-#include <shadyloc/vo/Channel.h>
+#include <shadyloc/survey/SurveyBuilder.h>
+#include <shadyloc/vo/ChannelOptions.h>
 #include <shadyloc/vo/StereoVO.h>
+#include <shadyloc/vo/VOConfig.h>
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
-#include <mrpt/obs/CObservationStereoImages.h>
+#include <mrpt/system/string_utils.h>
 
 #include <chrono>
+#include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -24,61 +26,56 @@
 namespace
 {
 using namespace shadyloc;
-using Stereo = mrpt::obs::CObservationStereoImages;
 
 bool endsWith(const std::string& s, const std::string& suf)
 {
 	return s.size() >= suf.size() && s.compare(s.size() - suf.size(), suf.size(), suf) == 0;
 }
 
-/** The invariant parameters recorded by `shadyloc filter` in a filtered rawlog. */
-std::optional<image::InvariantParams> recordedInvariantParams(const std::string& path)
+/** One channel of the survey: the filter that makes it, where its frames
+ * come from, and its feature extractor. */
+struct TSurveyChannel
 {
-	const std::string rec = filters::readPipelineRecord(path);
-	if (rec.empty()) return std::nullopt;
-	mrpt::config::CConfigFileMemory cfg(rec);
-	const auto pipeline = filters::FilterPipeline::FromConfig(cfg, path + " (filter record)");
-	for (const auto& f : pipeline.filters)
-		if (const auto inv = std::dynamic_pointer_cast<CFilterInvariant>(f)) return inv->params();
-	return std::nullopt;
-}
-
-/** One channel of the survey: how its grey pair is made, and its extractor. */
-struct TChannel
-{
-	vo::ChannelConverter conv;
+	filters::TChannel channel;
+	filters::TChannelInput input;
 	features::StereoFeatureExtractor extractor;
-	std::string filteredLabel;	//!< "<base>_mono" / "<base>_inv" when the rawlog holds it
-	map::TChannelParams params;
+	map::TChannelParams params;	 //!< what the map records
+	std::unique_ptr<io::StereoFrameSource> source;
+	io::TStereoFrame frame;	 //!< the current frame
 };
 
-/** A frame: observations of one timestamp (the colour pair and/or filtered ones). */
-struct TFrame
+bool sameCalib(const geometry::TStereoCalib& a, const geometry::TStereoCalib& b)
 {
-	mrpt::Clock::time_point t{};
-	std::shared_ptr<Stereo> colour;
-	std::map<std::string, std::shared_ptr<Stereo>> filtered;
-	std::string where;
-	bool empty() const { return !colour && filtered.empty(); }
-};
+	const auto eq = [](double x, double y) { return std::abs(x - y) <= 1e-9 * std::max(1.0, std::abs(x)); };
+	return eq(a.fx, b.fx) && eq(a.fy, b.fy) && eq(a.cx, b.cx) && eq(a.cy, b.cy) && eq(a.cxR, b.cxR) &&
+		   eq(a.baseline, b.baseline);
+}
 
 int run(int argc, char** argv)
 {
 	TCLAP::CmdLine cmd(
 		"Builds a dual-channel keyframe map (" + std::string(CKeyframeMap::kFileExtension) +
-			") from a survey rawlog: the monochrome VO chooses the keyframes, and at each one the stereo "
-			"measurements of both channels (mono, invariant) are stored. Uses the <label>_mono / <label>_inv "
-			"observations of a filtered rawlog when present, otherwise converts the colour images.",
+			") from a survey rawlog: the first channel's VO (mono by default) chooses the keyframes, and at each "
+			"one the stereo measurements of every channel are stored. A channel is the filter that makes its "
+			"images (a section of the config, or the built-in mono / invariant); its frames are the rawlog's "
+			"<camera><suffix> observations when it holds them (the filter record says how they were made), "
+			"otherwise the colour images filtered on the fly. Map options: the config's [map] section.",
 		' ', "0.1");
 	TCLAP::ValueArg<std::string> in("i", "input", "survey rawlog", true, "", "run.rawlog", cmd);
 	TCLAP::ValueArg<std::string> out(
 		"o", "output", std::string("map file (") + CKeyframeMap::kFileExtension + ")", true, "", "map.kfmap", cmd);
 	TCLAP::ValueArg<std::string> cfgArg(
-		"c", "config", "options .ini ([vo], [features], [features.invariant], [invariant], [map])", false, "",
-		"vo.ini", cmd);
+		"c", "config",
+		"options .ini ([vo], [features], [features.<channel>], the channel sections [mono] [invariant], [map]; "
+		"see config/vo.ini)",
+		false, "", "vo.ini", cmd);
+	TCLAP::ValueArg<std::string> chArg(
+		"", "channels", "channels to store, comma-separated; the first one's VO makes the keyframe chain", false,
+		"mono,invariant", "mono,invariant", cmd);
 	TCLAP::ValueArg<std::string> gtArg("", "gt", "ground truth (TUM), stored beside the keyframes", false, "", "run.tum", cmd);
 	TCLAP::ValueArg<std::string> runName("", "run-name", "survey run name (default: the rawlog's stem)", false, "", "name", cmd);
-	TCLAP::ValueArg<std::string> label("", "label", "sensor label of the colour stereo camera", false, "", "label", cmd);
+	TCLAP::ValueArg<std::string> label(
+		"", "label", "sensor label of the colour stereo camera (default: the first one found)", false, "", "label", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no option dump or progress", cmd);
 	cmd.parse(argc, argv);
 
@@ -92,139 +89,127 @@ int run(int argc, char** argv)
 		if (!std::filesystem::exists(cfgArg.getValue()))
 			throw std::runtime_error("config file '" + cfgArg.getValue() + "' does not exist");
 		cfg = std::make_unique<mrpt::config::CConfigFile>(cfgArg.getValue());
+		vo::checkVOConfigSections(*cfg);
 	}
 	else
 		cfg = std::make_unique<mrpt::config::CConfigFileMemory>("");
-	std::optional<eval::Trajectory> gt;
-	if (gtArg.isSet()) gt = eval::readTum(gtArg.getValue());
+	const std::string cfgName = cfgArg.isSet() ? cfgArg.getValue() : std::string("(no config)");
+	std::optional<io::Trajectory> gt;
+	if (gtArg.isSet()) gt = io::readTum(gtArg.getValue());
 
 	auto mapPtr = CKeyframeMap::Create();
 	CKeyframeMap& kfmap = *mapPtr;
 	if (cfg->sectionExists("map")) kfmap.options.loadFromConfigFile(*cfg, "map");
 	const bool talk = !quiet.getValue();
 
-	// ---- channels: the mono VO's chain, both channels' measurements ------------
-	std::vector<TChannel> channels;
-	for (const auto c : {vo::Channel::Mono, vo::Channel::Invariant})
+	// ---- channels: the first one's VO makes the chain, every one is stored ------
+	std::vector<std::string> names;
+	mrpt::system::tokenize(chArg.getValue(), ", ", names);
+	if (names.empty()) throw std::invalid_argument("--channels: no channel named");
+	std::vector<TSurveyChannel> channels;
+	for (const auto& name : names)
 	{
-		const auto conv = vo::ChannelConverter::FromConfig(*cfg, vo::toString(c));
-		const auto fo = vo::featureOptionsFor(*cfg, c);
-		channels.push_back({conv, features::StereoFeatureExtractor(fo), "", {}});
-	}
-	// Which streams the rawlog holds: the colour pair and any filtered channels.
-	std::string base = label.getValue();
-	{
-		io::RawlogReader rd(inPath);
-		for (int i = 0; i < 400; i++)
+		TSurveyChannel c{
+			filters::channelFromConfig(*cfg, name, cfgName), {}, features::StereoFeatureExtractor(), {}, {}, {}};
+		for (const auto& o : channels)
+			if (o.channel.label == c.channel.label)
+				throw std::invalid_argument("--channels: channel '" + c.channel.label + "' given twice");
+		c.input = filters::resolveChannelInput(inPath, c.channel, label.getValue());
+		const auto fo = vo::featureOptionsFor(*cfg, c.channel.label);
+		c.extractor = features::StereoFeatureExtractor(fo);
+		// The map records what made the images: for a filtered rawlog the
+		// filter its record names, not the config's.
+		const CObservationFilter* madeBy = c.channel.filter.get();
+		if (c.input.filtered)
 		{
-			const auto obj = rd.next();
-			if (!obj) break;
-			for (const auto& o : io::observationsIn(obj))
-			{
-				if (!IS_CLASS(*o, Stereo)) continue;
-				const auto& l = o->sensorLabel;
-				for (auto& ch : channels)
-				{
-					const std::string suf = vo::channelSuffix(ch.conv.channel());
-					if (endsWith(l, suf) && (base.empty() || l == base + suf)) ch.filteredLabel = l;
-				}
-				if (base.empty() && !endsWith(l, "_mono") && !endsWith(l, "_inv") && !endsWith(l, "_lin")) base = l;
-			}
-		}
-	}
-	for (auto& ch : channels)
-	{
-		image::InvariantParams inv = ch.conv.invariantParams();
-		if (ch.conv.channel() == vo::Channel::Invariant && !ch.filteredLabel.empty())
-		{
-			// The map records what made the images: the filter record, not the config.
-			const auto rec = recordedInvariantParams(inPath);
-			if (!rec)
+			if (!c.input.recorded)
 				throw std::runtime_error(
-					inPath + ": holds invariant images '" + ch.filteredLabel +
-					"' but no filter record: their transform is unknown, so the map could not be checked against "
-					"live data (re-filter it with shadyloc filter, or survey the unfiltered run)");
-			inv = *rec;
+					inPath + ": holds " + c.channel.label + " images '" + c.input.sensorLabel + "' but no filter record" +
+					(c.input.hasRecord ? " of suffix " + c.channel.suffix() : std::string()) +
+					": how they were made is unknown, so the map could not be checked against live data (re-filter "
+					"it with shadyloc filter, or survey the unfiltered run)");
+			madeBy = c.input.recorded.get();
+			if (!c.input.recorded->sameImagesAs(*c.channel.filter))
+				std::cerr << "warning: " << inPath << ": its " << c.channel.label << " images were made with "
+						  << c.input.recorded->describe() << " (filter record), not with " << cfgName << "'s ["
+						  << c.channel.label << "] " << c.channel.filter->describe()
+						  << "; the map records the filter that made them\n";
 		}
-		const bool mono = ch.conv.channel() == vo::Channel::Mono;
-		ch.params = map::TChannelParams::From(
-			vo::toString(ch.conv.channel()), mono ? map::ChannelKind::Mono : map::ChannelKind::Invariant,
-			ch.extractor.options(), inv, image::ChannelOrder::BGR);
+		c.params = survey::channelParams(c.channel.label, *madeBy, fo);
+		c.source = std::make_unique<io::StereoFrameSource>(inPath, c.input.sourceOptions);
+		channels.push_back(std::move(c));
 	}
-	const vo::TStereoVOOptions vopt = vo::voOptionsFor(*cfg, vo::Channel::Mono);
+	const vo::TStereoVOOptions vopt = vo::voOptionsFor(*cfg, channels[0].channel.label);
 	vo::StereoVO voChain(vopt, channels[0].extractor.options());
 	voChain.setMinLoggingLevel(talk ? mrpt::system::LVL_WARN : mrpt::system::LVL_ERROR);
 	if (talk)
 	{
 		std::cout << "survey of " << inPath << "\n";
-		for (const auto& ch : channels)
-			std::cout << "channel " << ch.params.asString() << ": "
-					  << (ch.filteredLabel.empty() ? "converted from '" + base + "'" : "filtered '" + ch.filteredLabel + "'")
+		for (const auto& c : channels)
+			std::cout << "channel " << c.params.asString() << "\n  "
+					  << (c.input.filtered ? "from the filtered observations '" + c.input.sensorLabel + "'"
+										   : "filtered on the fly from the colour camera" +
+												 (c.input.sensorLabel.empty() ? std::string() : " '" + c.input.sensorLabel + "'"))
 					  << "\n";
-		std::cout << "[map]\n";
+		std::cout << "keyframe chain: the " << channels[0].channel.label << " VO\n[map]\n";
 		kfmap.options.dumpToTextStream(std::cout);
 	}
 
 	const std::string run = runName.isSet() ? runName.getValue() : std::filesystem::path(inPath).stem().string();
-	std::unique_ptr<map::CSurveyBuilder> builder;
-	io::RawlogReader rd(inPath);
+	std::unique_ptr<survey::CSurveyBuilder> builder;
 	geometry::TStereoCalib calib;
-	cv::Size size;
 	size_t nFrames = 0, nGt = 0;
 	double msTotal = 0;
 	const auto t0 = std::chrono::steady_clock::now();
 
-	auto process = [&](TFrame& f) {
+	// The channels' sources walk the rawlog in lockstep: the same frame index
+	// and timestamp from each, or the run is refused.
+	for (;;)
+	{
 		const auto tf = std::chrono::steady_clock::now();
-		// Grey pairs per channel: the filtered observation, or converted colour.
-		std::vector<std::pair<cv::Mat, cv::Mat>> grey(channels.size());
-		std::shared_ptr<Stereo> any = f.colour;
-		for (size_t c = 0; c < channels.size(); c++)
+		size_t have = 0;
+		for (auto& c : channels) have += c.source->next(c.frame) ? 1 : 0;
+		if (have == 0) break;
+		const auto& f0 = channels[0].frame;
+		const std::string where0 = "'" + inPath + "': frame " + std::to_string(nFrames);
+		if (have != channels.size())
 		{
-			auto& ch = channels[c];
-			const auto it = ch.filteredLabel.empty() ? f.filtered.end() : f.filtered.find(ch.filteredLabel);
-			if (it != f.filtered.end())
-			{
-				io::loadExternalImages(*it->second);
-				grey[c] = {it->second->imageLeft.asCvMat<cv::Mat>(mrpt::img::SHALLOW_COPY),
-						   it->second->imageRight.asCvMat<cv::Mat>(mrpt::img::SHALLOW_COPY)};
-				if (!any) any = it->second;
-			}
-			else
-			{
-				if (!f.colour)
-					throw std::runtime_error(
-						f.where + ": no '" + (ch.filteredLabel.empty() ? base : ch.filteredLabel) + "' stereo pair for channel '" +
-						ch.params.label + "'");
-				io::loadExternalImages(*f.colour);
-				try
-				{
-					ch.conv.convert(f.colour->imageLeft.asCvMatRef(), grey[c].first);
-					ch.conv.convert(f.colour->imageRight.asCvMatRef(), grey[c].second);
-				}
-				catch (const std::exception& e)
-				{
-					throw std::runtime_error(f.where + ": channel '" + ch.params.label + "': " + e.what());
-				}
-			}
-			if (grey[c].first.empty() || grey[c].first.size() != grey[c].second.size() || grey[c].first.type() != CV_8UC1)
-				throw std::runtime_error(f.where + ": channel '" + ch.params.label + "': empty, mismatched or non-grey images");
+			std::string ended;
+			for (const auto& c : channels)
+				if (c.source->frames() == nFrames) ended += (ended.empty() ? "" : ", ") + c.channel.label;
+			throw std::runtime_error(
+				where0 + ": the frames of channel(s) " + ended +
+				" end here while the other channels have more (a partly filtered rawlog?)");
+		}
+		for (const auto& c : channels)
+		{
+			const auto& f = c.frame;
+			const std::string where = c.source->reader().where(
+				"frame " + std::to_string(f.index) + " (sensor '" + f.sensorLabel + "', channel '" + c.channel.label + "')");
+			if (f.index != f0.index || f.timestamp != f0.timestamp)
+				throw std::runtime_error(
+					where + ": timestamp " + std::to_string(f.timestamp) + " is not channel '" +
+					channels[0].channel.label + "''s frame " + std::to_string(f0.index) + " at " +
+					std::to_string(f0.timestamp) + " (the channels' frames must pair up)");
+			if (f.left.type() != CV_8UC1)
+				throw std::runtime_error(
+					where + ": " + std::to_string(f.left.channels()) + "-channel images; the survey needs grey ones");
+			if (!sameCalib(f.calib, f0.calib) || f.left.size() != f0.left.size())
+				throw std::runtime_error(where + ": calibration or image size differs from channel '" +
+										 channels[0].channel.label + "''s");
 		}
 		if (nFrames == 0)
 		{
-			calib = geometry::TStereoCalib::FromObservation(*any);
-			size = grey[0].first.size();
-			kfmap.setup(calib, size.width, size.height, {channels[0].params, channels[1].params});
-			builder = std::make_unique<map::CSurveyBuilder>(kfmap, run);
+			calib = f0.calib;
+			std::vector<map::TChannelParams> params;
+			for (const auto& c : channels) params.push_back(c.params);
+			kfmap.setup(calib, f0.left.cols, f0.left.rows, params);
+			builder = std::make_unique<survey::CSurveyBuilder>(kfmap, run);
 			if (talk) std::cout << "calibration: " << calib.asString() << "\n";
 		}
-		else if (grey[0].first.size() != size)
-			throw std::runtime_error(f.where + ": image size changed within the run");
-		for (const auto& g : grey)
-			if (g.first.size() != size) throw std::runtime_error(f.where + ": channels of different image sizes");
-		const double t = mrpt::Clock::toDouble(f.t);
+		const double t = f0.timestamp;
 		const size_t before = voChain.keyframes().size();
-		const auto res = voChain.process(grey[0].first, grey[0].second, calib, t);
+		const auto res = voChain.process(f0.left, f0.right, calib, t);
 		if (builder->offer(res, voChain.keyframes(), before))
 		{
 			std::vector<std::vector<features::TStereoMeasurement>> meas(channels.size());
@@ -236,13 +221,13 @@ int run(int argc, char** argv)
 					continue;
 				}
 				features::TStereoFrame fr;
-				channels[c].extractor.process(grey[c].first, grey[c].second, calib, fr);
+				channels[c].extractor.process(channels[c].frame.left, channels[c].frame.right, calib, fr);
 				meas[c] = std::move(fr.meas);
 			}
 			std::optional<Eigen::Isometry3d> T_gt;
 			if (gt)
 			{
-				eval::Trajectory one{{t, Eigen::Isometry3d::Identity()}};
+				const io::Trajectory one{{t, Eigen::Isometry3d::Identity()}};
 				const auto pairs = eval::associate(*gt, one, 0.01);
 				if (!pairs.empty())
 				{
@@ -255,38 +240,11 @@ int run(int argc, char** argv)
 		nFrames++;
 		msTotal += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tf).count();
 		if (talk && nFrames % 100 == 0)
-			std::cout << "frame " << nFrames << " (" << std::fixed << std::setprecision(0) << 100 * rd.progress()
-					  << "%): " << kfmap.keyframeCount() << " keyframes, " << std::setprecision(1) << kfmap.pathLength()
-					  << " m" << std::endl;
-	};
-
-	TFrame cur;
-	while (const auto obj = rd.next())
-	{
-		for (const auto& o : io::observationsIn(obj))
-		{
-			auto st = std::dynamic_pointer_cast<Stereo>(o);
-			if (!st) continue;
-			const bool isColour = st->sensorLabel == base;
-			bool isFiltered = false;
-			for (const auto& ch : channels) isFiltered |= !ch.filteredLabel.empty() && st->sensorLabel == ch.filteredLabel;
-			if (!isColour && !isFiltered) continue;
-			if (!cur.empty() && st->timestamp != cur.t)
-			{
-				process(cur);
-				cur = TFrame();
-			}
-			cur.t = st->timestamp;
-			cur.where = rd.where("stereo observation '" + st->sensorLabel + "'");
-			if (isColour)
-				cur.colour = st;
-			else
-				cur.filtered[st->sensorLabel] = st;
-		}
+			std::cout << "frame " << nFrames << " (" << std::fixed << std::setprecision(0)
+					  << 100 * channels[0].source->progress() << "%): " << kfmap.keyframeCount() << " keyframes, "
+					  << std::setprecision(1) << kfmap.pathLength() << " m" << std::endl;
 	}
-	if (!cur.empty()) process(cur);
-	if (nFrames == 0)
-		throw std::runtime_error(inPath + ": no stereo observations" + (base.empty() ? "" : " labelled '" + base + "'"));
+	if (nFrames == 0) throw std::runtime_error(channels[0].source->noFramesMessage());
 	if (kfmap.isEmpty()) throw std::runtime_error(inPath + ": the VO never tracked: no keyframes, no map written");
 	if (gt && nGt == 0)
 		throw std::runtime_error(gtArg.getValue() + ": no ground-truth pose within 10 ms of any keyframe of " + inPath);
@@ -297,8 +255,8 @@ int run(int argc, char** argv)
 	const double sWall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 	std::cout << kfmap.asString() << "\n"
 			  << std::fixed << std::setprecision(2) << "frames: " << nFrames << ", VO breaks: " << builder->breaks()
-			  << ", build " << msTotal / nFrames << " ms/frame (VO + both channels' features), save " << msSave
-			  << " ms, wall " << sWall << " s; map -> " << outPath << "\n";
+			  << ", build " << msTotal / nFrames << " ms/frame (reading, filters, VO, every channel's features), save "
+			  << msSave << " ms, wall " << sWall << " s; map -> " << outPath << "\n";
 	return 0;
 }
 shadyloc::apps::RegisterCommand reg(

@@ -46,6 +46,22 @@ std::string CObservationFilter::optionsAsIni() const
 	return s.str();
 }
 
+std::string CObservationFilter::imageOptionsAsIni() const
+{
+	// The specific options without their comments.
+	std::ostringstream s;
+	specificOptionsAsIni(s);
+	std::istringstream in(s.str());
+	std::string line, out;
+	while (std::getline(in, line))
+	{
+		const std::string t = mrpt::system::trim(line);
+		if (t.empty() || t[0] == ';' || t[0] == '#') continue;
+		out += t + "\n";
+	}
+	return out;
+}
+
 std::string CObservationFilter::describe() const
 {
 	// The specific options, comments dropped, on one line.

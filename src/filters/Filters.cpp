@@ -4,6 +4,7 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include <ostream>
+#include <sstream>
 #include <stdexcept>
 
 using namespace shadyloc;
@@ -126,6 +127,20 @@ void CFilterInvariant::specificOptionsAsIni(std::ostream& out) const
 	w.value("parallel_eyes", parallel_eyes, "transform left and right on two threads");
 }
 
+std::string CFilterInvariant::imageOptionsAsIni() const
+{
+	std::ostringstream s;
+	core::SettingsWriter w(s);
+	w.value("alpha", m_params.alpha);
+	w.value("beta", m_params.beta);
+	w.value("channel_order", image::toString(m_params.order));
+	w.value("linearisation", image::toString(m_params.linearisation));
+	if (m_params.linearisation == image::Linearisation::Gamma) w.value("gamma", m_params.gamma);
+	w.value("scale", m_params.scale);
+	w.value("offset", m_params.offset);
+	return s.str();
+}
+
 uint8_t CFilterInvariant::serializeGetVersion() const { return 0; }
 void CFilterInvariant::serializeTo(mrpt::serialization::CArchive& out) const
 {
@@ -191,6 +206,15 @@ void CFilterLinearise::specificOptionsAsIni(std::ostream& out) const
 	w.value("linearisation", image::toString(linearisation), "none | srgb | gamma");
 	w.value("gamma", gamma, "exponent with linearisation = gamma");
 }
+std::string CFilterLinearise::imageOptionsAsIni() const
+{
+	std::ostringstream s;
+	core::SettingsWriter w(s);
+	w.value("linearisation", image::toString(linearisation));
+	if (linearisation == image::Linearisation::Gamma) w.value("gamma", gamma);
+	return s.str();
+}
+
 uint8_t CFilterLinearise::serializeGetVersion() const { return 0; }
 void CFilterLinearise::serializeTo(mrpt::serialization::CArchive& out) const
 {

@@ -135,16 +135,8 @@ std::vector<uint8_t> readBlob(mrpt::serialization::CArchive& in, uint64_t n, con
 void putChannel(ByteWriter& w, const map::TChannelParams& c)
 {
 	w.str(c.label);
-	w.put<uint8_t>(static_cast<uint8_t>(c.kind));
-	w.put<uint8_t>(static_cast<uint8_t>(c.order));
-	const auto& p = c.invariant;
-	w.put<double>(p.alpha);
-	w.put<double>(p.beta);
-	w.put<uint8_t>(static_cast<uint8_t>(p.order));
-	w.put<uint8_t>(static_cast<uint8_t>(p.linearisation));
-	w.put<double>(p.gamma);
-	w.put<double>(p.scale);
-	w.put<double>(p.offset);
+	w.str(c.filter_class);
+	w.str(c.filter_options);
 	w.put<int32_t>(c.brief_patch_size);
 	w.put<uint32_t>(c.brief_seed);
 	w.put<double>(c.presmooth_sigma);
@@ -154,26 +146,16 @@ map::TChannelParams getChannel(ByteReader& r)
 {
 	map::TChannelParams c;
 	c.label = r.str();
-	const auto kind = r.get<uint8_t>(), order = r.get<uint8_t>();
-	if (kind > 1) r.fail("channel kind " + std::to_string(kind));
-	if (order > 1) r.fail("channel order " + std::to_string(order));
-	c.kind = static_cast<map::ChannelKind>(kind);
-	c.order = static_cast<image::ChannelOrder>(order);
-	auto& p = c.invariant;
-	p.alpha = r.get<double>();
-	p.beta = r.get<double>();
-	const auto po = r.get<uint8_t>(), pl = r.get<uint8_t>();
-	if (po > 1 || pl > 2) r.fail("invariant order/linearisation");
-	p.order = static_cast<image::ChannelOrder>(po);
-	p.linearisation = static_cast<image::Linearisation>(pl);
-	p.gamma = r.get<double>();
-	p.scale = r.get<double>();
-	p.offset = r.get<double>();
+	c.filter_class = r.str();
+	c.filter_options = r.str();
 	c.brief_patch_size = r.get<int32_t>();
 	c.brief_seed = r.get<uint32_t>();
 	c.presmooth_sigma = r.get<double>();
 	c.sigma_px = r.get<double>();
 	if (c.label.empty()) r.fail("channel without a label");
+	if (c.filter_class.empty()) r.fail("channel '" + c.label + "': no filter class");
+	if (c.brief_patch_size <= 0) r.fail("channel '" + c.label + "': BRIEF patch size");
+	if (!(c.presmooth_sigma >= 0) || !std::isfinite(c.presmooth_sigma)) r.fail("channel '" + c.label + "': presmooth_sigma");
 	if (!(c.sigma_px > 0) || !std::isfinite(c.sigma_px)) r.fail("channel '" + c.label + "': sigma_px");
 	return c;
 }
@@ -588,7 +570,10 @@ static TBlocks encode(
 	return b;
 }
 
-uint8_t CKeyframeMap::serializeGetVersion() const { return 0; }
+// 0: channels recorded as a kind (mono / invariant) with the invariant
+//    parameters, before channels were filters; refused (no map of it was kept).
+// 1: channels recorded as the filter that made them (class, image options).
+uint8_t CKeyframeMap::serializeGetVersion() const { return 1; }
 
 void CKeyframeMap::serializeTo(mrpt::serialization::CArchive& out) const
 {
@@ -609,6 +594,11 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 	switch (version)
 	{
 		case 0:
+			throw std::runtime_error(
+				std::string(kClass) +
+				": format version 0 (channels stored as mono/invariant kinds) is no longer read; rebuild the map "
+				"with `shadyloc survey`");
+		case 1:
 		{
 			uint8_t nBlocks;
 			in >> nBlocks;

@@ -2,21 +2,21 @@
 #include <shadyloc/map/MapTypes.h>
 
 #include <cmath>
+#include <map>
+#include <set>
 #include <sstream>
+#include <vector>
 
 namespace shadyloc::map
 {
-std::string toString(ChannelKind k) { return k == ChannelKind::Mono ? "mono" : "invariant"; }
-
 TChannelParams TChannelParams::From(
-	const std::string& label, ChannelKind kind, const features::TStereoFeatureOptions& fo,
-	const image::InvariantParams& inv, image::ChannelOrder order)
+	const std::string& label, const std::string& filterClass, const std::string& filterOptions,
+	const features::TStereoFeatureOptions& fo)
 {
 	TChannelParams p;
 	p.label = label;
-	p.kind = kind;
-	p.order = order;
-	if (kind == ChannelKind::Invariant) p.invariant = inv;
+	p.filter_class = filterClass;
+	p.filter_options = filterOptions;
 	p.brief_patch_size = fo.brief_patch_size;
 	p.brief_seed = fo.brief_seed;
 	p.presmooth_sigma = fo.presmooth_sigma;
@@ -24,14 +24,45 @@ TChannelParams TChannelParams::From(
 	return p;
 }
 
+namespace
+{
+/** "key = value" lines as key -> value (blank lines and comments skipped). */
+std::map<std::string, std::string> optionLines(const std::string& text)
+{
+	std::map<std::string, std::string> kv;
+	std::istringstream in(text);
+	std::string line;
+	auto trim = [](std::string x) {
+		const auto a = x.find_first_not_of(" \t\r"), b = x.find_last_not_of(" \t\r");
+		return a == std::string::npos ? std::string() : x.substr(a, b - a + 1);
+	};
+	while (std::getline(in, line))
+	{
+		line = trim(line);
+		if (line.empty() || line[0] == ';' || line[0] == '#') continue;
+		const auto eq = line.find('=');
+		if (eq == std::string::npos)
+			kv[line] = "";
+		else
+			kv[trim(line.substr(0, eq))] = trim(line.substr(eq + 1));
+	}
+	return kv;
+}
+}  // namespace
+
+std::string TChannelParams::filterOptionsLine() const
+{
+	std::string out;
+	for (const auto& [k, v] : optionLines(filter_options)) out += (out.empty() ? "" : " ") + k + "=" + v;
+	return out;
+}
+
 std::string TChannelParams::asString() const
 {
 	std::ostringstream s;
-	s << "'" << label << "': " << toString(kind);
-	if (kind == ChannelKind::Invariant)
-		s << " (" << invariant.asString() << ")";
-	else
-		s << " (order " << image::toString(order) << ")";
+	s << "'" << label << "': " << filter_class;
+	const std::string o = filterOptionsLine();
+	if (!o.empty()) s << " (" << o << ")";
 	s << ", BRIEF patch " << brief_patch_size << " px seed " << brief_seed << ", presmooth "
 	  << presmooth_sigma << " px";
 	return s.str();
@@ -40,10 +71,16 @@ std::string TChannelParams::asString() const
 std::string TChannelParams::differences(const TChannelParams& o) const
 {
 	std::vector<std::string> d;
-	if (kind != o.kind) d.push_back("channel kind");
-	if (kind == ChannelKind::Mono && o.kind == ChannelKind::Mono && order != o.order) d.push_back("colour order");
-	if (kind == ChannelKind::Invariant && o.kind == ChannelKind::Invariant && !invariant.sameImageAs(o.invariant))
-		d.push_back("invariant transform / 8-bit mapping");
+	if (filter_class != o.filter_class) d.push_back("filter class");
+	const auto a = optionLines(filter_options), b = optionLines(o.filter_options);
+	std::set<std::string> keys;
+	for (const auto& kv : a) keys.insert(kv.first);
+	for (const auto& kv : b) keys.insert(kv.first);
+	for (const auto& k : keys)
+	{
+		const auto ia = a.find(k), ib = b.find(k);
+		if (ia == a.end() || ib == b.end() || ia->second != ib->second) d.push_back("filter option " + k);
+	}
 	if (brief_patch_size != o.brief_patch_size) d.push_back("BRIEF patch size");
 	if (brief_seed != o.brief_seed) d.push_back("BRIEF pattern seed");
 	if (std::abs(presmooth_sigma - o.presmooth_sigma) > 1e-9) d.push_back("pre-smoothing");
@@ -54,12 +91,9 @@ std::string TChannelParams::differences(const TChannelParams& o) const
 
 bool TChannelParams::operator==(const TChannelParams& o) const
 {
-	return label == o.label && differences(o).empty() && sigma_px == o.sigma_px &&
-		   (kind != ChannelKind::Invariant ||
-			(invariant.alpha == o.invariant.alpha && invariant.beta == o.invariant.beta &&
-			 invariant.order == o.invariant.order && invariant.linearisation == o.invariant.linearisation &&
-			 invariant.gamma == o.invariant.gamma && invariant.scale == o.invariant.scale &&
-			 invariant.offset == o.invariant.offset));
+	return label == o.label && filter_class == o.filter_class && filter_options == o.filter_options &&
+		   brief_patch_size == o.brief_patch_size && brief_seed == o.brief_seed &&
+		   presmooth_sigma == o.presmooth_sigma && sigma_px == o.sigma_px;
 }
 
 void composeWithCovariance(

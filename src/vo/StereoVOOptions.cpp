@@ -5,6 +5,7 @@
 
 #include <mrpt/config/CConfigFileBase.h>
 
+#include <algorithm>
 #include <ostream>
 #include <stdexcept>
 
@@ -23,7 +24,8 @@ void TStereoVOOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c
 {
 	core::SettingsSection r(c, s);
 	r.renamed(kRenamedVOKeys);
-	// Read from [vo] by the channel selection (vo::ChannelConverter::FromConfig).
+	// Read from [vo] by the commands: `channel` picks the channel (filters::channelFromConfig);
+	// `channel_order` moved to the channel's filter section and is refused there, naming it.
 	r.alsoKnown({"channel", "channel_order"});
 	r.read("search_radius_px", search_radius_px);
 	r.read("search_radius_lost_px", search_radius_lost_px);
@@ -123,13 +125,25 @@ void TStereoVOOptions::validate() const
 const std::vector<std::string>& voConfigSections()
 {
 	static const std::vector<std::string> s = {
-		"vo", "vo.mono", "vo.invariant", "features", "features.mono", "features.invariant", "invariant"};
+		"vo",  "vo.mono",  "vo.invariant", "features", "features.mono", "features.invariant",
+		"mono", "invariant", "filters", "map"};
 	return s;
+}
+
+std::vector<std::string> voConfigSectionsOf(const mrpt::config::CConfigFileBase& cfg)
+{
+	std::vector<std::string> known = voConfigSections(), all;
+	cfg.getAllSections(all);
+	for (const auto& s : all)
+		if (!s.empty() && cfg.keyExists(s, "class"))
+			for (const std::string& k : {s, "vo." + s, "features." + s})
+				if (std::find(known.begin(), known.end(), k) == known.end()) known.push_back(k);
+	return known;
 }
 
 void checkVOConfigSections(const mrpt::config::CConfigFileBase& cfg)
 {
-	core::checkSections(cfg, voConfigSections(), "VO config");
+	core::checkSections(cfg, voConfigSectionsOf(cfg), "VO config");
 }
 
 }  // namespace shadyloc::vo

@@ -22,12 +22,15 @@ TEST(ArchitectureAreaGraph, OnlyAllowedIncludes)
 		{"io", {"geometry"}},
 		{"features", {"geometry"}},
 		{"filters", {"image", "io"}},
-		{"vo", {"features", "geometry"}},
+		{"map", {"features", "geometry", "io"}},
+		{"vo", {"features", "geometry", "map"}},
+		// Joins the VO and the map (and the channels' filters that the map records).
+		{"survey", {"features", "filters", "map", "vo"}},
 		{"eval", {"geometry", "io"}},
 		{"sim", {"geometry", "io"}},
 		{"datasets", {"io"}},
 		{"render", {"io"}},
-		{"core", {"filters"}},
+		{"core", {"filters", "map"}},
 		{"localisation", {"eval", "features", "filters", "geometry", "io", "map", "vo"}},
 	};
 	const fs::path root(SHADYLOC_SOURCE_DIR);

@@ -3,9 +3,11 @@
  * CMetricMap virtuals it refuses, landmark selection, and `shadyloc survey`
  * / `map-info` end to end on a synthetic stereo run. */
 #include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/filters/Channel.h>
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/map/CKeyframeMap.h>
-#include <shadyloc/map/SurveyBuilder.h>
+#include <shadyloc/io/Tum.h>
+#include <shadyloc/survey/SurveyBuilder.h>
 #include <shadyloc/sim/SyntheticCorridor.h>
 
 #include "../support/TestSupport.h"
@@ -165,8 +167,16 @@ TEST(MapQueries, MeasurementsByChannelAndDescriptorCheck)
 	EXPECT_THROW(m->measurements(4, "infrared"), std::out_of_range);
 	auto live = m->channels()[1];
 	EXPECT_NO_THROW(m->checkCompatible(live));
-	live.brief_seed ^= 1;
-	live.invariant.scale = 255;
+	// A live run whose invariant filter maps to 8 bits differently and whose
+	// BRIEF pattern differs, recorded as a survey records its channels.
+	CFilterInvariant liveFilter;
+	auto ip = image::InvariantParams::FromWavelengths(470, 540, 620);
+	ip.scale = 255;
+	liveFilter.setParams(ip);
+	features::TStereoFeatureOptions fo;
+	fo.presmooth_sigma = live.presmooth_sigma;
+	fo.brief_seed = live.brief_seed ^ 1;
+	live = survey::channelParams("invariant", liveFilter, fo);
 	try
 	{
 		m->checkCompatible(live);
@@ -176,7 +186,9 @@ TEST(MapQueries, MeasurementsByChannelAndDescriptorCheck)
 	{
 		const std::string w = e.what();
 		EXPECT_NE(w.find("BRIEF pattern seed"), std::string::npos) << w;
-		EXPECT_NE(w.find("invariant transform"), std::string::npos) << w;
+		EXPECT_NE(w.find("filter option scale"), std::string::npos) << w;
+		EXPECT_EQ(w.find("filter option alpha"), std::string::npos) << w;  // only what differs
+		EXPECT_NE(w.find("scale=255"), std::string::npos) << w;
 		EXPECT_NE(w.find("map 'invariant'"), std::string::npos) << w;  // both sets named
 		EXPECT_NE(w.find("live 'invariant'"), std::string::npos) << w;
 		EXPECT_NE(w.find("scale=128"), std::string::npos) << w;
@@ -242,12 +254,12 @@ TEST(MapQueries, LandmarkSelectionSpreadsOverTheImage)
 		m.response = 15;
 		all.push_back(m);
 	}
-	const auto kept = map::selectLandmarks(all, 40, 8, 6, 512, 384);
+	const auto kept = survey::selectLandmarks(all, 40, 8, 6, 512, 384);
 	ASSERT_EQ(kept.size(), 40u);
 	int weak = 0;
 	for (const auto& m : kept) weak += m.response == 15;
 	EXPECT_EQ(weak, 20) << "every bucket must give up its corners before a bucket gives a second";
-	EXPECT_EQ(map::selectLandmarks(all, 0, 8, 6, 512, 384).size(), all.size());
+	EXPECT_EQ(survey::selectLandmarks(all, 0, 8, 6, 512, 384).size(), all.size());
 }
 
 namespace
@@ -257,7 +269,7 @@ void writeCorridorRawlog(const std::string& rawlog, const std::string& gtTum, in
 	sim::SyntheticCorridor corridor;
 	const auto c = corridor.calib();
 	io::RawlogWriter w(rawlog);
-	eval::Trajectory gt;
+	io::Trajectory gt;
 	for (int k = 0; k < n; k++)
 	{
 		const Eigen::Isometry3d T = sim::SyntheticCorridor::examplePose(k, 0.25);
@@ -279,7 +291,7 @@ void writeCorridorRawlog(const std::string& rawlog, const std::string& gtTum, in
 		gt.push_back({t, T});
 	}
 	w.commit();
-	eval::writeTum(gtTum, gt);
+	io::writeTum(gtTum, gt);
 }
 }  // namespace
 
@@ -313,7 +325,7 @@ TEST(MapSurvey, SurveyAndMapInfoOnASyntheticRun)
 	}
 	EXPECT_TRUE(m->keyframe(0).T_map_kf.isApprox(Eigen::Isometry3d::Identity()));
 	// The chain against the ground truth: the corridor VO is good to a few cm over 10 m.
-	eval::Trajectory est, g;
+	io::Trajectory est, g;
 	for (const auto& k : m->keyframes())
 	{
 		est.push_back({k.timestamp, k.T_map_kf});
@@ -338,4 +350,60 @@ TEST(MapSurvey, SurveyAndMapInfoOnASyntheticRun)
 	EXPECT_NE(test::runCommand(test::appPath() + " map-info " + rawlog, &out), 0);
 	EXPECT_NE(out.find("corridor.rawlog"), std::string::npos) << out;
 	EXPECT_FALSE(std::filesystem::exists(none));
+}
+
+TEST(MapSurvey, AFilteredRunRecordsTheFilterThatMadeItsImages)
+{
+	// The same corridor surveyed twice: from a rawlog filtered by `shadyloc
+	// filter` with a non-default invariant transform (no survey config: the
+	// record, not the built-in channel, says how the images were made), and
+	// from the colour rawlog with that transform in the survey's config
+	// (filtered on the fly). Same images, so the same map.
+	const std::string dir = test::tempDir("map_survey_filtered");
+	const std::string raw = dir + "/corridor.rawlog", gt = dir + "/gt.tum", filtered = dir + "/corridor_f.rawlog";
+	writeCorridorRawlog(raw, gt, 24);
+	const std::string invSection =
+		"[invariant]\nclass = CFilterInvariant\noutput_suffix = _inv\nalpha = 0.45\nbeta = 0.5\nscale = 100\n";
+	{
+		std::ofstream f(dir + "/filters.ini");
+		f << "[filters]\npipeline = mono invariant\n[mono]\nclass = CFilterMonochrome\noutput_suffix = _mono\n"
+		  << invSection;
+		std::ofstream s(dir + "/survey.ini");
+		s << "[map]\nkf_spacing_m = 1.0\ncompression_level = 3\n" << invSection;
+		std::ofstream m(dir + "/map_only.ini");
+		m << "[map]\nkf_spacing_m = 1.0\ncompression_level = 3\n";
+	}
+	std::string out;
+	ASSERT_EQ(test::runCommand(test::appPath() + " filter -q -i " + raw + " -o " + filtered + " -c " + dir + "/filters.ini", &out), 0)
+		<< out;
+	ASSERT_EQ(
+		test::runCommand(test::appPath() + " survey -i " + filtered + " -o " + dir + "/f.kfmap -c " + dir + "/map_only.ini", &out), 0)
+		<< out;
+	EXPECT_NE(out.find("from the filtered observations 'CAMERA_inv'"), std::string::npos) << out;
+	EXPECT_NE(out.find("(filter record)"), std::string::npos) << out;	// warned: not the config's transform
+	ASSERT_EQ(
+		test::runCommand(test::appPath() + " survey -q -i " + raw + " -o " + dir + "/c.kfmap -c " + dir + "/survey.ini", &out), 0)
+		<< out;
+	const auto f = CKeyframeMap::LoadFromFile(dir + "/f.kfmap"), c = CKeyframeMap::LoadFromFile(dir + "/c.kfmap");
+	const auto& inv = f->channels()[f->channelIndex("invariant")];
+	EXPECT_EQ(inv.filter_class, "shadyloc::CFilterInvariant");
+	EXPECT_NE(inv.filter_options.find("alpha = 0.45\n"), std::string::npos) << inv.filter_options;
+	EXPECT_NE(inv.filter_options.find("scale = 100\n"), std::string::npos) << inv.filter_options;
+	EXPECT_EQ(f->channels(), c->channels());
+	ASSERT_EQ(f->keyframeCount(), c->keyframeCount());
+	ASSERT_GT(f->keyframeCount(), 3u);
+	for (uint32_t i = 0; i < f->keyframeCount(); i++)
+	{
+		EXPECT_TRUE(f->keyframe(i).T_map_kf.isApprox(c->keyframe(i).T_map_kf, 1e-12)) << "keyframe " << i;
+		for (size_t ch = 0; ch < 2; ch++)
+			EXPECT_EQ(f->keyframe(i).channels[ch].size(), c->keyframe(i).channels[ch].size()) << "keyframe " << i;
+	}
+	// The recorded filter is refused as live data by a map made with the default transform.
+	EXPECT_THROW(c->checkCompatible(survey::channelParams("invariant", *filters::defaultChannel("invariant").filter,
+														  features::TStereoFeatureOptions())),
+				 std::runtime_error);
+	// A channel the config does not define and no built-in has: named.
+	EXPECT_NE(test::runCommand(test::appPath() + " survey -i " + raw + " -o " + dir + "/x.kfmap --channels mono,infrared", &out), 0);
+	EXPECT_NE(out.find("infrared"), std::string::npos) << out;
+	EXPECT_FALSE(std::filesystem::exists(dir + "/x.kfmap"));
 }

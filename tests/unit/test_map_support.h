@@ -1,7 +1,9 @@
 /* Synthetic keyframe maps for the map tests. */
 #pragma once
 
+#include <shadyloc/filters/Filters.h>
 #include <shadyloc/map/CKeyframeMap.h>
+#include <shadyloc/survey/SurveyBuilder.h>
 
 #include <random>
 
@@ -24,6 +26,7 @@ enum Mutation
 	kChannelSigma,
 	kInvariantAlpha,
 	kInvariantScale,
+	kChannelFilterClass,
 	kRunName,
 	kKfTimestamp,
 	kKfFrame,
@@ -65,17 +68,20 @@ inline CKeyframeMap::Ptr makeSyntheticMap(int n = 24, int perKf = 40, int breakA
 	cal.baseline = 0.24;
 	if (mutate == kCalibFx) cal.fx = 400.5;
 	if (mutate == kCalibCxR) cal.cxR = 256.25;
-	map::TChannelParams mono, inv;
-	mono.label = mutate == kChannelLabel ? "grey" : "mono";
-	mono.kind = map::ChannelKind::Mono;
-	if (mutate == kChannelSeed) mono.brief_seed = 7;
-	inv.label = "invariant";
-	inv.kind = map::ChannelKind::Invariant;
-	inv.invariant = image::InvariantParams::FromWavelengths(470, 540, 620);
-	inv.invariant.scale = mutate == kInvariantScale ? 127 : 128;
-	if (mutate == kInvariantAlpha) inv.invariant.alpha += 1e-3;
-	inv.presmooth_sigma = mutate == kChannelPresmooth ? 1.5 : 1.0;
-	if (mutate == kChannelSigma) inv.sigma_px = 0.6;
+	// The channels as a survey records them: the filters that made them.
+	features::TStereoFeatureOptions fmono, finv;
+	if (mutate == kChannelSeed) fmono.brief_seed = 7;
+	finv.presmooth_sigma = mutate == kChannelPresmooth ? 1.5 : 1.0;
+	if (mutate == kChannelSigma) finv.sigma_px = 0.6;
+	CFilterMonochrome monoFilter;
+	CFilterInvariant invFilter;
+	auto ip = image::InvariantParams::FromWavelengths(470, 540, 620);
+	ip.scale = mutate == kInvariantScale ? 127 : 128;
+	if (mutate == kInvariantAlpha) ip.alpha += 1e-3;
+	invFilter.setParams(ip);
+	map::TChannelParams mono = survey::channelParams(mutate == kChannelLabel ? "grey" : "mono", monoFilter, fmono);
+	const map::TChannelParams inv = survey::channelParams("invariant", invFilter, finv);
+	if (mutate == kChannelFilterClass) mono.filter_class = "shadyloc::CFilterLinearise";
 	m->setup(cal, mutate == kImageWidth ? 513 : 512, 384, {mono, inv});
 	const uint16_t run = m->addRun(mutate == kRunName ? "noon2" : "noon");
 	Eigen::Isometry3d T_map = Eigen::Isometry3d::Identity();

@@ -2,12 +2,12 @@
  * covariance gate, sub-pixel refinement, the predicted measurement's
  * covariance), the relative-pose estimator (with and without the motion
  * prior), the keyframe policy, and StereoVO's track()/commit() split. */
-#include <shadyloc/vo/Channel.h>
+#include <shadyloc/filters/Channel.h>
+#include <shadyloc/sim/SyntheticCorridor.h>
 #include <shadyloc/vo/KeyframeMatcher.h>
 #include <shadyloc/vo/KeyframePolicy.h>
 #include <shadyloc/vo/RelativePoseEstimator.h>
 #include <shadyloc/vo/StereoVO.h>
-#include <shadyloc/vo/SyntheticCorridor.h>
 
 #include <gtest/gtest.h>
 
@@ -445,13 +445,13 @@ const TCorridorFrames& corridor()
 {
 	static const TCorridorFrames f = [] {
 		TCorridorFrames s;
-		vo::SyntheticCorridor c;
+		sim::SyntheticCorridor c;
 		s.calib = c.calib();
-		const vo::ChannelConverter mono(vo::Channel::Mono), inv(vo::Channel::Invariant);
+		const filters::TChannel mono = filters::defaultChannel("mono"), inv = filters::defaultChannel("invariant");
 		for (int k = 0; k < 12; k++)
 		{
 			cv::Mat l, r, a, b;
-			c.render(vo::SyntheticCorridor::examplePose(k, 0.15), l, r, static_cast<uint32_t>(k));
+			c.render(sim::SyntheticCorridor::examplePose(k, 0.15), l, r, static_cast<uint32_t>(k));
 			mono.convert(l, a);
 			mono.convert(r, b);
 			s.monoL.push_back(a.clone());

@@ -51,6 +51,15 @@ class CObservationFilter : public mrpt::serialization::CSerializable
 	 * loadFromConfig() reads back to the same values. */
 	std::string optionsAsIni() const;
 
+	/** The options that decide the images as canonical "key = value" lines
+	 * (core::SettingsWriter, no comments), leaving out what only changes the
+	 * speed (parallel_eyes) and values without effect (gamma unless
+	 * linearisation = gamma): loadFromConfig() reads them back to a filter
+	 * that makes the same images, and two filters with the same class and
+	 * the same text make the same images. A keyframe map records this of the
+	 * filter that made each channel. */
+	virtual std::string imageOptionsAsIni() const;
+
 	/** One line: the options that decide the images (for logs and warnings). */
 	virtual std::string describe() const;
 	/** True if this filter makes the same images as `o` from the same input:

@@ -35,6 +35,7 @@ class CFilterInvariant : public CObservationFilter
 	bool parallel_eyes = true;	//!< transform left and right on two threads
 
 	std::string describe() const override { return m_params.asString(); }
+	std::string imageOptionsAsIni() const override;
 	/** Same class and InvariantParams::sameImageAs (parallel_eyes aside). */
 	bool sameImagesAs(const CObservationFilter& o) const override;
 
@@ -61,6 +62,7 @@ class CFilterLinearise : public CObservationFilter
 	image::Linearisation linearisation = image::Linearisation::SRGB;
 	double gamma = 2.2;	 //!< exponent when linearisation = gamma
 	void transformImage(const cv::Mat& in, cv::Mat& out) const override;
+	std::string imageOptionsAsIni() const override;
 
    protected:
 	void loadSpecificOptions(core::SettingsSection& s) override;

@@ -13,7 +13,6 @@
 
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/geometry/PoseSolver.h>
-#include <shadyloc/image/ColourTransforms.h>
 
 #include <Eigen/Geometry>
 
@@ -24,22 +23,21 @@
 
 namespace shadyloc::map
 {
-/** How a channel's grey image is made from the colour one. */
-enum class ChannelKind : uint8_t
-{
-	Mono = 0,  //!< BT.601 luma (image::toMonochrome)
-	Invariant = 1  //!< illumination-invariant transform (image::InvariantTransform)
-};
-std::string toString(ChannelKind k);
-
-/** The parameters that define a channel's descriptors: a live run whose
- * values differ produces descriptors that do not compare with the map's. */
+/** The parameters that define a channel's descriptors: the observation
+ * filter that made its images (filters/Channel.h: a channel is that filter)
+ * and the feature options that shape BRIEF. A live run whose values differ
+ * produces descriptors that do not compare with the map's. The map knows the
+ * filter by class name and image options only (it does not depend on the
+ * filters): the filter can be rebuilt from them through the class factory. */
 struct TChannelParams
 {
 	std::string label;	//!< the channel's name, e.g. "mono", "invariant"
-	ChannelKind kind = ChannelKind::Mono;
-	image::ChannelOrder order = image::ChannelOrder::BGR;  //!< colour order of the input (mono conversion)
-	image::InvariantParams invariant;  //!< transform and 8-bit mapping (kind == Invariant only)
+	/** Class of the filter that made the channel's images ("CFilterInvariant"). */
+	std::string filter_class;
+	/** That filter's image options (CObservationFilter::imageOptionsAsIni():
+	 * canonical "key = value" lines, e.g. the invariant transform and its
+	 * 8-bit mapping); equal text means equal images. */
+	std::string filter_options;
 	int brief_patch_size = 32;	//!< BRIEF patch side [px]
 	uint32_t brief_seed = 0x5ad710c;  //!< BRIEF test pattern seed
 	double presmooth_sigma = 0;	 //!< Gaussian pre-smoothing before detection [px], 0 = off
@@ -47,16 +45,19 @@ struct TChannelParams
 	 * descriptor-defining: landmark covariances are recomputed with it on load). */
 	double sigma_px = 0.5;
 
-	/** From the options a survey or a live run uses for this channel. */
+	/** From the filter that made the images (class name, image options) and
+	 * the feature options a survey or a live run uses for this channel. */
 	static TChannelParams From(
-		const std::string& label, ChannelKind kind, const features::TStereoFeatureOptions& fo,
-		const image::InvariantParams& inv = {}, image::ChannelOrder order = image::ChannelOrder::BGR);
+		const std::string& label, const std::string& filterClass, const std::string& filterOptions,
+		const features::TStereoFeatureOptions& fo);
 
+	/** The filter options as "key=value" pairs on one line. */
+	std::string filterOptionsLine() const;
 	/** One line, every descriptor-defining value. */
 	std::string asString() const;
 	/** Names of the descriptor-defining fields that differ ("" when none):
-	 * kind, order, the invariant transform (kind Invariant), BRIEF patch
-	 * size and seed, pre-smoothing. */
+	 * filter class, each filter option that differs or is missing on one
+	 * side ("filter option alpha"), BRIEF patch size and seed, pre-smoothing. */
 	std::string differences(const TChannelParams& o) const;
 	bool operator==(const TChannelParams& o) const;
 };

@@ -8,12 +8,22 @@
 
 namespace shadyloc::vo
 {
-/** Sections a VO config may hold: [vo] and [features] with their per-channel
- * overrides ([vo.mono], [features.invariant], ...), and [invariant]. */
+/** Sections a VO config (config/vo.ini, config/vo_sim.ini) may hold, one
+ * list for every command that reads such a file (`vo`, `survey`): [vo] and
+ * [features] with their per-channel overrides ([vo.mono],
+ * [features.invariant], ...), the built-in channels' filter sections [mono]
+ * and [invariant], a filter pipeline [filters], and [map] (the keyframe map
+ * options the survey reads). */
 const std::vector<std::string>& voConfigSections();
 
-/** Throws core::SettingsError naming the first section of cfg that the VO
- * does not read (a misspelt [feature] would otherwise be ignored whole). */
+/** voConfigSections() plus, for every section of cfg with a `class` key (a
+ * channel defined by its filter, filters/Channel.h), that section and its
+ * [vo.<name>] / [features.<name>] overrides. */
+std::vector<std::string> voConfigSectionsOf(const mrpt::config::CConfigFileBase& cfg);
+
+/** Throws core::SettingsError naming the first section of cfg that is not
+ * in voConfigSectionsOf(cfg) (a misspelt [feature] would otherwise be ignored
+ * whole), or a key given twice in one section of a file. */
 void checkVOConfigSections(const mrpt::config::CConfigFileBase& cfg);
 
 }  // namespace shadyloc::vo

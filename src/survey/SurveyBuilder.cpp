@@ -1,12 +1,18 @@
-/* ShadyLoc — survey map building. */
-#include <shadyloc/map/SurveyBuilder.h>
+/* ShadyLoc — building a keyframe map from a survey run. */
+#include <shadyloc/survey/SurveyBuilder.h>
 
 #include <algorithm>
 #include <cmath>
 #include <numeric>
 
-namespace shadyloc::map
+namespace shadyloc::survey
 {
+map::TChannelParams channelParams(
+	const std::string& label, const CObservationFilter& madeBy, const features::TStereoFeatureOptions& fo)
+{
+	return map::TChannelParams::From(label, madeBy.GetRuntimeClass()->className, madeBy.imageOptionsAsIni(), fo);
+}
+
 std::vector<features::TStereoMeasurement> selectLandmarks(
 	const std::vector<features::TStereoMeasurement>& all, int keep, int cols, int rows, int width, int height)
 {
@@ -82,8 +88,8 @@ bool CSurveyBuilder::offer(
 		Eigen::Isometry3d T = m_T_ref_last.inverse();
 		geometry::Matrix6d C = geometry::invertCovariance(m_T_ref_last, m_cov_ref_last);
 		for (size_t k = m_lastRef + 1; k <= p.ref; k++)
-			composeWithCovariance(T, C, voKfs[k].T_prevkf_kf, voKfs[k].cov, T, C);
-		composeWithCovariance(T, C, p.T_ref_f, p.cov_ref_f, T, C);
+			map::composeWithCovariance(T, C, voKfs[k].T_prevkf_kf, voKfs[k].cov, T, C);
+		map::composeWithCovariance(T, C, p.T_ref_f, p.cov_ref_f, T, C);
 		p.T_prev_f = T;
 		p.cov_prev_f = C;
 		const auto& o = m_map.options;
@@ -102,7 +108,7 @@ void CSurveyBuilder::addKeyframe(
 	if (!m_pending.valid) throw std::logic_error("CSurveyBuilder::addKeyframe without an accepted offer()");
 	const auto& p = m_pending;
 	const auto& o = m_map.options;
-	TMapKeyframe kf;
+	map::TMapKeyframe kf;
 	kf.run = m_run;
 	kf.frame = p.res.frame;
 	kf.timestamp = p.res.timestamp;
@@ -144,4 +150,4 @@ void CSurveyBuilder::addKeyframe(
 	m_pending.valid = false;
 }
 
-}  // namespace shadyloc::map
+}  // namespace shadyloc::survey

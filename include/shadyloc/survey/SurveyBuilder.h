@@ -6,9 +6,16 @@
  * independent of the VO's internal keyframes; the relative transform between
  * consecutive map keyframes and its covariance are composed along the VO's
  * keyframe chain. A VO re-initialisation (a break) starts a new segment.
+ *
+ * The `survey` area joins the VO (which makes the chain) and the map (which
+ * stores it): the map holds the keyframe data type the VO fills, so `vo`
+ * includes `map`, and the builder, which needs both, cannot live in `map`
+ * without a cycle (docs/architecture.md).
  */
 #pragma once
 
+#include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/filters/CObservationFilter.h>
 #include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/vo/StereoVO.h>
 
@@ -16,8 +23,14 @@
 
 #include <optional>
 
-namespace shadyloc::map
+namespace shadyloc::survey
 {
+/** What the map records of a channel: the filter that made its images (for
+ * a filtered rawlog the filter its record names, not the config's) and the
+ * feature options the channel's descriptors were made with. */
+map::TChannelParams channelParams(
+	const std::string& label, const CObservationFilter& madeBy, const features::TStereoFeatureOptions& fo);
+
 /** Keeps at most `keep` measurements (all if keep <= 0 or fewer), spread
  * over the image: the image is cut into cols x rows buckets and the buckets
  * take turns giving up their strongest remaining corner (FAST response, then
@@ -77,4 +90,4 @@ class CSurveyBuilder : public mrpt::system::COutputLogger
 	} m_pending;
 };
 
-}  // namespace shadyloc::map
+}  // namespace shadyloc::survey
