@@ -1,8 +1,17 @@
 /* ShadyLoc — little-endian byte buffers for the keyframe map's blocks: a
  * writer, and a bounded reader whose every read checks the remaining bytes
  * and names the object and offset on failure (never a huge allocation from a
- * damaged count). Private to src/map. */
+ * damaged count). Private to src/map.
+ *
+ * The map's blocks are decompressed into memory first, so their exact size is
+ * known: ByteReader applies io::BoundedReader's rules to such a buffer (every
+ * read checked against the bytes left, a count checked by requireItems()
+ * before anything is sized by it, errors io::CorruptDataError naming the
+ * object and byte offset) with a memcpy per value instead of a virtual stream
+ * call: a map holds millions of values. */
 #pragma once
+
+#include <shadyloc/io/BoundedReader.h>
 
 #include <cstdint>
 #include <cstring>
@@ -85,7 +94,7 @@ class ByteReader
 	}
 	[[noreturn]] void fail(const std::string& msg) const
 	{
-		throw std::runtime_error(m_what + ", offset " + std::to_string(m_off) + ": " + msg);
+		throw io::CorruptDataError(m_what + ": byte " + std::to_string(m_off) + ": " + msg);
 	}
 	size_t offset() const { return m_off; }
 	size_t remaining() const { return m_n - m_off; }

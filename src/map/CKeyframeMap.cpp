@@ -24,6 +24,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iomanip>
+#include <memory>
 #include <set>
 #include <sstream>
 
@@ -41,7 +42,9 @@ constexpr const char* kClass = "shadyloc::CKeyframeMap";
 // (i8), BRIEF (32), patch.
 constexpr size_t kMeasBytes = 2 + 2 + 2 + 2 + 1 + 32 + features::kPatchSize * features::kPatchSize;
 constexpr uint8_t kMaxChannels = 16;
-constexpr uint64_t kMaxBlockBytes = uint64_t(1) << 36;	// 64 GiB: far beyond any map
+/** Largest serialised map (and block) a reader accepts [bytes]: 64 GiB, far
+ * beyond any map (150,000 keyframes of 120 measurements per channel are ~3.7 GB). */
+constexpr uint64_t kMaxSerializedBytes = uint64_t(1) << 36;
 
 void putPose(ByteWriter& w, const Eigen::Isometry3d& T)
 {
@@ -98,27 +101,51 @@ std::vector<uint8_t> compressBlock(const std::vector<uint8_t>& raw, int level)
 	return out;
 }
 
+/** Decompresses one block whose stored raw size is rawSize. Streams into a
+ * buffer that grows with the output actually produced, so a frame header
+ * claiming a huge size allocates nothing before its data proves it. */
 std::vector<uint8_t> decompressBlock(const std::vector<uint8_t>& comp, uint64_t rawSize, const std::string& what)
 {
 	const unsigned long long fs = ZSTD_getFrameContentSize(comp.data(), comp.size());
 	if (fs == ZSTD_CONTENTSIZE_ERROR || fs == ZSTD_CONTENTSIZE_UNKNOWN)
-		throw std::runtime_error(what + ": not a zstd frame (damaged)");
+		throw io::CorruptDataError(what + ": not a zstd frame (damaged)");
 	if (fs != rawSize)
-		throw std::runtime_error(
+		throw io::CorruptDataError(
 			what + ": stored size " + std::to_string(rawSize) + " disagrees with the frame's " +
 			std::to_string(fs) + " (damaged)");
-	std::vector<uint8_t> raw(rawSize);
-	const size_t n = ZSTD_decompress(raw.data(), raw.size(), comp.data(), comp.size());
-	if (ZSTD_isError(n)) throw std::runtime_error(what + ": " + ZSTD_getErrorName(n) + " (damaged)");
-	if (n != rawSize) throw std::runtime_error(what + ": short block (damaged)");
+	std::unique_ptr<ZSTD_DCtx, size_t (*)(ZSTD_DCtx*)> d(ZSTD_createDCtx(), ZSTD_freeDCtx);
+	if (!d) throw std::runtime_error(what + ": zstd context");
+	std::vector<uint8_t> raw;
+	ZSTD_inBuffer in{comp.data(), comp.size(), 0};
+	const size_t kStep = 1 << 20;
+	for (;;)
+	{
+		const size_t at = raw.size();
+		// At least one byte of room: output beyond rawSize shows a lying size.
+		const size_t room = std::max<size_t>(std::min<uint64_t>(kStep, rawSize - at), 1);
+		raw.resize(at + room);
+		ZSTD_outBuffer out{raw.data() + at, room, 0};
+		const size_t inBefore = in.pos;
+		const size_t ret = ZSTD_decompressStream(d.get(), &out, &in);
+		if (ZSTD_isError(ret)) throw io::CorruptDataError(what + ": " + ZSTD_getErrorName(ret) + " (damaged)");
+		raw.resize(at + out.pos);
+		if (raw.size() > rawSize) throw io::CorruptDataError(what + ": more data than its stored size (damaged)");
+		if (ret == 0) break;  // the frame is complete
+		if (out.pos == 0 && in.pos == inBefore)
+			throw io::CorruptDataError(what + ": the zstd frame ends early (damaged)");
+	}
+	if (raw.size() != rawSize || in.pos != in.size)
+		throw io::CorruptDataError(what + ": short or trailing data in the block (damaged)");
 	return raw;
 }
 
-/** Reads n bytes in chunks, so a damaged size cannot allocate more than the
- * stream holds before the read fails. */
-std::vector<uint8_t> readBlob(mrpt::serialization::CArchive& in, uint64_t n, const std::string& what)
+/** Reads n stored bytes in chunks through the bounded reader, so a damaged
+ * size can neither pass the budget nor allocate more than the stream holds. */
+std::vector<uint8_t> readBlob(io::BoundedReader& r, uint64_t n, const char* field)
 {
-	if (n > kMaxBlockBytes) throw std::runtime_error(what + ": block size " + std::to_string(n) + " (damaged)");
+	if (n > r.remaining())
+		r.fail(field, "needs " + std::to_string(n) + " bytes, only " + std::to_string(r.remaining()) +
+						  " can remain (truncated or corrupt)");
 	std::vector<uint8_t> out;
 	const size_t kChunk = 1 << 20;
 	while (out.size() < n)
@@ -126,8 +153,7 @@ std::vector<uint8_t> readBlob(mrpt::serialization::CArchive& in, uint64_t n, con
 		const size_t k = std::min<uint64_t>(kChunk, n - out.size());
 		const size_t at = out.size();
 		out.resize(at + k);
-		if (in.ReadBuffer(out.data() + at, k) != k)
-			throw std::runtime_error(what + ": truncated (" + std::to_string(at) + " of " + std::to_string(n) + " bytes)");
+		r.readBytes(out.data() + at, k, field);
 	}
 	return out;
 }
@@ -600,19 +626,24 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 				"with `shadyloc survey`");
 		case 1:
 		{
-			uint8_t nBlocks;
-			in >> nBlocks;
-			if (nBlocks < 2 || nBlocks > kMaxChannels + 1)
-				throw std::runtime_error(std::string(kClass) + ": " + std::to_string(nBlocks) + " blocks (damaged)");
+			// The stream's size is unknown here: the budget is the largest map
+			// (kMaxSerializedBytes); offsets count from the object's data.
+			io::BoundedReader in_(in, std::string(kClass) + " (version 1)", kMaxSerializedBytes);
+			const auto nBlocks = in_.read<uint8_t>("block count");
+			if (nBlocks < 1 || nBlocks > kMaxChannels + 1)
+				in_.fail("block count", std::to_string(nBlocks) + " blocks: 1 + channels (at most " +
+											std::to_string(kMaxChannels) + ") expected");
 			std::vector<std::vector<uint8_t>> raw;
 			for (int i = 0; i < nBlocks; i++)
 			{
 				const std::string what = std::string(kClass) + " block " + std::to_string(i);
-				uint64_t rawSize, compSize, sum;
-				in >> rawSize >> compSize >> sum;
-				if (rawSize > kMaxBlockBytes) throw std::runtime_error(what + ": size " + std::to_string(rawSize) + " (damaged)");
-				const auto comp = readBlob(in, compSize, what);
-				if (fnv1a(comp) != sum) throw std::runtime_error(what + ": checksum mismatch (damaged)");
+				const auto rawSize = in_.read<uint64_t>("block raw size");
+				const auto compSize = in_.read<uint64_t>("block stored size");
+				const auto sum = in_.read<uint64_t>("block checksum");
+				if (rawSize > kMaxSerializedBytes)
+					in_.fail("block raw size", std::to_string(rawSize) + " bytes: beyond any map (damaged)");
+				const auto comp = readBlob(in_, compSize, "block data");
+				if (fnv1a(comp) != sum) throw io::CorruptDataError(what + ": checksum mismatch (damaged)");
 				raw.push_back(decompressBlock(comp, rawSize, what));
 			}
 			// Parse into locals, then swap in: a failed load leaves the map as it was.
@@ -626,16 +657,20 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 			}
 			if (!(cal.fx > 0 && cal.fy > 0 && cal.baseline > 0)) r.fail("calibration: fx, fy, baseline must be > 0");
 			const int w = r.get<int32_t>(), h = r.get<int32_t>();
-			if (w <= 0 || h <= 0 || w * kPixelQuantum > 65535 || h * kPixelQuantum > 65535) r.fail("image size");
 			const auto nc = r.get<uint8_t>();
-			if (nc == 0 || nc > kMaxChannels || nc + 1 != nBlocks)
+			if (nc > kMaxChannels || nc + 1 != nBlocks)
 				r.fail(std::to_string(nc) + " channels for " + std::to_string(nBlocks) + " blocks");
+			// A map that was never set up (no channels, image size 0) holds no keyframes.
+			const bool setUp = nc > 0;
+			if (setUp ? (w <= 0 || h <= 0 || w * kPixelQuantum > 65535 || h * kPixelQuantum > 65535) : (w != 0 || h != 0))
+				r.fail("image size " + std::to_string(w) + "x" + std::to_string(h));
 			std::vector<map::TChannelParams> channels;
 			for (int i = 0; i < nc; i++) channels.push_back(getChannel(r));
 			const auto nr = r.get<uint16_t>();
 			std::vector<std::string> runs;
 			for (int i = 0; i < nr; i++) runs.push_back(r.str());
 			const auto nk = r.get<uint32_t>();
+			if (!setUp && nk > 0) r.fail(std::to_string(nk) + " keyframes in a map without channels");
 			r.requireItems(nk, 2 + 4 + 8 + 8 + 1 + 2 * 96 + 21 * 8, "keyframe");
 			CKeyframeMap tmp;
 			tmp.options = o;
@@ -799,9 +834,17 @@ CKeyframeMap::Ptr CKeyframeMap::LoadFromFile(const std::string& path)
 	}
 	catch (const std::exception& e)
 	{
+		// MRPT wraps the reader's error in its own message with a call trace:
+		// keep the line that says what is wrong.
+		std::string why = mrpt::exception_to_str(e);
+		const std::string tag = "Original exception:\n";
+		if (const auto at = why.find(tag); at != std::string::npos)
+		{
+			why = why.substr(at + tag.size());
+			why = why.substr(0, why.find('\n'));
+		}
 		throw std::runtime_error(
-			"keyframe map '" + path + "': cannot be read (damaged, or not a " + kClass +
-			" file): " + mrpt::exception_to_str(e));
+			"keyframe map '" + path + "': cannot be read (damaged, or not a " + kClass + " file): " + why);
 	}
 	if (mem.getPosition() != bytes.size())
 		throw std::runtime_error(

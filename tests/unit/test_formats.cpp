@@ -12,6 +12,7 @@
 #include <shadyloc/filters/Filters.h>
 #include <shadyloc/io/BoundedReader.h>
 #include <shadyloc/io/Rawlog.h>
+#include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/map/KeyframeIO.h>
 
 #include "../support/TestSupport.h"
@@ -152,6 +153,137 @@ void expectSameLinearise(const CFilterLinearise& a, const CFilterLinearise& b)
 	EXPECT_EQ(a.gamma, b.gamma);
 }
 
+/** A keyframe map with every stored field non-default and distinct: options,
+ * calibration, image size, two channels (each with its filter's class and
+ * image options and its feature parameters), two runs, three keyframes (a
+ * break and a second run's segment, one without ground truth), and three
+ * measurements per channel and keyframe. */
+CKeyframeMap::Ptr populatedKeyframeMap()
+{
+	auto m = CKeyframeMap::Create();
+	auto& o = m->options;
+	o.kf_spacing_m = 2.25;
+	o.kf_spacing_deg = 12.5;
+	o.landmarks_per_keyframe = 77;
+	o.selection_grid_cols = 5;
+	o.selection_grid_rows = 3;
+	o.compression_level = 4;
+	o.index_cell_m = 7.5;
+	o.draw_landmarks = true;
+	o.draw_landmark_max_depth_m = 22.5;
+	o.draw_frame_every_m = 3.75;
+	geometry::TStereoCalib cal;
+	cal.fx = 401.5;
+	cal.fy = 402.25;
+	cal.cx = 255.5;
+	cal.cy = 191.75;
+	cal.cxR = 257.125;
+	cal.baseline = 0.2375;
+	map::TChannelParams a, b;
+	a.label = "grey";
+	a.filter_class = "shadyloc::CFilterMonochrome";
+	a.filter_options = populatedMonochrome()->imageOptionsAsIni();
+	a.brief_patch_size = 31;
+	a.brief_seed = 0x1234567;
+	a.presmooth_sigma = 0.75;
+	a.sigma_px = 0.45;
+	b.label = "inv9";
+	b.filter_class = "shadyloc::CFilterInvariant";
+	b.filter_options = populatedInvariant()->imageOptionsAsIni();
+	b.brief_patch_size = 29;
+	b.brief_seed = 0x7654321;
+	b.presmooth_sigma = 1.25;
+	b.sigma_px = 0.65;
+	m->setup(cal, 500, 370, {a, b});
+	const uint16_t r0 = m->addRun("dawn"), r1 = m->addRun("dusk");
+	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+	for (int i = 0; i < 3; i++)
+	{
+		map::TMapKeyframe k;
+		k.run = i < 2 ? r0 : r1;
+		k.segment = static_cast<uint32_t>(i == 0 ? 3 : 5 + i);
+		k.predicted = i > 0;
+		k.frame = 1000 + 17 * i;
+		k.timestamp = 1400000000.125 + 0.5 * i;
+		const Eigen::AngleAxisd r(0.1 + 0.2 * i, Eigen::Vector3d(1, 2 + i, 3).normalized());
+		k.T_prev_kf = Eigen::Translation3d(0.1 * i, -0.2, 1.3 + i) * r;
+		T = T * k.T_prev_kf;
+		k.T_map_kf = T;
+		for (int x = 0; x < 6; x++)
+			for (int y = x; y < 6; y++)
+				k.cov_prev_kf(x, y) = k.cov_prev_kf(y, x) = (x == y ? 1e-3 : 1e-6) * (1 + x + 6 * y + 40 * i);
+		if (i != 1) k.T_gt_kf = Eigen::Translation3d(5.5 + i, -2.25, 40.75) * Eigen::AngleAxisd(-0.7 + i, Eigen::Vector3d::UnitY());
+		k.channels.resize(2);
+		for (int c = 0; c < 2; c++)
+			for (int j = 0; j < 3; j++)
+			{
+				features::TStereoMeasurement s;
+				s.uL = 100.5f + 10 * j + 3 * c + i;
+				s.v = 50.25f + 2 * j + c;
+				s.uR = s.uL - (20.0625f + 7 * j + i);
+				s.response = 33.0f + j + 5 * c;
+				s.zncc = 0.875f - 0.01f * j;
+				for (size_t w = 0; w < s.desc.w.size(); w++)
+					s.desc.w[w] = 0x0123456789abcdefull * (w + 1) + static_cast<uint64_t>(j + 3 * c + 9 * i);
+				for (size_t p = 0; p < s.patch.size(); p++) s.patch[p] = static_cast<uint8_t>(3 * p + 11 * j + 5 * c + i);
+				k.channels[c].push_back(s);
+			}
+		m->appendKeyframe(std::move(k));
+	}
+	return m;
+}
+
+void expectSameKeyframeMap(const CKeyframeMap& a, const CKeyframeMap& b)
+{
+	EXPECT_TRUE(a.options == b.options);
+	const auto &ca = a.calibration(), &cb = b.calibration();
+	EXPECT_EQ(ca.fx, cb.fx);
+	EXPECT_EQ(ca.fy, cb.fy);
+	EXPECT_EQ(ca.cx, cb.cx);
+	EXPECT_EQ(ca.cy, cb.cy);
+	EXPECT_EQ(ca.cxR, cb.cxR);
+	EXPECT_EQ(ca.baseline, cb.baseline);
+	EXPECT_EQ(a.imageWidth(), b.imageWidth());
+	EXPECT_EQ(a.imageHeight(), b.imageHeight());
+	EXPECT_EQ(a.channels(), b.channels());
+	EXPECT_EQ(a.runs(), b.runs());
+	ASSERT_EQ(a.keyframeCount(), b.keyframeCount());
+	for (uint32_t i = 0; i < a.keyframeCount(); i++)
+	{
+		SCOPED_TRACE("keyframe " + std::to_string(i));
+		const auto &x = a.keyframe(i), &y = b.keyframe(i);
+		EXPECT_EQ(x.id, y.id);
+		EXPECT_EQ(x.run, y.run);
+		EXPECT_EQ(x.segment, y.segment);
+		EXPECT_EQ(x.frame, y.frame);
+		EXPECT_EQ(x.timestamp, y.timestamp);
+		EXPECT_EQ(x.predicted, y.predicted);
+		EXPECT_EQ(x.T_map_kf.matrix(), y.T_map_kf.matrix());
+		EXPECT_EQ(x.T_prev_kf.matrix(), y.T_prev_kf.matrix());
+		EXPECT_EQ(x.cov_prev_kf, y.cov_prev_kf);
+		ASSERT_EQ(bool(x.T_gt_kf), bool(y.T_gt_kf));
+		if (x.T_gt_kf) EXPECT_EQ(x.T_gt_kf->matrix(), y.T_gt_kf->matrix());
+		ASSERT_EQ(x.channels.size(), y.channels.size());
+		for (size_t c = 0; c < x.channels.size(); c++)
+		{
+			ASSERT_EQ(x.channels[c].size(), y.channels[c].size()) << "channel " << c;
+			for (size_t j = 0; j < x.channels[c].size(); j++)
+			{
+				const auto &p = x.channels[c][j], &q = y.channels[c][j];
+				EXPECT_EQ(p.uL, q.uL);
+				EXPECT_EQ(p.v, q.v);
+				EXPECT_EQ(p.uR, q.uR);
+				EXPECT_EQ(p.response, q.response);
+				EXPECT_EQ(p.zncc, q.zncc);
+				EXPECT_TRUE(p.desc == q.desc);
+				EXPECT_EQ(p.patch, q.patch);
+				EXPECT_EQ(p.P, q.P);
+				EXPECT_EQ(p.cov, q.cov);
+			}
+		}
+	}
+}
+
 /** Every shadyloc:: class the registry must hold, and how to test it. A class
  * registered but missing here (or listed but not registered) fails
  * FormatsRegistry.EveryClassIsListedAndRoundTrips: a new class needs its
@@ -185,6 +317,7 @@ const std::map<std::string, TClassCase>& classCases()
 		m["shadyloc::CFilterMonochrome"] = concrete<CFilterMonochrome>(populatedMonochrome, expectSameMonochrome);
 		m["shadyloc::CFilterInvariant"] = concrete<CFilterInvariant>(populatedInvariant, expectSameInvariant);
 		m["shadyloc::CFilterLinearise"] = concrete<CFilterLinearise>(populatedLinearise, expectSameLinearise);
+		m["shadyloc::CKeyframeMap"] = concrete<CKeyframeMap>(populatedKeyframeMap, expectSameKeyframeMap);
 		return m;
 	}();
 	return cases;

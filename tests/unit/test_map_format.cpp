@@ -18,6 +18,7 @@
 #include <unistd.h>
 
 #include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -251,6 +252,88 @@ TEST(MapFormat, DamagedFilesAreCleanErrors)
 		expectError("trailing byte");
 	}
 	EXPECT_THROW(CKeyframeMap::LoadFromFile(dir + "/missing.kfmap"), std::runtime_error);
+}
+
+namespace
+{
+uint64_t fnv1a(const std::vector<uint8_t>& b)
+{
+	uint64_t h = 0xcbf29ce484222325ull;
+	for (uint8_t x : b) h = (h ^ x) * 0x100000001b3ull;
+	return h;
+}
+}  // namespace
+
+TEST(MapFormat, OldVersionAndLyingBlockSizesAreRefused)
+{
+	const std::string dir = test::tempDir("map_lying"), path = dir + "/m.kfmap";
+	const auto good = bytesOf(*test::makeSyntheticMap(6, 8, 4));
+	const std::string name = "shadyloc::CKeyframeMap";
+	const size_t ver = 1 + name.size();	 // MRPT's header: 0x80 | length, the name, the version
+	ASSERT_EQ(std::string(good.begin() + 1, good.begin() + 1 + name.size()), name);
+	ASSERT_EQ(good[ver], 1);
+	// Version 0 (channels as kinds, before channels were filters): refused, saying what to do.
+	{
+		auto b = good;
+		b[ver] = 0;
+		writeBytes(path, b, b.size());
+		try
+		{
+			CKeyframeMap::LoadFromFile(path);
+			ADD_FAILURE() << "version 0 loaded";
+		}
+		catch (const std::runtime_error& e)
+		{
+			EXPECT_NE(std::string(e.what()).find("rebuild the map"), std::string::npos) << e.what();
+		}
+	}
+	// Block 0 rewritten to claim 48 GiB of content, consistently: the stored
+	// raw size, the zstd frame's content size field and the checksum all
+	// agree. Only the data is short. The loader must refuse it without
+	// allocating what the header claims (a zero-filled 48 GiB buffer would
+	// end this process).
+	const size_t blk = ver + 1 + 1;	 // after the block count
+	auto u64at = [&](const std::vector<uint8_t>& b, size_t at) {
+		uint64_t v;
+		std::memcpy(&v, b.data() + at, 8);
+		return v;
+	};
+	const uint64_t compSize = u64at(good, blk + 8);
+	const size_t frame = blk + 24;
+	std::vector<uint8_t> comp(good.begin() + frame, good.begin() + frame + compSize);
+	ASSERT_EQ(comp[0], 0x28);  // zstd magic, little-endian 0xFD2FB528
+	const uint8_t fhd = comp[4];
+	const bool single = (fhd >> 5) & 1;
+	const int fcsFlag = fhd >> 6, didFlag = fhd & 3;
+	const size_t fcsBytes[] = {single ? 1u : 0u, 2, 4, 8};
+	const size_t didBytes[] = {0, 1, 2, 4};
+	const size_t fcsAt = 5 + (single ? 0 : 1) + didBytes[didFlag];
+	const uint64_t claimed = 48ull << 30;
+	std::vector<uint8_t> lying(comp.begin(), comp.begin() + fcsAt);
+	lying[4] = static_cast<uint8_t>((fhd & 0x3f) | (3 << 6));	 // 8-byte content size field
+	for (int i = 0; i < 8; i++) lying.push_back(static_cast<uint8_t>(claimed >> (8 * i)));
+	lying.insert(lying.end(), comp.begin() + fcsAt + fcsBytes[fcsFlag], comp.end());
+	std::vector<uint8_t> b(good.begin(), good.begin() + blk);
+	auto put64 = [&](uint64_t v) {
+		for (int i = 0; i < 8; i++) b.push_back(static_cast<uint8_t>(v >> (8 * i)));
+	};
+	put64(claimed);
+	put64(lying.size());
+	put64(fnv1a(lying));
+	b.insert(b.end(), lying.begin(), lying.end());
+	b.insert(b.end(), good.begin() + frame + compSize, good.end());
+	writeBytes(path, b, b.size());
+	try
+	{
+		CKeyframeMap::LoadFromFile(path);
+		ADD_FAILURE() << "a block claiming 48 GiB loaded";
+	}
+	catch (const std::runtime_error& e)
+	{
+		const std::string w = e.what();
+		EXPECT_NE(w.find(path), std::string::npos) << w;
+		EXPECT_NE(w.find("block 0"), std::string::npos) << w;
+	}
 }
 
 TEST(MapFormat, KilledSavesLeaveThePreviousFileLoadable)
