@@ -836,12 +836,16 @@ CKeyframeMap::Ptr CKeyframeMap::LoadFromFile(const std::string& path)
 	{
 		// MRPT wraps the reader's error in its own message with a call trace:
 		// keep the line that says what is wrong.
-		std::string why = mrpt::exception_to_str(e);
+		const std::string all = mrpt::exception_to_str(e);
 		const std::string tag = "Original exception:\n";
-		if (const auto at = why.find(tag); at != std::string::npos)
+		const auto at = all.rfind(tag);
+		std::istringstream lines(at == std::string::npos ? all : all.substr(at + tag.size()));
+		std::string why, line;
+		while (why.empty() && std::getline(lines, line))
 		{
-			why = why.substr(at + tag.size());
-			why = why.substr(0, why.find('\n'));
+			if (line.rfind("====", 0) == 0) continue;  // MRPT's banner
+			if (line.rfind("Message:", 0) == 0) line = line.substr(8);
+			why = line.substr(std::min(line.size(), line.find_first_not_of(' ')));
 		}
 		throw std::runtime_error(
 			"keyframe map '" + path + "': cannot be read (damaged, or not a " + kClass + " file): " + why);
