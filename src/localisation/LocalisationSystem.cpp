@@ -1,7 +1,6 @@
 /* ShadyLoc — the combined localisation system (VO prediction, parallel
  * localisers, switching policy, global search). */
 #include <shadyloc/core/Settings.h>
-#include <shadyloc/filters/Filters.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/vo/ChannelOptions.h>
 
@@ -211,11 +210,8 @@ CLocalisationSystem::CLocalisationSystem(
 
 map::TChannelParams CLocalisationSystem::liveParams(const filters::TChannel& ch, const features::TStereoFeatureOptions& fo)
 {
-	if (const auto inv = std::dynamic_pointer_cast<CFilterInvariant>(ch.filter))
-		return map::TChannelParams::From(ch.label, map::ChannelKind::Invariant, fo, inv->params(), inv->params().order);
-	image::ChannelOrder order = image::ChannelOrder::BGR;
-	if (const auto mono = std::dynamic_pointer_cast<CFilterMonochrome>(ch.filter)) order = mono->order;
-	return map::TChannelParams::From(ch.label, map::ChannelKind::Mono, fo, {}, order);
+	// What the survey records for a channel (survey::channelParams): the filter and the features.
+	return map::TChannelParams::From(ch.label, ch.filter->GetRuntimeClass()->className, ch.filter->imageOptionsAsIni(), fo);
 }
 
 map::TChannelParams CLocalisationSystem::liveParams(const std::string& label) const

@@ -188,6 +188,7 @@ TEST_F(LocalisationCorridor, KeyframeOffsetAlongTheChainIsRejected)
 	// the chain (either way) but reports the chosen one, as if it had locked
 	// onto the wrong place. The fixes it would report are off by ~3 m; the
 	// failure test must reject (nearly) all of them.
+	int solvedTotal = 0;
 	for (const int off : {3, -3})
 	{
 		auto sys = makeSystem(s_map, 2, "fault_keyframe_offset = " + std::to_string(off) + "\n");
@@ -202,9 +203,13 @@ TEST_F(LocalisationCorridor, KeyframeOffsetAlongTheChainIsRejected)
 				falseAccepted += em > 0.5 || ed > 2.0;
 			}
 		EXPECT_EQ(falseAccepted, 0) << "offset " << off;
-		// The fault was exercised: poses were solved against the wrong keyframe.
 		RecordProperty("solved_offset_" + std::to_string(off), solved);
+		solvedTotal += solved;
 	}
+	// The fault was exercised: poses were solved against the wrong keyframe
+	// (at +3 the keyframe's landmarks mostly fall outside the gates: few solves;
+	// at -3 they are behind the camera's view less often: most frames solve).
+	EXPECT_GT(solvedTotal, 20);
 }
 
 TEST_F(LocalisationCorridor, MapOfAnotherWorldGivesNoFix)
