@@ -179,7 +179,9 @@ TEST_F(LocalisationCorridor, KnownOffsetIsRecoveredByBothChannels)
 	EXPECT_GE(accepted["invariant"], 25);
 	// The policy: mono whenever it has a fix.
 	for (const auto& u : run.ups)
-		if (u.result("mono")->accepted()) EXPECT_EQ(u.used, "mono");
+	{
+		if (u.result("mono")->accepted()) { EXPECT_EQ(u.used, "mono"); }
+	}
 }
 
 TEST_F(LocalisationCorridor, KeyframeOffsetAlongTheChainIsRejected)
@@ -221,7 +223,7 @@ TEST_F(LocalisationCorridor, MapOfAnotherWorldGivesNoFix)
 	for (const auto& u : run.ups)
 	{
 		EXPECT_FALSE(u.localised()) << "frame " << u.frame;
-		if (u.global_search) EXPECT_FALSE(u.place.ok) << "frame " << u.frame;
+		if (u.global_search) { EXPECT_FALSE(u.place.ok) << "frame " << u.frame; }
 	}
 }
 
