@@ -104,7 +104,8 @@ Eigen::Matrix3d CKeyframeMatcher::gateMatrix(const Eigen::Matrix3d& S) const
 	return es.eigenvectors() * lam.asDiagonal() * es.eigenvectors().transpose();
 }
 
-int CKeyframeMatcher::searchDescriptors(const TKeyframeMatchInput& in, double radius, std::vector<int>& matchOf) const
+int CKeyframeMatcher::searchDescriptors(
+	const TKeyframeMatchInput& in, double radius, std::vector<int>& matchOf, TGateStats* gateStats) const
 {
 	checkInput(in);
 	const auto& o = m_opts;
@@ -117,6 +118,9 @@ int CKeyframeMatcher::searchDescriptors(const TKeyframeMatchInput& in, double ra
 	std::vector<int> bestKf(meas.size(), -1), bestD(meas.size(), 999);
 	const bool gate = o.region == SearchRegion::Gate;
 	const double r2 = radius * radius;
+	std::vector<double> axes;
+	int overflow = 0;
+	const double W = in.frame->left.cols, H = in.frame->left.rows;
 	for (size_t j = 0; j < kfm.size(); j++)
 	{
 		double u = 0, v = 0, hu = radius, hv = radius;
@@ -126,6 +130,18 @@ int CKeyframeMatcher::searchDescriptors(const TKeyframeMatchInput& in, double ra
 		{
 			const auto pm = predict(calib, in.T_curr_kf_pred, in.cov_T_curr_kf_pred, kfm[j].P, kfm[j].cov, o.sigma_px);
 			if (!pm.ok) continue;
+			if (pm.z.x() >= 0 && pm.z.x() < W && pm.z.y() >= 0 && pm.z.y() < H)
+			{
+				// The longest axis of the unclamped gate: sqrt(chi2 lambda_max).
+				Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (pm.S + pm.S.transpose()), Eigen::EigenvaluesOnly);
+				const double axis = std::sqrt(o.gate_chi2 * std::max(0.0, es.eigenvalues().maxCoeff()));
+				axes.push_back(axis);
+				if (axis > o.gate_max_px)
+				{
+					overflow++;
+					if (!o.gate_clamp) continue;
+				}
+			}
 			const Eigen::Matrix3d G = gateMatrix(pm.S);
 			Ginv = G.inverse();
 			zp = pm.z;
@@ -182,6 +198,17 @@ int CKeyframeMatcher::searchDescriptors(const TKeyframeMatchInput& in, double ra
 			matchOf[j] = bi;
 		}
 	}
+	if (gateStats)
+	{
+		*gateStats = TGateStats();
+		gateStats->predicted = static_cast<int>(axes.size());
+		gateStats->overflow = overflow;
+		if (!axes.empty())
+		{
+			std::nth_element(axes.begin(), axes.begin() + axes.size() / 2, axes.end());
+			gateStats->median_axis_px = axes[axes.size() / 2];
+		}
+	}
 	return static_cast<int>(std::count_if(matchOf.begin(), matchOf.end(), [](int i) { return i >= 0; }));
 }
 
@@ -196,7 +223,7 @@ void CKeyframeMatcher::match(const TKeyframeMatchInput& in, TKeyframeMatchOutput
 	std::vector<int> matchOf;
 	int nMatch = 0;
 	if (o.region == SearchRegion::Gate)
-		nMatch = searchDescriptors(in, 0.0, matchOf);
+		nMatch = searchDescriptors(in, 0.0, matchOf, &out.gate);
 	else
 	{
 		nMatch = searchDescriptors(in, in.wide ? o.search_radius_lost_px : o.search_radius_px, matchOf);

@@ -144,6 +144,23 @@ TFrameResult StereoVO::track(
 {
 	ASSERTMSG_(!m_pending.active, "StereoVO::track(): the previous frame was not committed (call commit())");
 	const auto tStart = Clock::now();
+	features::TStereoFrame fr;
+	m_extractor.process(left8, right8, calib, fr);
+	return trackMeasured(std::move(fr), calib, timestamp, prior, tStart);
+}
+
+TFrameResult StereoVO::track(
+	features::TStereoFrame frame, const geometry::TStereoCalib& calib, double timestamp,
+	const Eigen::Isometry3d* prior)
+{
+	ASSERTMSG_(!m_pending.active, "StereoVO::track(): the previous frame was not committed (call commit())");
+	return trackMeasured(std::move(frame), calib, timestamp, prior, Clock::now());
+}
+
+TFrameResult StereoVO::trackMeasured(
+	features::TStereoFrame&& fr, const geometry::TStereoCalib& calib, double timestamp,
+	const Eigen::Isometry3d* prior, std::chrono::steady_clock::time_point tStart)
+{
 	const auto& o = m_opts;
 	m_pending = TPending();
 	m_pending.active = true;
@@ -152,8 +169,6 @@ TFrameResult StereoVO::track(
 	res.frame = m_frame++;
 	res.timestamp = timestamp;
 
-	features::TStereoFrame fr;
-	m_extractor.process(left8, right8, calib, fr);
 	res.features = fr.cornersLeft;
 	res.stereo = fr.meas.size();
 	res.ms.detect = fr.timings.detect_ms;

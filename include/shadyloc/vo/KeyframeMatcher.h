@@ -51,6 +51,11 @@ struct TKeyframeMatcherOptions
 	 * are integer pixels; a tiny covariance must not exclude them) [px]. */
 	double gate_min_px = 3.0;
 	double gate_max_px = 80.0;	//!< Gate: ... and at most this long (bounds the search) [px]
+	/** Gate: an axis longer than gate_max_px is clamped to it (true, the
+	 * VO), or the landmark is not searched at all and counted as an overflow
+	 * (false, the localisers: a clipped gate silently excludes the true
+	 * match, so a caller that sees many overflows declares itself lost). */
+	bool gate_clamp = true;
 	double sigma_px = 0.5;	//!< Gate: measurement noise per pixel coordinate [px]
 	int max_hamming = 90;  //!< largest BRIEF distance of a match [bits of 256]
 	double match_ratio = 0.95;	//!< best must be < ratio * second best distance in the region
@@ -94,6 +99,14 @@ struct TPredictedMeasurement
 	Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
 };
 
+/** What the Gate saw of the landmarks (TKeyframeMatchOutput::gate). */
+struct TGateStats
+{
+	int predicted = 0;	//!< landmarks in front of the camera, predicted inside the image
+	int overflow = 0;  //!< ... whose gate exceeded gate_max_px (not searched when !gate_clamp)
+	double median_axis_px = 0;	//!< median longest gate axis of the predicted ones (before clamping) [px]
+};
+
 /** Output of one matching. */
 struct TKeyframeMatchOutput
 {
@@ -103,6 +116,7 @@ struct TKeyframeMatchOutput
 	int descriptor_matches = 0;	 //!< BRIEF matches of the last search (before refinement)
 	bool widened = false;  //!< Circle: the wide retry ran
 	bool near_only = false;	 //!< far landmarks were left out (near_min_disparity)
+	TGateStats gate;  //!< Gate region only
 };
 
 /** The keyframe matcher (see the file comment). Stateless: one instance can
@@ -119,7 +133,8 @@ class CKeyframeMatcher
 	/** Steps 1-3 with a given region: matchOf[j] = index of the measurement
 	 * matched to landmark j, or -1; returns the number of matches. For the
 	 * Circle region, `radius` [px] is the circle's; the Gate ignores it. */
-	int searchDescriptors(const TKeyframeMatchInput& in, double radius, std::vector<int>& matchOf) const;
+	int searchDescriptors(
+		const TKeyframeMatchInput& in, double radius, std::vector<int>& matchOf, TGateStats* gate = nullptr) const;
 
 	/** The predicted measurement of landmark P_kf (covariance cov_P [m^2]) at
 	 * T_curr_kf (covariance cov_T, left convention) with pixel noise sigma_px. */

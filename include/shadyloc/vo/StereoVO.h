@@ -162,6 +162,13 @@ class StereoVO : public mrpt::system::COutputLogger
 	TFrameResult track(
 		const cv::Mat& left8, const cv::Mat& right8, const geometry::TStereoCalib& calib,
 		double timestamp, const Eigen::Isometry3d* prior_T_prev_curr = nullptr);
+	/** track() on measurements already extracted (StereoFeatureExtractor with
+	 * this VO's feature options, e.g. shared with a localiser of the same
+	 * channel): the frame's measurements are kept as a keyframe's if it
+	 * becomes one, hence taken by value. */
+	TFrameResult track(
+		features::TStereoFrame frame, const geometry::TStereoCalib& calib, double timestamp,
+		const Eigen::Isometry3d* prior_T_prev_curr = nullptr);
 	/** The second half: a tracked (Ok) frame becomes a keyframe as decided;
 	 * other frames ignore the decision (First and Reinit frames are keyframes
 	 * anyway, untracked ones cannot be). Returns the final result. */
@@ -181,6 +188,9 @@ class StereoVO : public mrpt::system::COutputLogger
 	void reset();
 
    private:
+	TFrameResult trackMeasured(
+		features::TStereoFrame&& fr, const geometry::TStereoCalib& calib, double timestamp,
+		const Eigen::Isometry3d* prior, std::chrono::steady_clock::time_point tStart);
 	void addKeyframe(
 		size_t frame, double timestamp, const Eigen::Isometry3d& T_world_kf, const geometry::Matrix6d& cov,
 		bool chainBreak, std::vector<features::TStereoMeasurement>&& meas, const geometry::TStereoCalib& calib);

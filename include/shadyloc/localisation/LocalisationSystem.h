@@ -1,0 +1,175 @@
+/* ShadyLoc — the combined localisation system (McManus et al. 2014,
+ * Section III-B, Figure 4): live stereo VO on the monochrome channel predicts
+ * for every localiser (the baseline's VO tells the invariant pipeline where
+ * to look); the localisers (one CStereoLocaliser per channel, made from
+ * config) run in parallel threads on every frame; the policy takes the first
+ * localiser in its order that has an accepted fix (monochrome, then
+ * invariant), and when none has, dead-reckons on VO until one re-acquires.
+ * Not fused: the invariant estimate is noisier and slightly biased, so
+ * switching beats fusing (the paper).
+ *
+ * Starting and recovering: with no known place (the start, a prediction
+ * whose gates grew past the ceiling, or too many frames without a fix) every
+ * localiser's global search runs on the frame; the first verified,
+ * unambiguous place in policy order becomes the prediction, and fixes are
+ * accepted again after K consistent frames.
+ *
+ * The MRPT-facing call: feed CObservationStereoImages one at a time
+ * (processObservation), read one TLocalisationUpdate per frame.
+ */
+#pragma once
+
+#include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/filters/Channel.h>
+#include <shadyloc/localisation/StereoLocaliser.h>
+#include <shadyloc/map/CKeyframeMap.h>
+#include <shadyloc/vo/StereoVO.h>
+
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/obs/CObservationStereoImages.h>
+#include <mrpt/poses/CPose3DPDFGaussian.h>
+#include <mrpt/system/COutputLogger.h>
+
+#include <memory>
+#include <string>
+#include <vector>
+
+namespace shadyloc::localisation
+{
+/** Options of the combined system ([localise] in config/localise_sim.ini). */
+struct TSystemOptions
+{
+	/** Localisers, in policy order (the first with an accepted fix is used). */
+	std::vector<std::string> localisers = {"mono", "invariant"};
+	std::string vo_channel = "mono";  //!< the channel of the live VO that predicts for all
+	int threads = 2;  //!< 1: everything on the calling thread; >= 2: channels in parallel
+	/** VO's covariance is scaled by this (the solver's is optimistic) [-]. */
+	double vo_cov_scale = 4.0;
+	/** Added to each VO step's covariance, per metre of the step: drift that
+	 * the solver's covariance does not see [m/m], [deg/m]. */
+	double vo_sigma_m_per_m = 0.02;
+	double vo_sigma_deg_per_m = 0.2;
+	/** A step VO could not measure (predicted by constant velocity) [m], [deg]. */
+	double vo_lost_sigma_m = 0.3;
+	double vo_lost_sigma_deg = 3.0;
+	/** Without a fix for this many frames the place is searched for anew [frames]. */
+	int relocalise_after_frames = 30;
+	/** Added to a global-search place's covariance (one frame's solve,
+	 * unconfirmed) [m], [deg]. */
+	double global_sigma_m = 0.1;
+	double global_sigma_deg = 1.0;
+
+	void load(const mrpt::config::CConfigFileBase& c, const std::string& section);
+	void dump(std::ostream& out) const;
+	void validate() const;
+};
+
+/** One frame's result: which localiser (if any), the pose relative to its
+ * keyframe with covariance, quality, and each localiser's own result. */
+struct TLocalisationUpdate
+{
+	size_t frame = 0;
+	double timestamp = 0;  //!< [s]
+	/** The localiser whose fix is used ("" when none: dead reckoning). */
+	std::string used;
+	bool localised() const { return !used.empty(); }
+	/** A place is known (a fix now or earlier, dead-reckoned since): the
+	 * pose fields below are meaningful. */
+	bool placeKnown = false;
+	uint32_t kf_id = 0;
+	uint16_t kf_run = 0;
+	uint64_t kf_frame = 0;
+	double kf_stamp = 0;  //!< [s]
+	Eigen::Isometry3d T_kf_live = Eigen::Isometry3d::Identity();  //!< live left camera in the keyframe's
+	geometry::Matrix6d cov = geometry::Matrix6d::Zero();  //!< of T_kf_live, left perturbation [m^2, rad^2]
+	Eigen::Isometry3d T_map_live = Eigen::Isometry3d::Identity();  //!< live left camera in the map frame
+	double distance_m = 0;	//!< travelled so far, from VO [m]
+	int frames_since_fix = 0;
+	std::vector<TLocaliserResult> localisers;  //!< in policy order
+	vo::TFrameResult vo;
+	TMotion motion;	 //!< VO's increment used for the prediction
+	bool global_search = false;	 //!< the global search ran on this frame
+	TGlobalPlace place;	 //!< its outcome (the one adopted, or the first localiser's)
+	double ms_total = 0;  //!< channel conversion, features, VO, localisers and policy (decoding excluded) [ms]
+	double ms_convert = 0;	//!< of which channel conversion, summed over the channels [ms]
+
+	/** The localiser result of a channel, or nullptr. */
+	const TLocaliserResult* result(const std::string& channel) const;
+	/** T_kf_live and cov as MRPT's pose PDF. */
+	mrpt::poses::CPose3DPDFGaussian pdf() const;
+};
+
+class CLocalisationSystem : public mrpt::system::COutputLogger
+{
+   public:
+	/** A channel of the live frames. */
+	struct TChannelSetup
+	{
+		filters::TChannel channel;	//!< makes the channel's grey images from the colour ones
+		features::TStereoFeatureOptions features;
+		TLocaliserOptions localiser;  //!< used if the channel is one of the localisers
+	};
+
+	/** Checks every channel's descriptor parameters against the map's
+	 * (throws naming both sets) and that the map has the localisers'
+	 * channels and keyframes. */
+	CLocalisationSystem(
+		CKeyframeMap::Ptr map, const std::vector<TChannelSetup>& channels, const vo::TStereoVOOptions& vo,
+		const TSystemOptions& o);
+
+	/** From a config: [localise], [localiser], [localiser.<channel>], [vo],
+	 * [features] and their channel sections, the channel filter sections.
+	 * `localisers`, if not empty, replaces [localise] localisers. `what`
+	 * names the config in errors. */
+	static std::unique_ptr<CLocalisationSystem> FromConfig(
+		const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::vector<std::string>& localisers,
+		int threads, const std::string& what);
+
+	/** Starts near a keyframe: the first search for the place looks only at
+	 * the keyframes within start_radius_m along the chain of it (a place is
+	 * still verified geometrically, never assumed). */
+	void setStartKeyframe(uint32_t id, double start_radius_m = 10.0);
+
+	/** One stereo observation (images loaded, rectified). */
+	TLocalisationUpdate processObservation(const mrpt::obs::CObservationStereoImages& obs);
+	/** One stereo frame: colour images (as MRPT stores them, BGR) that each
+	 * channel's filter converts. */
+	TLocalisationUpdate processFrame(
+		const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib, double timestamp);
+
+	const CKeyframeMap& map() const { return *m_map; }
+	const TSystemOptions& options() const { return m_opts; }
+	/** The channel labels, the VO's first. */
+	std::vector<std::string> channelLabels() const;
+	const TChannelSetup& channelSetup(const std::string& label) const;
+	/** The live descriptor parameters of a channel (what the map must match). */
+	map::TChannelParams liveParams(const std::string& label) const;
+	static map::TChannelParams liveParams(const filters::TChannel& ch, const features::TStereoFeatureOptions& fo);
+	void reset();
+
+   private:
+	struct TPipe
+	{
+		TChannelSetup setup;
+		features::StereoFeatureExtractor extractor;
+		std::unique_ptr<CStereoLocaliser> localiser;  //!< null: the channel only feeds the VO
+		int policyRank = -1;  //!< index in m_opts.localisers
+	};
+	/** VO's increment from the previous frame with its covariance. */
+	TMotion motionOf(const vo::TFrameResult& r);
+
+	CKeyframeMap::Ptr m_map;
+	TSystemOptions m_opts;
+	std::vector<TPipe> m_pipes;	 //!< the VO channel first
+	vo::StereoVO m_vo;
+	// State.
+	size_t m_frame = 0;
+	TKeyframePose m_est;  //!< the current estimate (valid once a place is known)
+	int m_framesSinceFix = 0;
+	std::vector<uint32_t> m_searchAmong;  //!< keyframes the next global search looks at (empty: all)
+	double m_distance = 0;
+	bool m_havePrevVO = false;
+	vo::TFrameResult m_prevVO;
+};
+
+}  // namespace shadyloc::localisation

@@ -1,0 +1,278 @@
+/* ShadyLoc — one localiser: a live stereo frame of one channel against the
+ * dual-channel keyframe map (McManus et al. 2014, Sections II-B and III-B).
+ * The same class serves every channel; the combined system makes one per
+ * channel from config (monochrome, illumination-invariant).
+ *
+ * Per frame (localise()):
+ *   1. keyframe choice: from the predicted pose (the last fix composed with
+ *      the VO increment, with covariance), the keyframe nearest a point
+ *      look-ahead metres in front of the camera along the chain, heading
+ *      included (roads are driven both ways); the prediction is re-expressed
+ *      in that keyframe with the inter-keyframe covariance;
+ *   2. active search: every landmark's predicted stereo measurement
+ *      (uL, v, uR) with the covariance of the landmark, the pixel noise and
+ *      the prediction (vo::CKeyframeMatcher::predict), a chi-square gate with
+ *      a floor; when the gates grow past the ceiling the localiser declares
+ *      itself lost (it never clips a gate); BRIEF inside, patch refinement;
+ *   3. RANSAC and the robust solve for T_kf_live with covariance, WITHOUT the
+ *      motion prior (a RANSAC that favours the prediction would agree with it
+ *      by construction, and the failure test would test nothing);
+ *   4. the failure test: too few inliers; the fix against the prediction
+ *      (catches a constant offset appearing, e.g. a wrong keyframe where the
+ *      scenery repeats); the frame-to-frame motion of two consecutive solves
+ *      against VO's (the paper's test), both Mahalanobis tests on the sum of
+ *      the covariances; a fix is accepted only after K consecutive
+ *      consistent frames after any failure.
+ * Starting and recovering: globalSearch() votes with BRIEF over every
+ * keyframe and verifies the best candidates geometrically (RANSAC + solve);
+ * it never returns a place without a verified pose, nor an ambiguous one.
+ * docs/localisation.md.
+ */
+#pragma once
+
+#include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/geometry/PoseCovariance.h>
+#include <shadyloc/geometry/PoseSolver.h>
+#include <shadyloc/geometry/StereoCamera.h>
+#include <shadyloc/map/CKeyframeMap.h>
+#include <shadyloc/vo/KeyframeMatcher.h>
+#include <shadyloc/vo/RelativePoseEstimator.h>
+
+#include <mrpt/config/CConfigFileBase.h>
+
+#include <Eigen/Geometry>
+
+#include <cstdint>
+#include <optional>
+#include <ostream>
+#include <string>
+
+namespace shadyloc::localisation
+{
+/** How the localiser searches for each landmark's match (must-show 4). */
+enum class SearchMode
+{
+	Gate,  //!< the chi-square gate of the predicted measurement (active search, the default)
+	Window,	 //!< a fixed circle of window_px around the predicted projection
+	Global	//!< every measurement of the frame (global BRIEF matching to the keyframe)
+};
+std::string toString(SearchMode m);
+
+/** Options of one localiser ([localiser], then [localiser.<channel>]
+ * overrides; config/localise_sim.ini). */
+struct TLocaliserOptions
+{
+	// ---- keyframe choice
+	double kf_back_m = 6.0;	 //!< keyframes considered behind the predicted keyframe along the chain [m]
+	double kf_ahead_m = 12.0;  //!< ... and ahead of it [m]
+	/** The keyframe nearest the point this far in front of the predicted
+	 * camera is taken: a keyframe a little ahead sees what the live camera
+	 * sees, one behind has landmarks the camera has passed [m]. */
+	double kf_lookahead_m = 1.5;
+	double kf_max_distance_m = 6.0;	 //!< farther keyframes are not used [m]
+	double kf_max_angle_deg = 30.0;	 //!< optical axes farther apart are not used [deg]
+	double kf_angle_weight_m_per_deg = 0.1;	 //!< ranking: metres a degree of heading is worth [m/deg]
+	/** Covariance added when the prediction crosses from one chain segment to
+	 * another (their link is not measured): standard deviations [m], [deg]. */
+	double cross_segment_sigma_m = 2.0;
+	double cross_segment_sigma_deg = 5.0;
+
+	// ---- search
+	SearchMode search = SearchMode::Gate;
+	double gate_chi2 = 11.34;  //!< gate on (uL, v, uR): 99 % of chi^2 with 3 degrees of freedom
+	double gate_min_px = 3.0;  //!< every gate axis at least this long [px]
+	/** Gate ceiling: a landmark whose gate axis is longer is not searched;
+	 * when more than max_overflow_fraction of the visible landmarks overflow,
+	 * the localiser is lost (status lost) [px]. */
+	double gate_max_px = 60.0;
+	double max_overflow_fraction = 0.5;	 //!< see gate_max_px
+	double window_px = 40.0;  //!< Window: circle radius [px]
+	int max_hamming = 80;  //!< largest BRIEF distance of a match [bits of 256]
+	double match_ratio = 0.9;  //!< best < ratio * second best distance in the region
+	double refine_min_zncc = 0.6;  //!< the refined patch must correlate this well
+	int refine_radius_px = 2;  //!< refinement climbs at most this far from the BRIEF match [px]
+	int refine_iterations = 5;	//!< Gauss-Newton steps of the sub-pixel refinement
+
+	// ---- solve
+	double ransac_threshold_px = 3.0;  //!< inlier bound on |(duL, dv, duR)| [px]
+	int ransac_iterations = 300;  //!< RANSAC upper bound
+	double sigma_px = 0.5;	//!< measurement noise of the solve [px]
+	double huber_k = 1.0;  //!< Huber threshold [sigmas]
+	bool two_view_ba = true;  //!< two-view bundle adjustment (else fixed landmarks)
+	int min_matches = 15;  //!< fewer matches after refinement: few_matches
+	int min_inliers = 20;  //!< fewer inliers: few_inliers
+	/** The solver's covariance is scaled by this before the tests (it is
+	 * optimistic: correlated errors, model error) [-]. */
+	double cov_scale = 4.0;
+
+	/** A fix whose standard deviation (largest axis of the scaled covariance)
+	 * exceeds these is rejected (status uncertain): it could not meet the
+	 * accuracy a fix is judged by (0.5 m, 2 deg at 3 sigma) [m], [deg]. */
+	double max_sigma_m = 0.25;
+	double max_sigma_deg = 1.0;
+
+	// ---- failure test
+	/** Fix against prediction: Mahalanobis distance^2 bound, chi^2 with 6 dof
+	 * (22.46 = 99.9 %) [-]. */
+	double prediction_chi2 = 22.46;
+	/** Frame-to-frame motion of two consecutive solves against VO's [-]. */
+	double motion_chi2 = 22.46;
+	int consistent_frames = 3;	//!< K: consecutive consistent frames before fixes are accepted again
+
+	// ---- global search
+	int global_vote_hamming = 50;  //!< a landmark votes for its keyframe when a live descriptor is this close [bits]
+	int global_candidates = 5;	//!< keyframes verified geometrically, most votes first
+	/** First pass of a verification: BRIEF in a circle this large around each
+	 * landmark's projection from the candidate keyframe's own pose (the live
+	 * camera is near it); the second pass is the gate around that solve [px]. */
+	double global_window_px = 80.0;
+	int global_min_inliers = 30;  //!< a verified place needs this many inliers
+	/** Another verified place at least global_distinct_m away with inliers
+	 * >= ratio * the best's makes the search ambiguous: no place [-]. */
+	double global_ambiguity_ratio = 0.7;
+	double global_distinct_m = 3.0;	 //!< see global_ambiguity_ratio [m]
+
+	/** Fault injection (evaluation only): match against the keyframe this many
+	 * along the chain from the chosen one, reported as the chosen one. */
+	int fault_keyframe_offset = 0;
+
+	/** Reads `section` (keys as above, with their units) through
+	 * core::SettingsSection; unknown keys are errors. */
+	void load(const mrpt::config::CConfigFileBase& c, const std::string& section);
+	void dump(std::ostream& out) const;
+	void validate() const;	//!< throws std::invalid_argument naming the option
+};
+
+/** Options for the channel `channel`: [section], then [section.<channel>]. */
+TLocaliserOptions localiserOptionsFor(
+	const mrpt::config::CConfigFileBase& cfg, const std::string& channel, const std::string& section = "localiser");
+
+/** A pose relative to a map keyframe with its covariance (left perturbation,
+ * translation first [m^2, rad^2]). */
+struct TKeyframePose
+{
+	bool valid = false;
+	uint32_t kf = 0;  //!< map keyframe id
+	Eigen::Isometry3d T_kf_live = Eigen::Isometry3d::Identity();  //!< live left camera in the keyframe's left camera
+	geometry::Matrix6d cov = geometry::Matrix6d::Zero();
+};
+
+/** VO's motion from the previous frame to this one. */
+struct TMotion
+{
+	bool valid = false;
+	Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();
+	geometry::Matrix6d cov = geometry::Matrix6d::Zero();  //!< left perturbation [m^2, rad^2]
+};
+
+/** One frame's input. */
+struct TLocaliserInput
+{
+	size_t frame = 0;  //!< live frame index
+	double timestamp = 0;  //!< [s]
+	const features::TStereoFrame* meas = nullptr;  //!< the live frame's measurements of this channel
+	geometry::TStereoCalib calib;  //!< the live camera
+	TKeyframePose prediction;  //!< the predicted pose (invalid: no prior, nothing to do)
+	TMotion motion;	 //!< VO's increment (for the frame-to-frame test)
+};
+
+enum class LocaliserStatus
+{
+	Ok,	 //!< accepted fix
+	Unconfirmed,  //!< consistent, but fewer than K consistent frames since the last failure
+	NoPrediction,  //!< no prior pose: nothing to search around
+	NoKeyframe,	 //!< no map keyframe near the prediction (position and heading)
+	Lost,  //!< the gates grew past the ceiling: the prediction is too uncertain to search
+	FewMatches,
+	FewInliers,
+	SolverFailed,
+	Uncertain,	//!< the fix's covariance exceeds max_sigma_m / max_sigma_deg
+	PredictionInconsistent,	 //!< the fix disagrees with the prediction
+	MotionInconsistent	//!< its frame-to-frame motion disagrees with VO's
+};
+std::string toString(LocaliserStatus s);
+
+/** One localiser's result for one frame (shaped like MOLA's localisation
+ * update: timestamp, reference, relative pose, covariance, quality). */
+struct TLocaliserResult
+{
+	size_t frame = 0;
+	double timestamp = 0;  //!< [s]
+	std::string channel;
+	LocaliserStatus status = LocaliserStatus::NoPrediction;
+	bool solved = false;  //!< a pose was solved (T_kf_live, cov meaningful)
+	bool accepted() const { return status == LocaliserStatus::Ok; }
+	uint32_t kf_id = 0;	 //!< the keyframe localised against
+	uint16_t kf_run = 0;  //!< its survey run (CKeyframeMap::runs())
+	uint64_t kf_frame = 0;	//!< its frame in the survey run
+	double kf_stamp = 0;  //!< its timestamp [s]
+	Eigen::Isometry3d T_kf_live = Eigen::Isometry3d::Identity();  //!< live left camera in the keyframe's [m]
+	geometry::Matrix6d cov = geometry::Matrix6d::Zero();  //!< of T_kf_live (scaled by cov_scale)
+	int matches = 0;  //!< correspondences after refinement
+	int inliers = 0;
+	double rms_px = 0;
+	double sigma_m = -1, sigma_deg = -1;  //!< largest standard deviation of the fix (scaled) [m], [deg]
+	double prediction_d2 = -1;	//!< Mahalanobis distance^2 of the prediction test (-1: not run)
+	double motion_d2 = -1;	//!< ... of the motion test (-1: not run)
+	int consistent = 0;	 //!< consecutive consistent frames so far
+	vo::TGateStats gate;
+	double ms = 0;	//!< time of this localiser on this frame [ms]
+};
+
+/** A place found by the global search. */
+struct TGlobalPlace
+{
+	bool ok = false;  //!< a verified, unambiguous place
+	std::string why;  //!< when not ok: why not
+	TKeyframePose pose;	 //!< the live camera in the place's keyframe
+	int inliers = 0, votes = 0;
+	int runner_up_inliers = 0;	//!< best verified place elsewhere (ambiguity)
+	int verified = 0;  //!< candidates verified
+};
+
+class CStereoLocaliser
+{
+   public:
+	/** `channel` names one of the map's channels (throws naming the map's
+	 * channels if absent). The map must outlive the localiser. */
+	CStereoLocaliser(const CKeyframeMap& map, const std::string& channel, const TLocaliserOptions& o);
+
+	/** One frame (see the file comment). Keeps the state of the failure test. */
+	TLocaliserResult localise(const TLocaliserInput& in);
+
+	/** A place for the live frame with no prior. Const: one instance may run
+	 * it while another thread uses a different localiser. */
+	TGlobalPlace globalSearch(const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed) const;
+	/** The same among the given keyframes only (e.g. around a start keyframe). */
+	TGlobalPlace globalSearch(
+		const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed,
+		const std::vector<uint32_t>& among) const;
+
+	/** Forgets the previous solve and confirmation (a new start). */
+	void reset();
+
+	const std::string& channel() const { return m_channel; }
+	const TLocaliserOptions& options() const { return m_opts; }
+
+   private:
+	/** The keyframe to localise against and the prediction in it; invalid if none. */
+	TKeyframePose chooseKeyframe(const TKeyframePose& pred) const;
+	/** T_a_b with covariance through the chain, or through map poses plus
+	 * the cross-segment covariance when a and b are in different segments. */
+	geometry::TPoseWithCov between(uint32_t a, uint32_t b) const;
+
+	const CKeyframeMap& m_map;
+	std::string m_channel;
+	TLocaliserOptions m_opts;
+	vo::CKeyframeMatcher m_matcher;	 //!< options.search's region
+	vo::CKeyframeMatcher m_gateMatcher;	 //!< global search, second pass
+	vo::CKeyframeMatcher m_placeMatcher;  //!< global search, first pass (window around the keyframe's view)
+	vo::CRelativePoseEstimator m_estimator;
+	// Failure-test state.
+	TKeyframePose m_prevSolve;	//!< the last frame's solve (any status), for the motion test
+	size_t m_prevFrame = 0;
+	int m_consistent = 0;
+	bool m_confirmed = false;
+};
+
+}  // namespace shadyloc::localisation

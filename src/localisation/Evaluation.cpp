@@ -1,0 +1,281 @@
+/* ShadyLoc — evaluation of a localisation run (docs/localisation.md). */
+#include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/localisation/Evaluation.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+#include <unordered_map>
+
+namespace shadyloc::localisation
+{
+namespace
+{
+constexpr double kDeg = M_PI / 180.0;
+
+double axesAngleDeg(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B)
+{
+	return std::acos(std::clamp(A.linear().col(2).dot(B.linear().col(2)), -1.0, 1.0)) / kDeg;
+}
+
+/** Hash grid over 3D points: the candidates within a radius. */
+class PointGrid
+{
+   public:
+	PointGrid(double cell) : m_cell(cell) {}
+	void add(const Eigen::Vector3d& p, size_t id) { m_cells[key(p)].push_back(id); }
+	template <typename F>
+	void near(const Eigen::Vector3d& p, F&& f) const
+	{
+		const auto c = cellOf(p);
+		for (int dx = -1; dx <= 1; dx++)
+			for (int dy = -1; dy <= 1; dy++)
+				for (int dz = -1; dz <= 1; dz++)
+				{
+					const auto it = m_cells.find(key3(c[0] + dx, c[1] + dy, c[2] + dz));
+					if (it == m_cells.end()) continue;
+					for (const size_t id : it->second) f(id);
+				}
+	}
+
+   private:
+	std::array<long long, 3> cellOf(const Eigen::Vector3d& p) const
+	{
+		return {static_cast<long long>(std::floor(p.x() / m_cell)), static_cast<long long>(std::floor(p.y() / m_cell)),
+				static_cast<long long>(std::floor(p.z() / m_cell))};
+	}
+	static uint64_t key3(long long x, long long y, long long z)
+	{
+		return (static_cast<uint64_t>(x) * 73856093ull) ^ (static_cast<uint64_t>(y) * 19349663ull) ^
+			   (static_cast<uint64_t>(z) * 83492791ull);
+	}
+	uint64_t key(const Eigen::Vector3d& p) const
+	{
+		const auto c = cellOf(p);
+		return key3(c[0], c[1], c[2]);
+	}
+	double m_cell;
+	std::unordered_map<uint64_t, std::vector<size_t>> m_cells;
+};
+
+/** Truth of a fix relative to keyframe kf, given the live ground-truth pose. */
+FixTruth judge(
+	const CKeyframeMap& map, uint32_t kf, const Eigen::Isometry3d& T_kf_live, const Eigen::Isometry3d& T_gt_live,
+	const TEvalOptions& o, double* errM = nullptr, double* errDeg = nullptr)
+{
+	const auto& k = map.keyframe(kf);
+	if (!k.T_gt_kf) return FixTruth::None;
+	const Eigen::Isometry3d truth = k.T_gt_kf->inverse() * T_gt_live;
+	const double em = (truth.translation() - T_kf_live.translation()).norm();
+	const double ed = Eigen::AngleAxisd(truth.linear().transpose() * T_kf_live.linear()).angle() / kDeg;
+	if (errM) *errM = em;
+	if (errDeg) *errDeg = ed;
+	return em <= o.true_max_m && ed <= o.true_max_deg ? FixTruth::True : FixTruth::False;
+}
+}  // namespace
+
+TEvaluation evaluate(
+	const std::vector<TLocalisationUpdate>& ups, const CKeyframeMap& map, const io::Trajectory* gt,
+	const TEvalOptions& o)
+{
+	TEvaluation ev;
+	const size_t n = ups.size();
+	ev.frames.resize(n);
+	ev.ground_truth = gt != nullptr;
+	size_t nCh = ups.empty() ? 0 : ups.front().localisers.size();
+	for (size_t c = 0; c < nCh; c++) ev.channels.push_back({ups.front().localisers[c].channel});
+
+	// ---- ground truth of the live frames
+	std::vector<int> gtOf(n, -1);
+	if (gt)
+	{
+		io::Trajectory est;
+		for (const auto& u : ups) est.push_back({u.timestamp, Eigen::Isometry3d::Identity()});
+		io::Trajectory g = *gt;
+		io::sortByTime(g);
+		for (const auto& p : eval::associate(g, est, o.assoc_dt_s)) gtOf[p.second] = static_cast<int>(p.first);
+		// associate() refers to the sorted copy.
+		ev.associated = static_cast<size_t>(std::count_if(gtOf.begin(), gtOf.end(), [](int i) { return i >= 0; }));
+		if (n > 0 && ev.associated < o.min_associated * n)
+			throw std::runtime_error(
+				"ground truth: only " + std::to_string(ev.associated) + " of " + std::to_string(n) +
+				" live frames have a pose within " + std::to_string(o.assoc_dt_s) + " s (at least " +
+				std::to_string(static_cast<int>(o.min_associated * 100)) + " % needed)");
+		// Distance from ground truth, VO's across frames without it.
+		double d = 0;
+		for (size_t i = 0; i < n; i++)
+		{
+			if (i > 0)
+			{
+				if (gtOf[i] >= 0 && gtOf[i - 1] >= 0)
+					d += (g[gtOf[i]].T.translation() - g[gtOf[i - 1]].T.translation()).norm();
+				else
+					d += ups[i].distance_m - ups[i - 1].distance_m;
+			}
+			ev.frames[i].distance_m = d;
+			ev.frames[i].has_truth = gtOf[i] >= 0;
+		}
+		// ---- in_map from both runs' ground truth
+		bool mapHasGt = true;
+		for (const auto& k : map.keyframes()) mapHasGt &= k.T_gt_kf.has_value();
+		if (mapHasGt)
+		{
+			PointGrid grid(o.in_map_m);
+			for (const auto& k : map.keyframes()) grid.add(k.T_gt_kf->translation(), k.id);
+			for (size_t i = 0; i < n; i++)
+			{
+				if (gtOf[i] < 0) continue;
+				const auto& T = g[gtOf[i]].T;
+				bool in = false;
+				grid.near(T.translation(), [&](size_t id) {
+					const auto& K = *map.keyframe(static_cast<uint32_t>(id)).T_gt_kf;
+					in |= (K.translation() - T.translation()).norm() <= o.in_map_m && axesAngleDeg(K, T) <= o.in_map_deg;
+				});
+				ev.frames[i].in_map = in;
+			}
+		}
+		else
+			throw std::runtime_error(
+				"ground truth: the map's keyframes carry no ground truth (survey it with --gt): fixes cannot be checked");
+		// ---- truth of the fixes
+		for (size_t i = 0; i < n; i++)
+		{
+			auto& f = ev.frames[i];
+			f.channel.assign(nCh, FixTruth::None);
+			if (gtOf[i] < 0) continue;
+			const auto& T = g[gtOf[i]].T;
+			for (size_t c = 0; c < nCh; c++)
+			{
+				const auto& r = ups[i].localisers[c];
+				if (r.accepted()) f.channel[c] = judge(map, r.kf_id, r.T_kf_live, T, o);
+			}
+			if (ups[i].localised()) f.used = judge(map, ups[i].kf_id, ups[i].T_kf_live, T, o, &f.used_err_m, &f.used_err_deg);
+		}
+	}
+	else
+	{
+		for (size_t i = 0; i < n; i++)
+		{
+			ev.frames[i].distance_m = ups[i].distance_m;
+			ev.frames[i].channel.assign(nCh, FixTruth::None);
+			// Without ground truth: the system's own estimate.
+			if (!ups[i].placeKnown)
+			{
+				ev.frames[i].in_map = true;
+				continue;
+			}
+			map::TNearestQuery q;
+			q.max_distance_m = o.in_map_m;
+			q.max_angle_deg = o.in_map_deg;
+			q.max_results = 1;
+			ev.frames[i].in_map = !map.nearestKeyframes(ups[i].T_map_live, q).empty();
+		}
+	}
+
+	// ---- counts
+	for (size_t i = 0; i < n; i++)
+	{
+		const auto& u = ups[i];
+		const auto& f = ev.frames[i];
+		ev.in_map_frames += f.in_map;
+		ev.global_searches += u.global_search;
+		if (u.localised())
+		{
+			ev.fixes++;
+			ev.fixes_in_map += f.in_map;
+			if (f.used == FixTruth::True)
+			{
+				ev.true_fixes++;
+				ev.true_fixes_in_map += f.in_map;
+			}
+			else if (f.used == FixTruth::False)
+				ev.false_fixes++;
+			else if (gt)
+				ev.unverifiable++;
+		}
+		for (size_t c = 0; c < nCh; c++)
+		{
+			const auto& r = u.localisers[c];
+			if (!r.accepted()) continue;
+			auto& cs = ev.channels[c];
+			cs.accepted++;
+			cs.used += u.used == r.channel;
+			if (f.channel[c] == FixTruth::True)
+				cs.true_fixes++;
+			else if (f.channel[c] == FixTruth::False)
+				cs.false_fixes++;
+			else if (gt)
+				cs.unverifiable++;
+		}
+	}
+	auto ratio = [](size_t a, size_t b) { return b ? static_cast<double>(a) / static_cast<double>(b) : 0.0; };
+	ev.coverage_in_map = ratio(ev.fixes_in_map, ev.in_map_frames);
+	ev.coverage_all = ratio(ev.fixes, n);
+	ev.true_coverage_in_map = ratio(ev.true_fixes_in_map, ev.in_map_frames);
+	ev.true_coverage_all = ratio(ev.true_fixes, n);
+	ev.false_fix_share = ratio(ev.false_fixes, ev.true_fixes + ev.false_fixes);
+
+	// ---- blind episodes
+	int lastFix = -1;
+	for (size_t i = 0; i <= n; i++)
+	{
+		const bool fix = i < n && ups[i].localised();
+		if (i < n && !fix) continue;
+		// i is a fix (or the end); frames lastFix+1 .. i-1 are blind.
+		if (static_cast<int>(i) > lastFix + 1)
+		{
+			TBlindEpisode e;
+			e.first = static_cast<size_t>(lastFix + 1);
+			e.last = i - 1;
+			const double from = lastFix >= 0 ? ev.frames[lastFix].distance_m : ev.frames[0].distance_m;
+			const double to = i < n ? ev.frames[i].distance_m : ev.frames[n - 1].distance_m;
+			e.length_m = to - from;
+			e.kind = lastFix < 0 ? TBlindEpisode::BeforeFirstFix : (i == n ? TBlindEpisode::AtEnd : TBlindEpisode::Between);
+			if (lastFix < 0 && i == n) e.kind = TBlindEpisode::BeforeFirstFix;	// never localised
+			ev.episodes.push_back(e);
+		}
+		if (i < n) lastFix = static_cast<int>(i);
+	}
+	std::vector<double> between;
+	for (const auto& e : ev.episodes)
+	{
+		ev.blind_m += e.length_m;
+		if (e.kind == TBlindEpisode::Between) between.push_back(e.length_m);
+		if (e.kind == TBlindEpisode::BeforeFirstFix) ev.before_first_fix_m = e.length_m;
+	}
+	for (size_t i = 0; i < n; i++)
+		if (ups[i].localised())
+		{
+			ev.first_fix_frame = static_cast<int>(i);
+			if (ev.before_first_fix_m < 0) ev.before_first_fix_m = 0;
+			break;
+		}
+	if (ev.first_fix_frame < 0) ev.before_first_fix_m = -1;
+	ev.total_m = n ? ev.frames[n - 1].distance_m - ev.frames[0].distance_m : 0;
+	ev.blind_m_per_km = ev.total_m > 0 ? 1000 * ev.blind_m / ev.total_m : 0;
+	ev.episodes_between = between.size();
+	ev.episodes_long = static_cast<size_t>(
+		std::count_if(between.begin(), between.end(), [&](double l) { return l >= o.blind_long_m; }));
+	ev.p_long = ratio(ev.episodes_long, between.size());
+	if (!between.empty())
+	{
+		// Percentile bootstrap over episodes (seeded: the summary is repeatable).
+		std::mt19937 rng(o.bootstrap_seed);
+		std::uniform_int_distribution<size_t> pick(0, between.size() - 1);
+		std::vector<double> ps;
+		ps.reserve(o.bootstrap_samples);
+		for (int b = 0; b < o.bootstrap_samples; b++)
+		{
+			size_t k = 0;
+			for (size_t j = 0; j < between.size(); j++) k += between[pick(rng)] >= o.blind_long_m;
+			ps.push_back(static_cast<double>(k) / between.size());
+		}
+		std::sort(ps.begin(), ps.end());
+		ev.p_long_lo = ps[static_cast<size_t>(0.025 * (ps.size() - 1))];
+		ev.p_long_hi = ps[static_cast<size_t>(0.975 * (ps.size() - 1))];
+	}
+	return ev;
+}
+
+}  // namespace shadyloc::localisation

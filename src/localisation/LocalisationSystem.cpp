@@ -1,0 +1,518 @@
+/* ShadyLoc — the combined localisation system (VO prediction, parallel
+ * localisers, switching policy, global search). */
+#include <shadyloc/core/Settings.h>
+#include <shadyloc/localisation/LocalisationSystem.h>
+#include <shadyloc/vo/ChannelOptions.h>
+
+#include <mrpt/core/exceptions.h>
+
+#include <algorithm>
+#include <chrono>
+#include <future>
+#include <sstream>
+#include <stdexcept>
+
+namespace shadyloc::localisation
+{
+using geometry::Matrix6d;
+using geometry::TPoseWithCov;
+
+namespace
+{
+constexpr double kDeg = M_PI / 180.0;
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+Matrix6d diagCov(double sm, double sdeg)
+{
+	Matrix6d c = Matrix6d::Zero();
+	const double sr = sdeg * kDeg;
+	c.diagonal() << sm * sm, sm * sm, sm * sm, sr * sr, sr * sr, sr * sr;
+	return c;
+}
+
+std::vector<std::string> splitWords(const std::string& s)
+{
+	std::vector<std::string> out;
+	std::string w;
+	for (const char c : s + " ")
+		if (c == ' ' || c == ',' || c == '\t')
+		{
+			if (!w.empty()) out.push_back(w);
+			w.clear();
+		}
+		else
+			w += c;
+	return out;
+}
+
+/** Runs a() and b() on two threads when parallel, else one after the other
+ * (the results are the same either way: nothing is shared). */
+template <typename A, typename B>
+void both(bool parallel, A&& a, B&& b)
+{
+	if (!parallel)
+	{
+		a();
+		b();
+		return;
+	}
+	auto f = std::async(std::launch::async, std::forward<B>(b));
+	std::exception_ptr ea;
+	try
+	{
+		a();
+	}
+	catch (...)
+	{
+		ea = std::current_exception();
+	}
+	f.get();  // rethrows b's exception
+	if (ea) std::rethrow_exception(ea);
+}
+}  // namespace
+
+// ---- options -----------------------------------------------------------------------
+void TSystemOptions::load(const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+	core::SettingsSection r(c, s);
+	if (r.has("localisers"))
+	{
+		localisers = splitWords(r.text("localisers"));
+		if (localisers.empty()) r.fail("localisers", "names no localiser (mono, invariant, ...)");
+	}
+	r.read("vo_channel", vo_channel);
+	r.read("threads", threads);
+	r.read("vo_cov_scale", vo_cov_scale);
+	r.read("vo_sigma_m_per_m", vo_sigma_m_per_m);
+	r.read("vo_sigma_deg_per_m", vo_sigma_deg_per_m);
+	r.read("vo_lost_sigma_m", vo_lost_sigma_m);
+	r.read("vo_lost_sigma_deg", vo_lost_sigma_deg);
+	r.read("relocalise_after_frames", relocalise_after_frames);
+	r.read("global_sigma_m", global_sigma_m);
+	r.read("global_sigma_deg", global_sigma_deg);
+	r.finish();
+	try
+	{
+		validate();
+	}
+	catch (const std::exception& e)
+	{
+		throw core::SettingsError(r.where() + " " + e.what());
+	}
+}
+
+void TSystemOptions::dump(std::ostream& out) const
+{
+	core::SettingsWriter w(out);
+	std::string l;
+	for (const auto& x : localisers) l += (l.empty() ? "" : " ") + x;
+	w.value("localisers", l, "policy order: the first with an accepted fix is used");
+	w.value("vo_channel", vo_channel, "the live VO that predicts for every localiser");
+	w.value("threads", threads);
+	w.value("vo_cov_scale", vo_cov_scale);
+	w.value("vo_sigma_m_per_m", vo_sigma_m_per_m, "[m/m]");
+	w.value("vo_sigma_deg_per_m", vo_sigma_deg_per_m, "[deg/m]");
+	w.value("vo_lost_sigma_m", vo_lost_sigma_m, "[m]");
+	w.value("vo_lost_sigma_deg", vo_lost_sigma_deg, "[deg]");
+	w.value("relocalise_after_frames", relocalise_after_frames, "[frames]");
+	w.value("global_sigma_m", global_sigma_m, "[m]");
+	w.value("global_sigma_deg", global_sigma_deg, "[deg]");
+}
+
+void TSystemOptions::validate() const
+{
+	auto need = [](bool ok, const char* key, const char* what) {
+		if (!ok) throw std::invalid_argument(std::string(key) + ": " + what);
+	};
+	need(!localisers.empty(), "localisers", "at least one");
+	for (size_t i = 0; i < localisers.size(); i++)
+		for (size_t j = i + 1; j < localisers.size(); j++)
+			need(localisers[i] != localisers[j], "localisers", "a localiser named twice");
+	need(!vo_channel.empty(), "vo_channel", "must name a channel");
+	need(threads >= 1, "threads", "must be >= 1");
+	need(vo_cov_scale >= 1, "vo_cov_scale", "must be >= 1");
+	need(vo_sigma_m_per_m >= 0, "vo_sigma_m_per_m", "must be >= 0");
+	need(vo_sigma_deg_per_m >= 0, "vo_sigma_deg_per_m", "must be >= 0");
+	need(vo_lost_sigma_m > 0, "vo_lost_sigma_m", "must be > 0");
+	need(vo_lost_sigma_deg > 0, "vo_lost_sigma_deg", "must be > 0");
+	need(relocalise_after_frames >= 1, "relocalise_after_frames", "must be >= 1");
+	need(global_sigma_m >= 0, "global_sigma_m", "must be >= 0");
+	need(global_sigma_deg >= 0, "global_sigma_deg", "must be >= 0");
+}
+
+// ---- the update ------------------------------------------------------------------------
+const TLocaliserResult* TLocalisationUpdate::result(const std::string& channel) const
+{
+	for (const auto& r : localisers)
+		if (r.channel == channel) return &r;
+	return nullptr;
+}
+
+mrpt::poses::CPose3DPDFGaussian TLocalisationUpdate::pdf() const
+{
+	TPoseWithCov p;
+	p.T = T_kf_live;
+	p.cov = cov;
+	return geometry::toCPose3DPDFGaussian(p);
+}
+
+// ---- the system ----------------------------------------------------------------------------
+namespace
+{
+features::TStereoFeatureOptions featuresOf(
+	const std::vector<CLocalisationSystem::TChannelSetup>& channels, const std::string& label)
+{
+	for (const auto& c : channels)
+		if (c.channel.label == label) return c.features;
+	throw std::invalid_argument("CLocalisationSystem: no channel '" + label + "' given (the VO's channel)");
+}
+}  // namespace
+
+CLocalisationSystem::CLocalisationSystem(
+	CKeyframeMap::Ptr map, const std::vector<TChannelSetup>& channels, const vo::TStereoVOOptions& vopt,
+	const TSystemOptions& o)
+	: mrpt::system::COutputLogger("CLocalisationSystem"),
+	  m_map(std::move(map)),
+	  m_opts(o),
+	  // The VO runs on the VO channel's shared measurements (track() with a
+	  // measured frame): its own extractor only holds the options.
+	  m_vo(vopt, featuresOf(channels, o.vo_channel))
+{
+	m_opts.validate();
+	if (!m_map) throw std::invalid_argument("CLocalisationSystem: no map");
+	if (m_map->isEmpty()) throw std::invalid_argument("CLocalisationSystem: the map has no keyframes");
+	auto find = [&](const std::string& l) -> const TChannelSetup* {
+		for (const auto& c : channels)
+			if (c.channel.label == l) return &c;
+		return nullptr;
+	};
+	std::vector<std::string> labels = {m_opts.vo_channel};
+	for (const auto& l : m_opts.localisers)
+		if (l != m_opts.vo_channel) labels.push_back(l);
+	for (const auto& l : labels)
+	{
+		const TChannelSetup* c = find(l);
+		if (!c) throw std::invalid_argument("CLocalisationSystem: no channel '" + l + "' given");
+		TPipe p{*c, features::StereoFeatureExtractor(c->features), nullptr, -1};
+		const auto it = std::find(m_opts.localisers.begin(), m_opts.localisers.end(), l);
+		if (it != m_opts.localisers.end())
+		{
+			p.policyRank = static_cast<int>(it - m_opts.localisers.begin());
+			// Throws naming the map's channels when it has no such channel.
+			p.localiser = std::make_unique<CStereoLocaliser>(*m_map, l, c->localiser);
+			m_map->checkCompatible(liveParams(c->channel, c->features));
+		}
+		m_pipes.push_back(std::move(p));
+	}
+	m_vo.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+}
+
+map::TChannelParams CLocalisationSystem::liveParams(const filters::TChannel& ch, const features::TStereoFeatureOptions& fo)
+{
+	// What the survey records for a channel (survey::channelParams): the filter and the features.
+	return map::TChannelParams::From(ch.label, ch.filter->GetRuntimeClass()->className, ch.filter->imageOptionsAsIni(), fo);
+}
+
+map::TChannelParams CLocalisationSystem::liveParams(const std::string& label) const
+{
+	const auto& s = channelSetup(label);
+	return liveParams(s.channel, s.features);
+}
+
+std::vector<std::string> CLocalisationSystem::channelLabels() const
+{
+	std::vector<std::string> l;
+	for (const auto& p : m_pipes) l.push_back(p.setup.channel.label);
+	return l;
+}
+
+const CLocalisationSystem::TChannelSetup& CLocalisationSystem::channelSetup(const std::string& label) const
+{
+	for (const auto& p : m_pipes)
+		if (p.setup.channel.label == label) return p.setup;
+	throw std::out_of_range("CLocalisationSystem: no channel '" + label + "'");
+}
+
+std::unique_ptr<CLocalisationSystem> CLocalisationSystem::FromConfig(
+	const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::vector<std::string>& localisers,
+	int threads, const std::string& what)
+{
+	TSystemOptions so;
+	if (cfg.sectionExists("localise")) so.load(cfg, "localise");
+	if (!localisers.empty()) so.localisers = localisers;
+	if (threads > 0) so.threads = threads;
+	so.validate();
+	std::vector<std::string> labels = {so.vo_channel};
+	for (const auto& l : so.localisers)
+		if (l != so.vo_channel) labels.push_back(l);
+	std::vector<TChannelSetup> chans;
+	for (const auto& l : labels)
+	{
+		TChannelSetup c;
+		c.channel = filters::channelFromConfig(cfg, l, what);
+		// The channel's name as the map knows it (the config may call it by its suffix).
+		c.features = vo::featureOptionsFor(cfg, c.channel.label);
+		c.localiser = localiserOptionsFor(cfg, c.channel.label);
+		chans.push_back(std::move(c));
+	}
+	// Localisers named by a suffix ("inv") take the channel's label.
+	for (size_t i = 0; i < labels.size(); i++)
+	{
+		for (auto& l : so.localisers)
+			if (l == labels[i]) l = chans[i].channel.label;
+		if (so.vo_channel == labels[i]) so.vo_channel = chans[i].channel.label;
+	}
+	const vo::TStereoVOOptions vopt = vo::voOptionsFor(cfg, so.vo_channel);
+	return std::make_unique<CLocalisationSystem>(std::move(map), chans, vopt, so);
+}
+
+void CLocalisationSystem::reset()
+{
+	m_vo.reset();
+	for (auto& p : m_pipes)
+		if (p.localiser) p.localiser->reset();
+	m_frame = 0;
+	m_est = TKeyframePose();
+	m_framesSinceFix = 0;
+	m_searchAmong.clear();
+	m_distance = 0;
+	m_havePrevVO = false;
+}
+
+void CLocalisationSystem::setStartKeyframe(uint32_t id, double radius)
+{
+	m_map->keyframe(id);  // throws naming the id
+	m_est = TKeyframePose();
+	m_searchAmong = m_map->keyframesAlongChain(id, radius, radius);
+}
+
+TMotion CLocalisationSystem::motionOf(const vo::TFrameResult& r)
+{
+	TMotion m;
+	if (!m_havePrevVO) return m;  // the first frame: no motion
+	m.valid = true;
+	m.T_prev_curr = m_prevVO.T_world_curr.inverse() * r.T_world_curr;
+	const bool prevTracked = vo::isTracked(m_prevVO.status);
+	if (r.status == vo::FrameStatus::Ok && (m_prevVO.keyframe || m_prevVO.status == vo::FrameStatus::Ok))
+	{
+		TPoseWithCov cur;
+		cur.T = r.T_kf_curr;
+		cur.cov = r.cov_kf_curr;
+		if (m_prevVO.keyframe)
+			m.cov = cur.cov;  // the previous frame is this frame's reference keyframe
+		else
+		{
+			// Both relative to the same keyframe: T_prev_curr = T_kf_prev^-1 T_kf_curr,
+			// errors taken as independent (conservative: they share the keyframe's).
+			TPoseWithCov prev;
+			prev.T = m_prevVO.T_kf_curr;
+			prev.cov = m_prevVO.cov_kf_curr;
+			m.cov = geometry::compose(geometry::inverse(prev), cur).cov;
+		}
+		m.cov *= m_opts.vo_cov_scale;
+	}
+	else
+		m.cov = diagCov(m_opts.vo_lost_sigma_m, m_opts.vo_lost_sigma_deg);
+	(void)prevTracked;
+	const double s = m.T_prev_curr.translation().norm();
+	m.cov += diagCov(m_opts.vo_sigma_m_per_m * s, m_opts.vo_sigma_deg_per_m * s);
+	return m;
+}
+
+TLocalisationUpdate CLocalisationSystem::processObservation(const mrpt::obs::CObservationStereoImages& obs)
+{
+	if (!obs.hasImageRight)
+		throw std::invalid_argument("CLocalisationSystem: observation '" + obs.sensorLabel + "' has no right image");
+	const cv::Mat l = obs.imageLeft.asCvMat<cv::Mat>(mrpt::img::SHALLOW_COPY);
+	const cv::Mat r = obs.imageRight.asCvMat<cv::Mat>(mrpt::img::SHALLOW_COPY);
+	return processFrame(l, r, geometry::TStereoCalib::FromObservation(obs), mrpt::Clock::toDouble(obs.timestamp));
+}
+
+TLocalisationUpdate CLocalisationSystem::processFrame(
+	const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib, double timestamp)
+{
+	const bool par = m_opts.threads >= 2 && m_pipes.size() >= 2;
+	TLocalisationUpdate u;
+	u.frame = m_frame++;
+	u.timestamp = timestamp;
+	const size_t n = m_pipes.size();
+
+	// ---- each channel's images and measurements, once (shared by VO and localiser)
+	std::vector<features::TStereoFrame> meas(n);
+	std::vector<double> msConv(n, 0), msOther(n, 0);
+	auto extract = [&](size_t i) {
+		const auto t0 = Clock::now();
+		cv::Mat gl, gr;
+		try
+		{
+			m_pipes[i].setup.channel.convertPair(left, right, gl, gr);
+		}
+		catch (const std::exception& e)
+		{
+			throw std::runtime_error(
+				"frame " + std::to_string(u.frame) + ": channel '" + m_pipes[i].setup.channel.label + "': " + e.what());
+		}
+		if (gl.type() != CV_8UC1)
+			throw std::runtime_error(
+				"frame " + std::to_string(u.frame) + ": channel '" + m_pipes[i].setup.channel.label +
+				"' does not give grey images");
+		msConv[i] = msSince(t0);
+		const auto t1 = Clock::now();
+		m_pipes[i].extractor.process(gl, gr, calib, meas[i]);
+		msOther[i] = msSince(t1);
+	};
+	const auto tAll = Clock::now();
+	double msVO = 0;
+	auto voChannel = [&] {
+		extract(0);
+		const auto t0 = Clock::now();
+		m_vo.track(meas[0], calib, timestamp);
+		u.vo = m_vo.commit();
+		msVO = msSince(t0);
+	};
+	auto others = [&] {
+		for (size_t i = 1; i < n; i++) extract(i);
+	};
+	both(par, voChannel, others);
+	u.motion = motionOf(u.vo);
+	m_prevVO = u.vo;
+	m_havePrevVO = true;
+	if (u.motion.valid) m_distance += u.motion.T_prev_curr.translation().norm();
+	u.distance_m = m_distance;
+
+	// ---- the prediction: the estimate composed with VO's increment
+	TKeyframePose pred;
+	if (m_est.valid)
+	{
+		pred = m_est;
+		if (u.motion.valid)
+		{
+			TPoseWithCov a, b;
+			a.T = m_est.T_kf_live;
+			a.cov = m_est.cov;
+			b.T = u.motion.T_prev_curr;
+			b.cov = u.motion.cov;
+			const TPoseWithCov c = geometry::compose(a, b);
+			pred.T_kf_live = c.T;
+			pred.cov = c.cov;
+		}
+	}
+
+	// ---- the localisers, in parallel
+	std::vector<TLocaliserResult> res(n);
+	std::vector<TGlobalPlace> places(n);
+	const bool search = !pred.valid;
+	auto runOne = [&](size_t i) {
+		auto& p = m_pipes[i];
+		if (!p.localiser) return;
+		if (search)
+		{
+			const auto t0 = Clock::now();
+			const auto seed = static_cast<uint32_t>(u.frame * 7919u + 3);
+			places[i] = m_searchAmong.empty() ? p.localiser->globalSearch(meas[i], calib, seed)
+											  : p.localiser->globalSearch(meas[i], calib, seed, m_searchAmong);
+			TLocaliserInput in;	 // no prediction: records the failure state
+			in.frame = u.frame;
+			in.timestamp = timestamp;
+			in.meas = &meas[i];
+			in.calib = calib;
+			in.motion = u.motion;
+			res[i] = p.localiser->localise(in);
+			res[i].ms = msSince(t0);
+			return;
+		}
+		TLocaliserInput in;
+		in.frame = u.frame;
+		in.timestamp = timestamp;
+		in.meas = &meas[i];
+		in.calib = calib;
+		in.prediction = pred;
+		in.motion = u.motion;
+		res[i] = p.localiser->localise(in);
+	};
+	auto runFirst = [&] { runOne(0); };
+	auto runRest = [&] {
+		for (size_t i = 1; i < n; i++) runOne(i);
+	};
+	both(par, runFirst, runRest);
+
+	// ---- the policy
+	std::vector<size_t> order;
+	for (size_t i = 0; i < n; i++)
+		if (m_pipes[i].localiser) order.push_back(i);
+	std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return m_pipes[a].policyRank < m_pipes[b].policyRank; });
+	for (const size_t i : order) u.localisers.push_back(res[i]);
+	if (search)
+	{
+		u.global_search = true;
+		u.place = places[order.front()];
+		for (const size_t i : order)
+			if (places[i].ok)
+			{
+				u.place = places[i];
+				m_est = places[i].pose;
+				m_est.cov += diagCov(m_opts.global_sigma_m, m_opts.global_sigma_deg);
+				m_framesSinceFix = 0;
+				m_searchAmong.clear();
+				break;
+			}
+		// The place is a prediction for the next frame, not a fix.
+	}
+	else
+	{
+		const TLocaliserResult* fix = nullptr;
+		for (const size_t i : order)
+			if (res[i].accepted())
+			{
+				fix = &res[i];
+				break;
+			}
+		if (fix)
+		{
+			u.used = fix->channel;
+			m_est.valid = true;
+			m_est.kf = fix->kf_id;
+			m_est.T_kf_live = fix->T_kf_live;
+			m_est.cov = fix->cov;
+			m_framesSinceFix = 0;
+		}
+		else
+		{
+			m_est = pred;  // dead reckoning
+			m_framesSinceFix++;
+			bool allLost = true;
+			for (const size_t i : order) allLost &= res[i].status == LocaliserStatus::Lost;
+			if (allLost || m_framesSinceFix > m_opts.relocalise_after_frames)
+			{
+				MRPT_LOG_DEBUG_FMT(
+					"frame %zu: %s: searching for the place anew", u.frame,
+					allLost ? "the prediction is too uncertain to search" : "too long without a fix");
+				m_est.valid = false;
+			}
+		}
+	}
+	u.frames_since_fix = m_framesSinceFix;
+	const TKeyframePose& shown = m_est.valid ? m_est : pred;
+	if (shown.valid)
+	{
+		const auto& kf = m_map->keyframe(shown.kf);
+		u.placeKnown = true;
+		u.kf_id = kf.id;
+		u.kf_run = kf.run;
+		u.kf_frame = kf.frame;
+		u.kf_stamp = kf.timestamp;
+		u.T_kf_live = shown.T_kf_live;
+		u.cov = shown.cov;
+		u.T_map_live = kf.T_map_kf * shown.T_kf_live;
+	}
+	double conv = 0;
+	for (const double c : msConv) conv += c;
+	u.ms_convert = conv;
+	u.ms_total = msSince(tAll);
+	(void)msVO;
+	(void)msOther;
+	return u;
+}
+
+}  // namespace shadyloc::localisation

@@ -1,0 +1,469 @@
+/* ShadyLoc — one localiser (active search, solve, failure test, global search). */
+#include <shadyloc/localisation/StereoLocaliser.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+namespace shadyloc::localisation
+{
+using geometry::Matrix6d;
+using geometry::TPoseWithCov;
+using geometry::Vector6d;
+
+namespace
+{
+constexpr double kDeg = M_PI / 180.0;
+
+double msSince(std::chrono::steady_clock::time_point t0)
+{
+	return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/** xi^T S^-1 xi; infinity if S is not positive definite. */
+double mahalanobis2(const Vector6d& xi, const Matrix6d& S)
+{
+	const Eigen::LDLT<Matrix6d> ldlt(0.5 * (S + S.transpose()));
+	if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return std::numeric_limits<double>::infinity();
+	const double d2 = xi.dot(ldlt.solve(xi));
+	return std::isfinite(d2) && d2 >= 0 ? d2 : std::numeric_limits<double>::infinity();
+}
+
+double angleBetweenAxesDeg(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B)
+{
+	const double c = std::clamp(A.linear().col(2).dot(B.linear().col(2)), -1.0, 1.0);
+	return std::acos(c) / kDeg;
+}
+
+vo::TKeyframeMatcherOptions matcherOptions(const TLocaliserOptions& o, SearchMode mode)
+{
+	vo::TKeyframeMatcherOptions m;
+	m.max_hamming = o.max_hamming;
+	m.match_ratio = o.match_ratio;
+	m.refine_min_zncc = o.refine_min_zncc;
+	m.refine_radius = o.refine_radius_px;
+	m.refine_iterations = o.refine_iterations;
+	m.sigma_px = o.sigma_px;
+	m.min_matches = 0;	// never widen on its own: the localiser decides
+	switch (mode)
+	{
+		case SearchMode::Gate:
+			m.region = vo::SearchRegion::Gate;
+			m.gate_chi2 = o.gate_chi2;
+			m.gate_min_px = o.gate_min_px;
+			m.gate_max_px = o.gate_max_px;
+			m.gate_clamp = false;
+			break;
+		case SearchMode::Window:
+			m.region = vo::SearchRegion::Circle;
+			m.search_radius_px = m.search_radius_lost_px = o.window_px;
+			break;
+		case SearchMode::Global:
+			// A circle larger than any image around an identity projection:
+			// every measurement of the frame is a candidate.
+			m.region = vo::SearchRegion::Circle;
+			m.search_radius_px = m.search_radius_lost_px = 1e5;
+			break;
+	}
+	return m;
+}
+
+vo::TKeyframeMatcherOptions placeMatcherOptions(const TLocaliserOptions& o)
+{
+	vo::TKeyframeMatcherOptions m = matcherOptions(o, SearchMode::Window);
+	m.search_radius_px = m.search_radius_lost_px = o.global_window_px;
+	return m;
+}
+
+vo::TRelativePoseOptions estimatorOptions(const TLocaliserOptions& o)
+{
+	vo::TRelativePoseOptions p;
+	p.ransac_threshold_px = o.ransac_threshold_px;
+	p.ransac_iterations = o.ransac_iterations;
+	p.sigma_px = o.sigma_px;
+	p.huber_k = o.huber_k;
+	p.two_view_ba = o.two_view_ba;
+	// Solved without the motion prior: see the file comment of StereoLocaliser.h.
+	p.ransac_prediction = false;
+	p.ransac_prior_sigma_m = 0;
+	p.min_inliers = 6;	// the localiser's own bounds (min_inliers, global_min_inliers) apply after
+	return p;
+}
+}  // namespace
+
+std::string toString(SearchMode m)
+{
+	switch (m)
+	{
+		case SearchMode::Gate: return "gate";
+		case SearchMode::Window: return "window";
+		case SearchMode::Global: return "global";
+	}
+	return "?";
+}
+
+std::string toString(LocaliserStatus s)
+{
+	switch (s)
+	{
+		case LocaliserStatus::Ok: return "ok";
+		case LocaliserStatus::Unconfirmed: return "unconfirmed";
+		case LocaliserStatus::NoPrediction: return "no_prediction";
+		case LocaliserStatus::NoKeyframe: return "no_keyframe";
+		case LocaliserStatus::Lost: return "lost";
+		case LocaliserStatus::FewMatches: return "few_matches";
+		case LocaliserStatus::FewInliers: return "few_inliers";
+		case LocaliserStatus::SolverFailed: return "solver_failed";
+		case LocaliserStatus::Uncertain: return "uncertain";
+		case LocaliserStatus::PredictionInconsistent: return "prediction_inconsistent";
+		case LocaliserStatus::MotionInconsistent: return "motion_inconsistent";
+	}
+	return "?";
+}
+
+CStereoLocaliser::CStereoLocaliser(const CKeyframeMap& map, const std::string& channel, const TLocaliserOptions& o)
+	: m_map(map),
+	  m_channel(channel),
+	  m_opts(o),
+	  m_matcher(matcherOptions(o, o.search)),
+	  m_gateMatcher(matcherOptions(o, SearchMode::Gate)),
+	  m_placeMatcher(placeMatcherOptions(o)),
+	  m_estimator(estimatorOptions(o))
+{
+	m_opts.validate();
+	map.channelIndex(channel);	// throws naming the map's channels
+}
+
+void CStereoLocaliser::reset()
+{
+	m_prevSolve = TKeyframePose();
+	m_consistent = 0;
+	m_confirmed = false;
+}
+
+TPoseWithCov CStereoLocaliser::between(uint32_t a, uint32_t b) const
+{
+	TPoseWithCov r;
+	if (a == b) return r;
+	if (m_map.sameSegment(a, b))
+	{
+		const auto rp = m_map.relativePose(a, b);
+		r.T = rp.T_a_b;
+		r.cov = rp.cov;
+		return r;
+	}
+	// Across a VO break: the map poses (one of them only predicted), with a
+	// covariance that says so.
+	r.T = m_map.keyframe(a).T_map_kf.inverse() * m_map.keyframe(b).T_map_kf;
+	const double st = m_opts.cross_segment_sigma_m, sr = m_opts.cross_segment_sigma_deg * kDeg;
+	r.cov.diagonal() << st * st, st * st, st * st, sr * sr, sr * sr, sr * sr;
+	return r;
+}
+
+TKeyframePose CStereoLocaliser::chooseKeyframe(const TKeyframePose& pred) const
+{
+	const auto& o = m_opts;
+	const Eigen::Isometry3d T_map_pred = m_map.keyframe(pred.kf).T_map_kf * pred.T_kf_live;
+	// The point the keyframe should be nearest: look-ahead metres in front of the camera.
+	const Eigen::Vector3d ahead = T_map_pred * Eigen::Vector3d(0, 0, o.kf_lookahead_m);
+	std::vector<uint32_t> cands = m_map.keyframesAlongChain(pred.kf, o.kf_back_m, o.kf_ahead_m);
+	// At a segment's end (or a VO break) the chain does not go on: also the
+	// spatially nearest keyframes of any segment.
+	map::TNearestQuery q;
+	q.max_distance_m = o.kf_max_distance_m;
+	q.max_angle_deg = o.kf_max_angle_deg;
+	q.max_results = 5;
+	for (const auto& h : m_map.nearestKeyframes(T_map_pred, q))
+		if (std::find(cands.begin(), cands.end(), h.id) == cands.end()) cands.push_back(h.id);
+	double best = std::numeric_limits<double>::infinity();
+	int bestId = -1;
+	for (const uint32_t c : cands)
+	{
+		const auto& T_map_c = m_map.keyframe(c).T_map_kf;
+		const double ang = angleBetweenAxesDeg(T_map_c, T_map_pred);
+		const double dist = (T_map_c.translation() - T_map_pred.translation()).norm();
+		if (ang > o.kf_max_angle_deg || dist > o.kf_max_distance_m) continue;
+		const double score = (T_map_c.translation() - ahead).norm() + o.kf_angle_weight_m_per_deg * ang;
+		// Ties (identical scores) go to the smaller id: deterministic.
+		if (score < best)
+		{
+			best = score;
+			bestId = static_cast<int>(c);
+		}
+	}
+	TKeyframePose out;
+	if (bestId < 0) return out;
+	const uint32_t c = static_cast<uint32_t>(bestId);
+	TPoseWithCov p;
+	p.T = pred.T_kf_live;
+	p.cov = pred.cov;
+	const TPoseWithCov q2 = geometry::compose(between(c, pred.kf), p);
+	out.valid = true;
+	out.kf = c;
+	out.T_kf_live = q2.T;
+	out.cov = q2.cov;
+	return out;
+}
+
+TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
+{
+	const auto t0 = std::chrono::steady_clock::now();
+	const auto& o = m_opts;
+	if (!in.meas) throw std::invalid_argument("CStereoLocaliser::localise: no measurements");
+	TLocaliserResult r;
+	r.frame = in.frame;
+	r.timestamp = in.timestamp;
+	r.channel = m_channel;
+	// Any frame without a consistent fix is a failure: K consistent frames are
+	// needed again. The previous solve survives only into the next frame.
+	const bool prevIsLastFrame = m_prevSolve.valid && m_prevFrame + 1 == in.frame;
+	auto fail = [&](LocaliserStatus s) {
+		r.status = s;
+		m_consistent = 0;
+		m_confirmed = false;
+		if (!r.solved) m_prevSolve = TKeyframePose();
+		r.consistent = m_consistent;
+		r.ms = msSince(t0);
+		return r;
+	};
+	if (!in.prediction.valid) return fail(LocaliserStatus::NoPrediction);
+
+	// ---- 1. keyframe choice ---------------------------------------------------------
+	const TKeyframePose pred = chooseKeyframe(in.prediction);
+	if (!pred.valid) return fail(LocaliserStatus::NoKeyframe);
+	const auto& kf = m_map.keyframe(pred.kf);
+	r.kf_id = kf.id;
+	r.kf_run = kf.run;
+	r.kf_frame = kf.frame;
+	r.kf_stamp = kf.timestamp;
+	uint32_t matchKf = pred.kf;
+	if (o.fault_keyframe_offset != 0)
+	{
+		const long long f = static_cast<long long>(pred.kf) + o.fault_keyframe_offset;
+		matchKf = static_cast<uint32_t>(std::clamp<long long>(f, 0, static_cast<long long>(m_map.keyframeCount()) - 1));
+	}
+
+	// ---- 2. active search --------------------------------------------------------------
+	vo::TKeyframeMatchInput mi;
+	mi.landmarks = &m_map.measurements(matchKf, m_channel);
+	mi.calib_kf = m_map.calibration();
+	mi.frame = in.meas;
+	mi.calib = in.calib;
+	TPoseWithCov p;
+	p.T = pred.T_kf_live;
+	p.cov = pred.cov;
+	const TPoseWithCov pinv = geometry::inverse(p);
+	mi.T_curr_kf_pred = pinv.T;
+	mi.cov_T_curr_kf_pred = pinv.cov;
+	vo::TKeyframeMatchOutput mo;
+	m_matcher.match(mi, mo);
+	r.gate = mo.gate;
+	r.matches = static_cast<int>(mo.corr.size());
+	if (o.search == SearchMode::Gate && mo.gate.predicted > 0 &&
+		mo.gate.overflow > o.max_overflow_fraction * mo.gate.predicted)
+		return fail(LocaliserStatus::Lost);
+	if (r.matches < o.min_matches) return fail(LocaliserStatus::FewMatches);
+
+	// ---- 3. RANSAC and the robust solve, without the prior ---------------------------
+	vo::TRelativePoseInput pi;
+	pi.corr = &mo.corr;
+	pi.calib = in.calib;
+	pi.T_curr_ref_pred = nullptr;
+	pi.seed = static_cast<uint32_t>(in.frame * 2654435761u + 7);
+	vo::TRelativePoseOutput po;
+	m_estimator.estimate(pi, po);
+	r.inliers = static_cast<int>(po.inliers);
+	r.rms_px = po.rms_px;
+	if (po.status == vo::RelativePoseStatus::SolverFailed) return fail(LocaliserStatus::SolverFailed);
+	if (!po.ok() || r.inliers < o.min_inliers) return fail(LocaliserStatus::FewInliers);
+	r.solved = true;
+	r.T_kf_live = po.T_curr_ref.inverse();
+	r.cov = o.cov_scale * po.cov_T_ref_curr;
+	{
+		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> et(r.cov.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
+		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> er(r.cov.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
+		r.sigma_m = std::sqrt(std::max(0.0, et.eigenvalues().maxCoeff()));
+		r.sigma_deg = std::sqrt(std::max(0.0, er.eigenvalues().maxCoeff())) / kDeg;
+	}
+
+	// ---- 4. the failure test -------------------------------------------------------------
+	bool consistent = true;
+	LocaliserStatus why = LocaliserStatus::Ok;
+	// (0) a fix too uncertain to be within the accuracy asked of it.
+	if (r.sigma_m > o.max_sigma_m || r.sigma_deg > o.max_sigma_deg)
+	{
+		consistent = false;
+		why = LocaliserStatus::Uncertain;
+	}
+	// (a) the fix against the prediction, both covariances.
+	r.prediction_d2 = mahalanobis2(geometry::localLeft(r.T_kf_live, pred.T_kf_live), pred.cov + r.cov);
+	if (r.prediction_d2 > o.prediction_chi2)
+	{
+		consistent = false;
+		if (why == LocaliserStatus::Ok) why = LocaliserStatus::PredictionInconsistent;
+	}
+	// (b) frame-to-frame motion of the two solves against VO's.
+	bool motionTested = false;
+	if (prevIsLastFrame && in.motion.valid)
+	{
+		TPoseWithCov prev, cur;
+		prev.T = m_prevSolve.T_kf_live;
+		prev.cov = m_prevSolve.cov;
+		cur.T = r.T_kf_live;
+		cur.cov = r.cov;
+		const TPoseWithCov D = geometry::compose(geometry::compose(geometry::inverse(prev), between(m_prevSolve.kf, pred.kf)), cur);
+		r.motion_d2 = mahalanobis2(geometry::localLeft(D.T, in.motion.T_prev_curr), D.cov + in.motion.cov);
+		motionTested = true;
+		if (r.motion_d2 > o.motion_chi2)
+		{
+			consistent = false;
+			if (why == LocaliserStatus::Ok) why = LocaliserStatus::MotionInconsistent;
+		}
+	}
+	m_prevSolve.valid = true;
+	m_prevSolve.kf = pred.kf;
+	m_prevSolve.T_kf_live = r.T_kf_live;
+	m_prevSolve.cov = r.cov;
+	m_prevFrame = in.frame;
+	if (!consistent) return fail(why);
+	if (motionTested) m_consistent++;
+	if (m_consistent >= o.consistent_frames) m_confirmed = true;
+	r.consistent = m_consistent;
+	r.status = m_confirmed ? LocaliserStatus::Ok : LocaliserStatus::Unconfirmed;
+	r.ms = msSince(t0);
+	return r;
+}
+
+TGlobalPlace CStereoLocaliser::globalSearch(
+	const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed) const
+{
+	std::vector<uint32_t> all(m_map.keyframeCount());
+	for (uint32_t k = 0; k < all.size(); k++) all[k] = k;
+	return globalSearch(meas, calib, seed, all);
+}
+
+TGlobalPlace CStereoLocaliser::globalSearch(
+	const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed,
+	const std::vector<uint32_t>& among) const
+{
+	const auto& o = m_opts;
+	TGlobalPlace out;
+	if (among.empty() || meas.meas.empty())
+	{
+		out.why = "no keyframes or no measurements";
+		return out;
+	}
+	// ---- BRIEF voting: a map landmark votes for its keyframe when some live
+	// descriptor is within global_vote_hamming of it.
+	std::vector<std::pair<int, uint32_t>> votes;  // (-votes, id): most first, then smaller id
+	votes.reserve(among.size());
+	for (const uint32_t k : among)
+	{
+		int v = 0;
+		for (const auto& lm : m_map.measurements(k, m_channel))
+		{
+			int best = 257;
+			for (const auto& m : meas.meas)
+			{
+				best = std::min(best, features::hamming(lm.desc, m.desc));
+				if (best <= o.global_vote_hamming) break;
+			}
+			v += best <= o.global_vote_hamming;
+		}
+		votes.emplace_back(-v, k);
+	}
+	std::sort(votes.begin(), votes.end());
+	// ---- geometric check of the best candidates.
+	struct TVerified
+	{
+		uint32_t kf;
+		int inliers, votes;
+		Eigen::Isometry3d T_kf_live, T_map_live;
+		Matrix6d cov;
+	};
+	std::vector<TVerified> ver;
+	for (int c = 0; c < o.global_candidates && c < static_cast<int>(votes.size()); c++)
+	{
+		const uint32_t k = votes[c].second;
+		if (-votes[c].first < o.min_matches) break;
+		// (1) the live camera near the keyframe: a window around each
+		// landmark's projection from the keyframe's own pose;
+		vo::TKeyframeMatchInput mi;
+		mi.landmarks = &m_map.measurements(k, m_channel);
+		mi.calib_kf = m_map.calibration();
+		mi.frame = &meas;
+		mi.calib = calib;
+		vo::TKeyframeMatchOutput mo;
+		m_placeMatcher.match(mi, mo);
+		if (static_cast<int>(mo.corr.size()) < o.min_matches) continue;
+		vo::TRelativePoseInput pi;
+		pi.corr = &mo.corr;
+		pi.calib = calib;
+		pi.seed = seed + k;
+		vo::TRelativePoseOutput po;
+		m_estimator.estimate(pi, po);
+		out.verified++;
+		if (!po.ok()) continue;
+		// (2) active search around that pose, solved again (without it as prior).
+		TPoseWithCov p1;
+		p1.T = po.T_curr_ref;
+		p1.cov = geometry::invertCovariance(po.T_curr_ref.inverse(), o.cov_scale * po.cov_T_ref_curr);
+		mi.T_curr_kf_pred = p1.T;
+		mi.cov_T_curr_kf_pred = p1.cov;
+		vo::TKeyframeMatchOutput mo2;
+		m_gateMatcher.match(mi, mo2);
+		vo::TRelativePoseOutput po2;
+		if (static_cast<int>(mo2.corr.size()) >= o.min_matches)
+		{
+			pi.corr = &mo2.corr;
+			m_estimator.estimate(pi, po2);
+		}
+		const vo::TRelativePoseOutput& best = po2.ok() && po2.inliers >= po.inliers ? po2 : po;
+		TVerified v;
+		v.kf = k;
+		v.inliers = static_cast<int>(best.inliers);
+		v.votes = -votes[c].first;
+		v.T_kf_live = best.T_curr_ref.inverse();
+		v.T_map_live = m_map.keyframe(k).T_map_kf * v.T_kf_live;
+		v.cov = o.cov_scale * best.cov_T_ref_curr;
+		ver.push_back(v);
+	}
+	if (ver.empty())
+	{
+		out.why = "no candidate verified";
+		return out;
+	}
+	const auto bestIt = std::max_element(ver.begin(), ver.end(), [](const TVerified& a, const TVerified& b) {
+		return a.inliers < b.inliers || (a.inliers == b.inliers && a.kf > b.kf);
+	});
+	const TVerified best = *bestIt;
+	for (const auto& v : ver)
+		if ((v.T_map_live.translation() - best.T_map_live.translation()).norm() > o.global_distinct_m)
+			out.runner_up_inliers = std::max(out.runner_up_inliers, v.inliers);
+	out.inliers = best.inliers;
+	out.votes = best.votes;
+	out.pose.kf = best.kf;
+	out.pose.T_kf_live = best.T_kf_live;
+	out.pose.cov = best.cov;
+	if (best.inliers < o.global_min_inliers)
+	{
+		out.why = "best place has " + std::to_string(best.inliers) + " inliers (< " +
+				  std::to_string(o.global_min_inliers) + ")";
+		return out;
+	}
+	if (out.runner_up_inliers >= o.global_ambiguity_ratio * best.inliers)
+	{
+		out.why = "ambiguous: another place has " + std::to_string(out.runner_up_inliers) + " inliers against " +
+				  std::to_string(best.inliers);
+		return out;
+	}
+	out.ok = true;
+	out.pose.valid = true;
+	return out;
+}
+
+}  // namespace shadyloc::localisation
