@@ -1,6 +1,7 @@
 /* ShadyLoc — the dual-channel keyframe map. */
 #include "ByteBuffer.h"
 
+#include <shadyloc/core/Settings.h>
 #include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/map/CKeyframeMap.h>
 
@@ -231,40 +232,42 @@ TKeyframeMapOptions getOptions(ByteReader& r)
 // ============================================================================
 void TKeyframeMapOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	MRPT_LOAD_CONFIG_VAR(kf_spacing_m, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(kf_spacing_deg, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(landmarks_per_keyframe, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(selection_grid_cols, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(selection_grid_rows, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(compression_level, int, c, s);
-	MRPT_LOAD_CONFIG_VAR(index_cell_m, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(draw_landmarks, bool, c, s);
-	MRPT_LOAD_CONFIG_VAR(draw_landmark_max_depth_m, double, c, s);
-	MRPT_LOAD_CONFIG_VAR(draw_frame_every_m, double, c, s);
+	core::SettingsSection r(c, s);
+	r.read("kf_spacing_m", kf_spacing_m);
+	r.read("kf_spacing_deg", kf_spacing_deg);
+	r.read("landmarks_per_keyframe", landmarks_per_keyframe);
+	r.read("selection_grid_cols", selection_grid_cols);
+	r.read("selection_grid_rows", selection_grid_rows);
+	r.read("compression_level", compression_level);
+	r.read("index_cell_m", index_cell_m);
+	r.read("draw_landmarks", draw_landmarks);
+	r.read("draw_landmark_max_depth_m", draw_landmark_max_depth_m);
+	r.read("draw_frame_every_m", draw_frame_every_m);
+	r.finish();
 	try
 	{
 		validate();
 	}
 	catch (const std::exception& e)
 	{
-		throw std::invalid_argument("[" + s + "] " + e.what());
+		throw core::SettingsError(r.where() + " " + e.what());
 	}
 }
 
 void TKeyframeMapOptions::dumpToTextStream(std::ostream& out) const
 {
-	// Bools on lines of their own: MRPT reads "true ; comment" as false.
-	out << "kf_spacing_m = " << kf_spacing_m << " ; new map keyframe after this distance [m]\n"
-		<< "kf_spacing_deg = " << kf_spacing_deg << " ; ... or this rotation [deg]\n"
-		<< "landmarks_per_keyframe = " << landmarks_per_keyframe << " ; per channel, 0 = all\n"
-		<< "selection_grid_cols = " << selection_grid_cols << " ; buckets across the image\n"
-		<< "selection_grid_rows = " << selection_grid_rows << " ; buckets down the image\n"
-		<< "compression_level = " << compression_level << " ; zstd, 1..22\n"
-		<< "index_cell_m = " << index_cell_m << " ; spatial hash grid cell [m]\n"
-		<< "; draw landmarks coloured by channel\n"
-		<< "draw_landmarks = " << (draw_landmarks ? "true" : "false") << "\n"
-		<< "draw_landmark_max_depth_m = " << draw_landmark_max_depth_m << " ; [m]\n"
-		<< "draw_frame_every_m = " << draw_frame_every_m << " ; keyframe triads at most this often [m]\n";
+	core::SettingsWriter w(out);
+	w.value("kf_spacing_m", kf_spacing_m, "a new map keyframe after this path distance along the VO chain [m]");
+	w.value("kf_spacing_deg", kf_spacing_deg, "... or this change of heading [deg]");
+	w.value("landmarks_per_keyframe", landmarks_per_keyframe,
+			"kept per keyframe and channel, strongest per image bucket first; 0 = all");
+	w.value("selection_grid_cols", selection_grid_cols, "landmark selection buckets across the image");
+	w.value("selection_grid_rows", selection_grid_rows, "... and down the image");
+	w.value("compression_level", compression_level, "zstd level 1 (fast) .. 22 (small)");
+	w.value("index_cell_m", index_cell_m, "cell of the spatial hash grid over camera centres [m]");
+	w.value("draw_landmarks", draw_landmarks, "drawings show landmarks, coloured by channel");
+	w.value("draw_landmark_max_depth_m", draw_landmark_max_depth_m, "farther landmarks are not drawn [m]");
+	w.value("draw_frame_every_m", draw_frame_every_m, "a keyframe axis triad at most this often along the path [m]");
 }
 
 void TKeyframeMapOptions::validate() const

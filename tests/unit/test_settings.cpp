@@ -7,6 +7,7 @@
 #include <shadyloc/filters/FilterPipeline.h>
 #include <shadyloc/filters/Filters.h>
 #include <shadyloc/image/ColourTransforms.h>
+#include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/sim/SimOptions.h>
 #include <shadyloc/vo/StereoVO.h>
 #include <shadyloc/vo/VOConfig.h>
@@ -639,4 +640,62 @@ TEST(Settings, KeyGivenTwiceInAFileIsAnError)
 	std::ofstream(p) << "[vo]\nsigma_px = 0.5\n[features]\nsigma_px = 0.5\n";
 	mrpt::config::CConfigFile ok(p);
 	EXPECT_NO_THROW(vo::checkVOConfigSections(ok));
+}
+
+TEST(Settings, MapOptionsRoundTripWithEveryFieldChanged)
+{
+	TKeyframeMapOptions o;
+	o.kf_spacing_m = 0.1 + 0.2;	 // needs 17 digits
+	o.kf_spacing_deg = 12.5;
+	o.landmarks_per_keyframe = 77;
+	o.selection_grid_cols = 5;
+	o.selection_grid_rows = 3;
+	o.compression_level = 4;
+	o.index_cell_m = 1.0 / 3.0;
+	o.draw_landmarks = true;
+	o.draw_landmark_max_depth_m = 22.5;
+	o.draw_frame_every_m = 3.75;
+	std::ostringstream dump;
+	o.dumpToTextStream(dump);
+	mrpt::config::CConfigFileMemory c("[map]\n" + dump.str());
+	TKeyframeMapOptions b;
+	ASSERT_FALSE(b == o);
+	b.loadFromConfigFile(c, "map");
+#define SAME(f) EXPECT_EQ(b.f, o.f) << #f
+	SAME(kf_spacing_m); SAME(kf_spacing_deg); SAME(landmarks_per_keyframe); SAME(selection_grid_cols);
+	SAME(selection_grid_rows); SAME(compression_level); SAME(index_cell_m); SAME(draw_landmarks);
+	SAME(draw_landmark_max_depth_m); SAME(draw_frame_every_m);
+#undef SAME
+	EXPECT_TRUE(b == o);
+	std::ostringstream again;
+	b.dumpToTextStream(again);
+	EXPECT_EQ(again.str(), dump.str());
+
+	// Strict: a key without its unit, a bool with a comment, a bad number, a range.
+	auto load = [](const std::string& text) {
+		mrpt::config::CConfigFileMemory m(text);
+		TKeyframeMapOptions x;
+		x.loadFromConfigFile(m, "map");
+		return x;
+	};
+	expectRefused([&] { load("[map]\nkf_spacing = 2\n"); }, {"[map] kf_spacing", "kf_spacing_m"}, "unit");
+	EXPECT_TRUE(load("[map]\ndraw_landmarks = true ; draw them\n").draw_landmarks);
+	expectRefused([&] { load("[map]\nlandmarks_per_keyframe = 12.5\n"); }, {"[map] landmarks_per_keyframe"}, "integer");
+	expectRefused([&] { load("[map]\ncompression_level = 30\n"); }, {"[map]", "compression_level must be in 1..22"}, "range");
+}
+
+TEST(Settings, MapSectionsOfTheVOConfigsAreTheDefaults)
+{
+	// config/vo.ini and config/vo_sim.ini document the map's defaults in
+	// [map]; the survey reads them, and `shadyloc vo` accepts the files.
+	for (const char* name : {"vo.ini", "vo_sim.ini"})
+	{
+		SCOPED_TRACE(name);
+		mrpt::config::CConfigFile c(std::string(SHADYLOC_SOURCE_DIR) + "/config/" + name);
+		ASSERT_TRUE(c.sectionExists("map"));
+		TKeyframeMapOptions o;
+		o.loadFromConfigFile(c, "map");
+		EXPECT_TRUE(o == TKeyframeMapOptions()) << "the [map] section differs from the defaults";
+		EXPECT_NO_THROW(vo::checkVOConfigSections(c));
+	}
 }

@@ -29,7 +29,10 @@ namespace shadyloc
 {
 /** Options of the keyframe map: how a survey thins and stores keyframes, and
  * how the map is drawn. Stored with the map. ([map] in config/vo*.ini, or the
- * creationOpts section of a CMultiMetricMap .ini.) */
+ * creationOpts section of a CMultiMetricMap .ini.) Read strictly
+ * (core::SettingsSection: unknown keys, bad numbers and booleans are errors
+ * naming file, section and key); dumped in the canonical form that loads
+ * back to the same values (core::SettingsWriter). */
 struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 {
 	double kf_spacing_m = 3.0;	//!< a new map keyframe after this distance along the VO path [m]
