@@ -57,6 +57,17 @@ Matrix6d invertCovariance(const Eigen::Isometry3d& T, const Matrix6d& covT)
 	return A * covT * A.transpose();
 }
 
+void composeWithCovariance(
+	const Eigen::Isometry3d& T_ab, const Matrix6d& cov_ab, const Eigen::Isometry3d& T_bc, const Matrix6d& cov_bc,
+	Eigen::Isometry3d& T_ac, Matrix6d& cov_ac)
+{
+	// exp(a) T_ab exp(b) T_bc = exp(a) exp(Ad(T_ab) b) T_ab T_bc ~ exp(a + Ad(T_ab) b) T_ac
+	const Matrix6d A = adjoint(T_ab);
+	const Matrix6d c = cov_ab + A * cov_bc * A.transpose();
+	T_ac = T_ab * T_bc;
+	cov_ac = 0.5 * (c + c.transpose());
+}
+
 bool stereoResidual(
 	const TStereoCalib& calib, const Eigen::Isometry3d& T_curr_ref, const Eigen::Vector3d& P_ref,
 	const Eigen::Vector3d& z, Eigen::Vector3d& r, Matrix36d* J)

@@ -509,7 +509,7 @@ map::TRelativePose CKeyframeMap::relativePose(uint32_t a, uint32_t b) const
 	map::TRelativePose r;
 	const uint32_t lo = std::min(a, b), hi = std::max(a, b);
 	for (uint32_t k = lo + 1; k <= hi; k++)
-		map::composeWithCovariance(r.T_a_b, r.cov, m_keyframes[k].T_prev_kf, m_keyframes[k].cov_prev_kf, r.T_a_b, r.cov);
+		geometry::composeWithCovariance(r.T_a_b, r.cov, m_keyframes[k].T_prev_kf, m_keyframes[k].cov_prev_kf, r.T_a_b, r.cov);
 	r.chain_length_m = m_chainDist[hi] - m_chainDist[lo];
 	if (a > b)
 	{

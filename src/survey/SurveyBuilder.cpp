@@ -88,8 +88,8 @@ bool CSurveyBuilder::offer(
 		Eigen::Isometry3d T = m_T_ref_last.inverse();
 		geometry::Matrix6d C = geometry::invertCovariance(m_T_ref_last, m_cov_ref_last);
 		for (size_t k = m_lastRef + 1; k <= p.ref; k++)
-			map::composeWithCovariance(T, C, voKfs[k].T_prevkf_kf, voKfs[k].cov, T, C);
-		map::composeWithCovariance(T, C, p.T_ref_f, p.cov_ref_f, T, C);
+			geometry::composeWithCovariance(T, C, voKfs[k].T_prevkf_kf, voKfs[k].cov, T, C);
+		geometry::composeWithCovariance(T, C, p.T_ref_f, p.cov_ref_f, T, C);
 		p.T_prev_f = T;
 		p.cov_prev_f = C;
 		const auto& o = m_map.options;

@@ -34,6 +34,15 @@ Matrix6d adjoint(const Eigen::Isometry3d& T);
 /** Covariance of T^-1 given that of T (both in the left convention). */
 Matrix6d invertCovariance(const Eigen::Isometry3d& T, const Matrix6d& covT);
 
+/** Composition of uncertain poses, left perturbation T = exp(xi) T_mean,
+ * xi = (rho, phi): T_ac = T_ab T_bc and, for independent errors, to first
+ * order cov_ac = cov_ab + Ad(T_ab) cov_bc Ad(T_ab)^T (symmetrised). The map's
+ * chain queries, the survey and the localisers compose along keyframe
+ * chains with it. T_ac and cov_ac may alias the inputs. */
+void composeWithCovariance(
+	const Eigen::Isometry3d& T_ab, const Matrix6d& cov_ab, const Eigen::Isometry3d& T_bc, const Matrix6d& cov_bc,
+	Eigen::Isometry3d& T_ac, Matrix6d& cov_ac);
+
 /** One correspondence: a landmark in the reference frame and its measurement
  * in the current frame. */
 struct TStereoCorrespondence
