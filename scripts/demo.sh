@@ -38,7 +38,7 @@ bash "$here/scripts/vo-table.sh" "$data" "$out" "$vo_cfg"
 
 echo
 echo "== 4. trajectories, rendered offscreen"
-"$app" render-traj --title "noon: ground truth vs stereo VO (SE(3)-aligned)" \
+"$app" render --title "noon: ground truth vs stereo VO (SE(3)-aligned)" \
   -t "$data/noon.tum:ground truth" -t "$out/noon_mono.tum:VO mono" -t "$out/noon_invariant.tum:VO invariant" \
   -o "$out/noon_trajectories.png" --align
 
