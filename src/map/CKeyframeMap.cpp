@@ -809,8 +809,14 @@ CKeyframeMap::Ptr CKeyframeMap::LoadFromFile(const std::string& path)
 {
 	std::ifstream f(path, std::ios::binary);
 	if (!f) throw std::runtime_error("keyframe map '" + path + "': cannot open");
-	std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-	if (bytes.empty()) throw std::runtime_error("keyframe map '" + path + "': empty file");
+	const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+	return LoadFromBytes(bytes.data(), bytes.size(), path);
+}
+
+CKeyframeMap::Ptr CKeyframeMap::LoadFromBytes(const uint8_t* data, size_t size, const std::string& path)
+{
+	if (size == 0) throw std::runtime_error("keyframe map '" + path + "': empty file");
+	const std::vector<uint8_t> bytes(data, data + size);
 	// MRPT's object header: 0x80 | name length, the class name, the version.
 	// ReadObject(existing) does not compare the name, so check it here: a file
 	// of another class is refused before anything of it is parsed.

@@ -21,6 +21,7 @@
 #include <mrpt/img/TColor.h>
 #include <mrpt/maps/CMetricMap.h>
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <unordered_map>
@@ -123,6 +124,9 @@ class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
 	/** Reads a map file; throws std::runtime_error naming the file on any
 	 * damage (truncation, flipped bytes, another class, unknown version). */
 	static CKeyframeMap::Ptr LoadFromFile(const std::string& path);
+	/** The same on the bytes of a map file in memory (the loader's whole
+	 * entry point, e.g. for a fuzz target); `path` names them in errors. */
+	static CKeyframeMap::Ptr LoadFromBytes(const uint8_t* data, size_t size, const std::string& path = "(memory)");
 
 	/** Stored bytes per block, measured by serialising: the metadata block
 	 * (options, calibration, channels, keyframe poses) and one block per channel. */
