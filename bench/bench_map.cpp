@@ -24,8 +24,9 @@ const CKeyframeMap& bigMap()
 		geometry::TStereoCalib cal;
 		map::TChannelParams a, b;
 		a.label = "mono";
+		a.filter_class = "shadyloc::CFilterMonochrome";
 		b.label = "invariant";
-		b.kind = map::ChannelKind::Invariant;
+		b.filter_class = "shadyloc::CFilterInvariant";
 		map->setup(cal, 512, 384, {a, b});
 		const uint16_t run = map->addRun("synthetic-100km");
 		std::mt19937 rng(5);

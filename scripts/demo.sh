@@ -5,7 +5,9 @@
 #  2. observation filters: monochrome + invariant channels of one traversal,
 #     checked with stock MRPT tools through the plugin;
 #  3. stereo VO on both channels of every traversal, errors against ground truth;
-#  4. an offscreen picture of the trajectories.
+#  4. the dual-channel keyframe map of one traversal (shadyloc survey), its
+#     summary and its chain's error against ground truth (shadyloc map-info);
+#  5. offscreen pictures of the trajectories and of the map (shadyloc render).
 # Everything goes to build/demo/.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -37,10 +39,18 @@ echo "== 3. stereo VO, both channels, every traversal (config: ${vo_cfg#$here/})
 bash "$here/scripts/vo-table.sh" "$data" "$out" "$vo_cfg"
 
 echo
-echo "== 4. trajectories, rendered offscreen"
-"$app" render-traj --title "noon: ground truth vs stereo VO (SE(3)-aligned)" \
+echo "== 4. keyframe map of 'noon' (shadyloc survey: mono VO chain, both channels' landmarks) and its summary"
+"$app" survey -q -i "$data/noon.rawlog" -o "$out/noon.kfmap" -c "$vo_cfg" --gt "$data/noon.tum" | tail -n 1
+"$app" map-info "$out/noon.kfmap"
+
+echo
+echo "== 5. trajectories and the map, rendered offscreen"
+"$app" render --title "noon: ground truth vs stereo VO (SE(3)-aligned)" \
   -t "$data/noon.tum:ground truth" -t "$out/noon_mono.tum:VO mono" -t "$out/noon_invariant.tum:VO invariant" \
   -o "$out/noon_trajectories.png" --align
+"$app" render --title "noon: keyframe map (shadyloc survey), ground truth over it" \
+  -m "$out/noon.kfmap:noon" -t "$data/noon.tum:ground truth" --align --landmarks \
+  --width 1000 --height 600 -o "$out/noon_map.png"
 
 echo
 echo "Done. Results in $out/"

@@ -5,13 +5,13 @@
 #include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/map/CKeyframeMap.h>
 
+#include <shadyloc/geometry/PoseCovariance.h>
+
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/opengl/CPointCloudColoured.h>
-#include <mrpt/opengl/CSetOfLines.h>
 #include <mrpt/opengl/CSetOfObjects.h>
-#include <mrpt/opengl/stock_objects.h>
-#include <mrpt/math/CMatrixFixed.h>
+#include <mrpt/opengl/CSetOfTriangles.h>
 #include <mrpt/poses/CPose3D.h>
 #include <mrpt/serialization/CArchive.h>
 
@@ -267,7 +267,7 @@ void TKeyframeMapOptions::dumpToTextStream(std::ostream& out) const
 	w.value("index_cell_m", index_cell_m, "cell of the spatial hash grid over camera centres [m]");
 	w.value("draw_landmarks", draw_landmarks, "drawings show landmarks, coloured by channel");
 	w.value("draw_landmark_max_depth_m", draw_landmark_max_depth_m, "farther landmarks are not drawn [m]");
-	w.value("draw_frame_every_m", draw_frame_every_m, "a keyframe axis triad at most this often along the path [m]");
+	w.value("draw_frame_every_m", draw_frame_every_m, "a keyframe marker (chevron) at most this often along the path [m]");
 }
 
 void TKeyframeMapOptions::validate() const
@@ -509,7 +509,11 @@ map::TRelativePose CKeyframeMap::relativePose(uint32_t a, uint32_t b) const
 	map::TRelativePose r;
 	const uint32_t lo = std::min(a, b), hi = std::max(a, b);
 	for (uint32_t k = lo + 1; k <= hi; k++)
-		map::composeWithCovariance(r.T_a_b, r.cov, m_keyframes[k].T_prev_kf, m_keyframes[k].cov_prev_kf, r.T_a_b, r.cov);
+	{
+		const auto c = geometry::compose({r.T_a_b, r.cov}, {m_keyframes[k].T_prev_kf, m_keyframes[k].cov_prev_kf});
+		r.T_a_b = c.T;
+		r.cov = c.cov;
+	}
 	r.chain_length_m = m_chainDist[hi] - m_chainDist[lo];
 	if (a > b)
 	{
@@ -811,8 +815,14 @@ CKeyframeMap::Ptr CKeyframeMap::LoadFromFile(const std::string& path)
 {
 	std::ifstream f(path, std::ios::binary);
 	if (!f) throw std::runtime_error("keyframe map '" + path + "': cannot open");
-	std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-	if (bytes.empty()) throw std::runtime_error("keyframe map '" + path + "': empty file");
+	const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+	return LoadFromBytes(bytes.data(), bytes.size(), path);
+}
+
+CKeyframeMap::Ptr CKeyframeMap::LoadFromBytes(const uint8_t* data, size_t size, const std::string& path)
+{
+	if (size == 0) throw std::runtime_error("keyframe map '" + path + "': empty file");
+	const std::vector<uint8_t> bytes(data, data + size);
 	// MRPT's object header: 0x80 | name length, the class name, the version.
 	// ReadObject(existing) does not compare the name, so check it here: a file
 	// of another class is refused before anything of it is parsed.
@@ -927,46 +937,78 @@ float CKeyframeMap::squareDistanceToClosestCorrespondence(float, float) const
 	throw std::logic_error(std::string(kClass) + "::squareDistanceToClosestCorrespondence: not defined for a keyframe map");
 }
 
-void CKeyframeMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const
+void CKeyframeMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const { getVisualizationInto(o, TDrawStyle()); }
+
+void CKeyframeMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o, const TDrawStyle& style) const
 {
-	if (!genericMapParams.enableSaveAs3DObject) return;
-	// One polyline per segment: blue for measured chains, orange where the
-	// map pose is only predicted (after a VO break).
-	for (size_t i = 0; i < m_keyframes.size();)
+	if (!genericMapParams.enableSaveAs3DObject || m_keyframes.empty()) return;
+	Eigen::Vector3d lo = m_keyframes[0].T_map_kf.translation(), hi = lo;
+	for (const auto& k : m_keyframes)
 	{
-		size_t j = i;
-		auto lines = mrpt::opengl::CSetOfLines::Create();
-		lines->setLineWidth(2);
-		const auto& k0 = m_keyframes[i];
-		lines->setColor_u8(k0.predicted ? mrpt::img::TColor(230, 120, 0) : mrpt::img::TColor(20, 60, 220));
-		while (j + 1 < m_keyframes.size() && sameSegment(static_cast<uint32_t>(i), static_cast<uint32_t>(j + 1)))
-		{
-			const auto& a = m_keyframes[j].T_map_kf.translation();
-			const auto& b = m_keyframes[j + 1].T_map_kf.translation();
-			lines->appendLine(a.x(), a.y(), a.z(), b.x(), b.y(), b.z());
-			j++;
-		}
-		if (!lines->empty()) o.insert(lines);
-		i = j + 1;
+		lo = lo.cwiseMin(k.T_map_kf.translation());
+		hi = hi.cwiseMax(k.T_map_kf.translation());
 	}
+	const double width = style.path_width_m > 0 ? style.path_width_m : std::max(0.05, (hi - lo).norm() / 250);
+	const double marker = style.marker_size_m > 0 ? style.marker_size_m : 4 * width;
+	const mrpt::img::TColor measured = kDrawColourMeasured, predicted = kDrawColourPredicted;
+	auto tri = [](mrpt::opengl::CSetOfTriangles& t, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+				  const Eigen::Vector3d& c, const mrpt::img::TColor& col) {
+		mrpt::opengl::TTriangle x(
+			mrpt::math::TPoint3Df(float(a.x()), float(a.y()), float(a.z())),
+			mrpt::math::TPoint3Df(float(b.x()), float(b.y()), float(b.z())),
+			mrpt::math::TPoint3Df(float(c.x()), float(c.y()), float(c.z())));
+		for (auto& v : x.vertices) v.setColor(col);
+		t.insertTriangle(x);
+	};
+	// The path: one ribbon per link within a segment, in the road plane (the
+	// plane of the camera's x and z axes; its y axis points down), each quad
+	// extended by half a width so the joints overlap instead of notching.
+	auto path = mrpt::opengl::CSetOfTriangles::Create();
+	path->enableLight(false);
+	for (size_t i = 0; i + 1 < m_keyframes.size(); i++)
+	{
+		if (!sameSegment(static_cast<uint32_t>(i), static_cast<uint32_t>(i + 1))) continue;
+		const auto& ka = m_keyframes[i];
+		const Eigen::Vector3d a = ka.T_map_kf.translation(), b = m_keyframes[i + 1].T_map_kf.translation();
+		Eigen::Vector3d d = b - a;
+		if (d.norm() < 1e-9) continue;
+		d.normalize();
+		Eigen::Vector3d side = d.cross(ka.T_map_kf.linear().col(1));
+		if (side.norm() < 1e-6) continue;  // moving straight up or down: no road plane
+		side = side.normalized() * (0.5 * width);
+		const Eigen::Vector3d e = d * (0.5 * width);
+		const auto& col = m_keyframes[i + 1].predicted ? predicted : measured;
+		tri(*path, a - e + side, a - e - side, b + e - side, col);
+		tri(*path, a - e + side, b + e - side, b + e + side, col);
+	}
+	o.insert(path);
+	// Keyframe markers: chevrons in the road plane pointing along the view.
+	auto marks = mrpt::opengl::CSetOfTriangles::Create();
+	marks->enableLight(false);
 	double last = -1e18;
 	for (size_t i = 0; i < m_keyframes.size(); i++)
 	{
 		const auto& k = m_keyframes[i];
 		if (m_chainDist[i] != 0 && m_chainDist[i] - last < options.draw_frame_every_m) continue;
 		last = m_chainDist[i];
-		auto c = mrpt::opengl::stock_objects::CornerXYZSimple(0.5f, 2.0f);
-		c->setPose(mrpt::poses::CPose3D(mrpt::math::CMatrixDouble44(k.T_map_kf.matrix())));
-		o.insert(c);
+		const Eigen::Vector3d p = k.T_map_kf.translation(), down = k.T_map_kf.linear().col(1);
+		Eigen::Vector3d f = k.T_map_kf.linear().col(2);
+		f = (f - f.dot(down) * down).normalized();
+		const Eigen::Vector3d r = f.cross(down).normalized();
+		// Lifted a little off the road plane (towards -down) so they lie on the path.
+		const Eigen::Vector3d q = p - 0.02 * marker * down;
+		const mrpt::img::TColor col = k.predicted ? mrpt::img::TColor(150, 70, 0) : mrpt::img::TColor(10, 25, 110);
+		tri(*marks, q + f * marker, q - 0.6 * marker * f + 0.5 * marker * r, q - 0.3 * marker * f, col);
+		tri(*marks, q + f * marker, q - 0.3 * marker * f, q - 0.6 * marker * f - 0.5 * marker * r, col);
 	}
+	o.insert(marks);
 	if (options.draw_landmarks)
 	{
-		static const mrpt::img::TColorf colours[] = {{0.1f, 0.1f, 0.1f}, {0.9f, 0.1f, 0.6f}, {0.1f, 0.7f, 0.2f}, {0.9f, 0.6f, 0.0f}};
 		for (size_t c = 0; c < m_channels.size(); c++)
 		{
 			auto pc = mrpt::opengl::CPointCloudColoured::Create();
-			pc->setPointSize(2);
-			const auto& col = colours[c % 4];
+			pc->setPointSize(3);
+			const mrpt::img::TColorf col(drawColourOfChannel(c));
 			for (const auto& k : m_keyframes)
 				for (const auto& m : k.channels[c])
 				{
@@ -977,6 +1019,12 @@ void CKeyframeMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const
 			o.insert(pc);
 		}
 	}
+}
+
+mrpt::img::TColor CKeyframeMap::drawColourOfChannel(size_t c)
+{
+	static const mrpt::img::TColor colours[] = {{40, 40, 40}, {220, 30, 150}, {30, 170, 60}, {230, 150, 0}};
+	return colours[c % 4];
 }
 
 std::string CKeyframeMap::asString() const

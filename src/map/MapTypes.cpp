@@ -1,4 +1,4 @@
-/* ShadyLoc — keyframe map types: channel parameters, pose composition. */
+/* ShadyLoc — keyframe map types: channel parameters. */
 #include <shadyloc/map/MapTypes.h>
 
 #include <cmath>
@@ -94,17 +94,6 @@ bool TChannelParams::operator==(const TChannelParams& o) const
 	return label == o.label && filter_class == o.filter_class && filter_options == o.filter_options &&
 		   brief_patch_size == o.brief_patch_size && brief_seed == o.brief_seed &&
 		   presmooth_sigma == o.presmooth_sigma && sigma_px == o.sigma_px;
-}
-
-void composeWithCovariance(
-	const Eigen::Isometry3d& T_ab, const geometry::Matrix6d& cov_ab, const Eigen::Isometry3d& T_bc,
-	const geometry::Matrix6d& cov_bc, Eigen::Isometry3d& T_ac, geometry::Matrix6d& cov_ac)
-{
-	// exp(a) T_ab exp(b) T_bc = exp(a) exp(Ad(T_ab) b) T_ab T_bc ~ exp(a + Ad(T_ab) b) T_ac
-	const geometry::Matrix6d A = geometry::adjoint(T_ab);
-	const geometry::Matrix6d c = cov_ab + A * cov_bc * A.transpose();
-	T_ac = T_ab * T_bc;
-	cov_ac = 0.5 * (c + c.transpose());
 }
 
 }  // namespace shadyloc::map

@@ -1,12 +1,12 @@
 /* ShadyLoc — offscreen trajectory snapshots. */
-#include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/render/SceneSnapshot.h>
 #include <shadyloc/render/TrajectorySnapshot.h>
 
 #include <mrpt/img/CImage.h>
-#include <mrpt/opengl/CFBORender.h>
 #include <mrpt/opengl/CGridPlaneXY.h>
 #include <mrpt/opengl/COpenGLScene.h>
 #include <mrpt/opengl/CSetOfTriangles.h>
+#include <mrpt/poses/CPose3D.h>
 
 #include <algorithm>
 #include <cmath>
@@ -29,15 +29,15 @@ struct Projection
 	}
 };
 
-Projection chooseProjection(const std::vector<TrajectoryLayer>& layers, char up)
+Projection chooseProjection(const std::vector<std::vector<mrpt::math::TPoint3D>>& sets, char up)
 {
 	if (up == 'a')
 	{
 		double lo[3], hi[3];
 		std::fill(lo, lo + 3, std::numeric_limits<double>::max());
 		std::fill(hi, hi + 3, std::numeric_limits<double>::lowest());
-		for (const auto& l : layers)
-			for (const auto& p : l.points)
+		for (const auto& l : sets)
+			for (const auto& p : l)
 			{
 				const double c[3] = {p.x, p.y, p.z};
 				for (int i = 0; i < 3; i++) lo[i] = std::min(lo[i], c[i]), hi[i] = std::max(hi[i], c[i]);
@@ -58,31 +58,75 @@ Projection chooseProjection(const std::vector<TrajectoryLayer>& layers, char up)
 	}
 	throw std::invalid_argument(std::string("upAxis must be x, y, z or a, got '") + up + "'");
 }
+
+/** The projection as a rotation (each projection is a proper one): world
+ * objects under a frame with this pose appear as the projected points do. */
+mrpt::poses::CPose3D asPose(const Projection& p)
+{
+	mrpt::math::CMatrixDouble44 M = mrpt::math::CMatrixDouble44::Identity();
+	const int idx[3] = {p.u, p.v, p.w};
+	const double sg[3] = {p.su, p.sv, p.sw};
+	for (int r = 0; r < 3; r++)
+		for (int c = 0; c < 3; c++) M(r, c) = c == idx[r] ? sg[r] : 0.0;
+	return mrpt::poses::CPose3D(M);
+}
 }  // namespace
 
 void renderTrajectories(
-	const std::vector<TrajectoryLayer>& layers, const SnapshotOptions& o, const std::string& pngPath)
+	const std::vector<TrajectoryLayer>& layers, const SnapshotOptions& o, const std::string& pngPath,
+	const std::vector<TObjectLayer>& objects)
 {
+	std::vector<std::vector<mrpt::math::TPoint3D>> sets;
+	for (const auto& l : layers) sets.push_back(l.points);
+	for (const auto& l : objects) sets.push_back(l.extent);
 	size_t n = 0;
-	for (const auto& l : layers) n += l.points.size();
+	for (const auto& s : sets) n += s.size();
 	if (n < 2) throw std::runtime_error("'" + pngPath + "': nothing to draw (fewer than two points)");
-	const Projection proj = chooseProjection(layers, o.upAxis);
+	const Projection proj = chooseProjection(sets, o.upAxis);
 
 	double x0 = 1e300, x1 = -1e300, y0 = 1e300, y1 = -1e300;
-	for (const auto& l : layers)
-		for (const auto& p : l.points)
+	for (const auto& s : sets)
+		for (const auto& p : s)
 		{
 			const auto q = proj(p);
 			x0 = std::min(x0, q.x), x1 = std::max(x1, q.x), y0 = std::min(y0, q.y), y1 = std::max(y1, q.y);
 		}
-	const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+	// The legend's lines (0.035 of the height each, below the title's) take
+	// a band at the top; the content is framed in the rest.
+	size_t lines = o.title.empty() ? 0 : 1;
+	for (const auto& l : layers) lines += l.points.size() >= 2;
+	for (const auto& l : objects) lines += l.legend.size();
+	const double band = o.legendBand && lines ? 0.035 * double(lines) + 0.04 : 0.0;
+	const double usableH = o.height * (1.0 - band) - 2 * o.marginFraction * o.height;
 	// Metres per pixel so that the extent fits with the margin.
-	const double span = std::max({(x1 - x0) / o.width, (y1 - y0) / o.height, 1e-3 / o.width});
-	const double mPerPx = span / (1.0 - 2 * o.marginFraction);
+	const double mPerPx = std::max(
+		{(x1 - x0) / (o.width * (1.0 - 2 * o.marginFraction)), (y1 - y0) / std::max(1.0, usableH),
+		 1e-3 / o.width});
+	// The camera looks at the picture's centre: that is half a band above the content's centre.
+	const double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1) + 0.5 * band * o.height * mPerPx;
 
 	mrpt::opengl::COpenGLScene scene;
 	auto vp = scene.getViewport();
 	vp->setCustomBackgroundColor({1.0f, 1.0f, 1.0f});
+	// The object layers, turned into the picture's frame; the grid goes
+	// under them and the paths over them.
+	double zLow = -1.0, zTop = 0.0;
+	for (const auto& l : objects)
+	{
+		if (!l.make) continue;
+		auto obj = l.make(mPerPx);
+		if (!obj) continue;
+		auto frame = mrpt::opengl::CSetOfObjects::Create();
+		frame->setPose(asPose(proj));
+		frame->insert(obj);
+		scene.insert(frame);
+		const auto bb = frame->getBoundingBox();
+		if (bb.min.z <= bb.max.z && std::isfinite(bb.min.z) && std::isfinite(bb.max.z))
+		{
+			zLow = std::min(zLow, bb.min.z - 1.0);
+			zTop = std::max(zTop, bb.max.z + 0.01);
+		}
+	}
 	if (o.grid)
 	{
 		// A grid step of a round number of metres, about 10 lines across.
@@ -92,7 +136,7 @@ void renderTrajectories(
 		const double hw = 0.5 * mPerPx * o.width, hh = 0.5 * mPerPx * o.height;
 		auto grid = mrpt::opengl::CGridPlaneXY::Create(
 			float(std::floor((cx - hw) / step) * step), float(std::ceil((cx + hw) / step) * step),
-			float(std::floor((cy - hh) / step) * step), float(std::ceil((cy + hh) / step) * step), -1.0f,
+			float(std::floor((cy - hh) / step) * step), float(std::ceil((cy + hh) / step) * step), float(zLow),
 			float(step));
 		grid->setColor(0.82, 0.82, 0.82);
 		scene.insert(grid);
@@ -112,7 +156,7 @@ void renderTrajectories(
 		if (l.points.size() < 2) continue;
 		auto tris = mrpt::opengl::CSetOfTriangles::Create();
 		const double hw = 0.5 * l.widthPx * mPerPx;
-		const float z = float(li) * 0.01f;	// later layers on top
+		const float z = float(zTop + 0.01 * double(li));	 // over the objects; later layers on top
 		for (size_t i = 0; i + 1 < l.points.size(); i++)
 		{
 			const auto a = proj(l.points[i]), b = proj(l.points[i + 1]);
@@ -140,6 +184,15 @@ void renderTrajectories(
 		vp->addTextMessage(0.01, 0.97 - 0.035 * double(li + 1), "-- " + l.name, 10 + li, f);
 		li++;
 	}
+	for (const auto& l : objects)
+		for (const auto& [text, colour] : l.legend)
+		{
+			mrpt::opengl::TFontParams f;
+			f.color = mrpt::img::TColorf(colour);
+			f.vfont_scale = 16;
+			vp->addTextMessage(0.01, 0.97 - 0.035 * double(li + 1), "-- " + text, 10 + li, f);
+			li++;
+		}
 	if (!o.title.empty())
 	{
 		mrpt::opengl::TFontParams f;
@@ -148,20 +201,16 @@ void renderTrajectories(
 		vp->addTextMessage(0.01, 0.97, o.title, 2, f);
 	}
 
-	mrpt::opengl::CFBORender render(o.width, o.height);
-	auto& cam = render.getCamera(scene);
-	cam.setOrthogonal(true);
-	cam.setPointingAt(float(cx), float(cy), 0.f);
-	cam.setAzimuthDegrees(-90.f);
-	cam.setElevationDegrees(90.f);
+	TSceneCamera cam;
+	cam.auto_frame = false;
+	cam.orthographic = true;
+	cam.pointing_at = {cx, cy, 0.0};
+	cam.azimuth_deg = -90;
+	cam.elevation_deg = 90;
 	// In orthographic mode MRPT 2.5 shows a vertical extent of half the zoom
 	// distance (measured: a 48 m tall view at zoom 95 m).
-	cam.setZoomDistance(float(2.0 * mPerPx * o.height));
-	mrpt::img::CImage img;
-	render.render_RGB(scene, img);
-	io::writeAtomically(pngPath, [&](const std::string& tmp) {
-		if (!img.saveToFile(tmp)) throw std::runtime_error("'" + pngPath + "': cannot write PNG");
-	});
+	cam.zoom_distance = 2.0 * mPerPx * o.height;
+	snapshotSceneToPng(scene, o.width, o.height, pngPath, cam);
 }
 
 }  // namespace shadyloc::render

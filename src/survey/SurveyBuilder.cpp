@@ -1,6 +1,8 @@
 /* ShadyLoc — building a keyframe map from a survey run. */
 #include <shadyloc/survey/SurveyBuilder.h>
 
+#include <shadyloc/geometry/PoseCovariance.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -85,16 +87,15 @@ bool CSurveyBuilder::offer(
 	{
 		// T_last_f along the VO chain: inv(T_a_last) * T_a_b * T_b_f, a = last's
 		// reference VO keyframe, b = this frame's.
-		Eigen::Isometry3d T = m_T_ref_last.inverse();
-		geometry::Matrix6d C = geometry::invertCovariance(m_T_ref_last, m_cov_ref_last);
+		geometry::TPoseWithCov T = geometry::inverse({m_T_ref_last, m_cov_ref_last});
 		for (size_t k = m_lastRef + 1; k <= p.ref; k++)
-			map::composeWithCovariance(T, C, voKfs[k].T_prevkf_kf, voKfs[k].cov, T, C);
-		map::composeWithCovariance(T, C, p.T_ref_f, p.cov_ref_f, T, C);
-		p.T_prev_f = T;
-		p.cov_prev_f = C;
+			T = geometry::compose(T, {voKfs[k].T_prevkf_kf, voKfs[k].cov});
+		T = geometry::compose(T, {p.T_ref_f, p.cov_ref_f});
+		p.T_prev_f = T.T;
+		p.cov_prev_f = T.cov;
 		const auto& o = m_map.options;
-		const double rotDeg = Eigen::AngleAxisd(T.linear()).angle() * 180.0 / M_PI;
-		if (T.translation().norm() < o.kf_spacing_m && rotDeg < o.kf_spacing_deg) return false;
+		const double rotDeg = Eigen::AngleAxisd(T.T.linear()).angle() * 180.0 / M_PI;
+		if (T.T.translation().norm() < o.kf_spacing_m && rotDeg < o.kf_spacing_deg) return false;
 	}
 	p.valid = true;
 	m_pending = p;

@@ -25,7 +25,7 @@ TEST(ArchitectureAreaGraph, OnlyAllowedIncludes)
 		{"map", {"features", "geometry", "io"}},
 		{"vo", {"features", "geometry", "map"}},
 		// Joins the VO and the map (and the channels' filters that the map records).
-		{"survey", {"features", "filters", "map", "vo"}},
+		{"survey", {"features", "filters", "geometry", "map", "vo"}},
 		{"eval", {"geometry", "io"}},
 		{"sim", {"geometry", "io"}},
 		{"datasets", {"io"}},

@@ -419,6 +419,7 @@ TEST(DatasetsKitti, ExportErrorsLeaveNoSequence)
 	EXPECT_FALSE(fs::exists(dir + "/out"));
 
 	// Ground truth that does not cover frame 2 (t = 1000.2 s).
+	// Identity poses spelt out: `{}` would value-construct an Isometry3d, which Eigen leaves uninitialised.
 	shadyloc::io::Trajectory gt = {{1000.0, Eigen::Isometry3d::Identity()}, {1000.1, Eigen::Isometry3d::Identity()}};
 	writeTum(dir + "/gt.tum", gt);
 	exp.options.sensorLabel = "CAMERA";

@@ -262,7 +262,10 @@ void expectSameKeyframeMap(const CKeyframeMap& a, const CKeyframeMap& b)
 		EXPECT_EQ(x.T_prev_kf.matrix(), y.T_prev_kf.matrix());
 		EXPECT_EQ(x.cov_prev_kf, y.cov_prev_kf);
 		ASSERT_EQ(bool(x.T_gt_kf), bool(y.T_gt_kf));
-		if (x.T_gt_kf) { EXPECT_EQ(x.T_gt_kf->matrix(), y.T_gt_kf->matrix()); }
+		if (x.T_gt_kf)
+		{
+			EXPECT_EQ(x.T_gt_kf->matrix(), y.T_gt_kf->matrix());
+		}
 		ASSERT_EQ(x.channels.size(), y.channels.size());
 		for (size_t c = 0; c < x.channels.size(); c++)
 		{

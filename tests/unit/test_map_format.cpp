@@ -272,6 +272,17 @@ TEST(MapFormat, OldVersionAndLyingBlockSizesAreRefused)
 	const size_t ver = 1 + name.size();	 // MRPT's header: 0x80 | length, the name, the version
 	ASSERT_EQ(std::string(good.begin() + 1, good.begin() + 1 + name.size()), name);
 	ASSERT_EQ(good[ver], 1);
+	// The loader on bytes in memory (the fuzz entry point) loads them as the file loader does.
+	EXPECT_EQ(CKeyframeMap::LoadFromBytes(good.data(), good.size())->keyframeCount(), 6u);
+	try
+	{
+		CKeyframeMap::LoadFromBytes(good.data(), 100, "first 100 bytes");
+		ADD_FAILURE() << "a truncated map loaded from memory";
+	}
+	catch (const std::runtime_error& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("first 100 bytes"), std::string::npos) << e.what();
+	}
 	// Version 0 (channels as kinds, before channels were filters): refused, saying what to do.
 	{
 		auto b = good;

@@ -125,40 +125,6 @@ TEST(MapQueries, RelativePoseComposesAndPropagates)
 	}
 }
 
-TEST(MapQueries, CompositionCovarianceMatchesMonteCarlo)
-{
-	// T_ac = T_ab T_bc with left-perturbed noise: the first-order covariance
-	// against 10^4 samples, each diagonal entry within 5 %.
-	std::mt19937 rng(11);
-	std::normal_distribution<double> N(0, 1);
-	Eigen::Isometry3d A = poseAt(1, 3, 20), B = poseAt(-2, 5, -35);
-	A.linear() = A.linear() * Eigen::AngleAxisd(0.2, Eigen::Vector3d::UnitX()).toRotationMatrix();
-	geometry::Matrix6d Ca = geometry::Matrix6d::Zero(), Cb = geometry::Matrix6d::Zero();
-	Ca.diagonal() << 4e-4, 1e-4, 9e-4, 1e-5, 4e-5, 1e-5;
-	Cb.diagonal() << 1e-4, 4e-4, 1e-4, 2e-5, 1e-5, 3e-5;
-	Eigen::Isometry3d Tac;
-	geometry::Matrix6d Cac;
-	map::composeWithCovariance(A, Ca, B, Cb, Tac, Cac);
-	auto sampleOf = [&](const geometry::Matrix6d& C) {
-		geometry::Vector6d x;
-		for (int i = 0; i < 6; i++) x(i) = std::sqrt(C(i, i)) * N(rng);
-		return x;
-	};
-	const int n = 10000;
-	geometry::Matrix6d S = geometry::Matrix6d::Zero();
-	for (int s = 0; s < n; s++)
-	{
-		const Eigen::Isometry3d Ta = geometry::retractLeft(sampleOf(Ca), A), Tb = geometry::retractLeft(sampleOf(Cb), B);
-		const Eigen::Isometry3d E = (Ta * Tb) * Tac.inverse();	// exp(xi) = T T_mean^-1
-		geometry::Vector6d xi;
-		xi.tail<3>() = Eigen::AngleAxisd(E.linear()).angle() * Eigen::AngleAxisd(E.linear()).axis();
-		xi.head<3>() = E.translation();
-		S += xi * xi.transpose();
-	}
-	S /= n;
-	for (int i = 0; i < 6; i++) EXPECT_NEAR(S(i, i), Cac(i, i), 0.05 * Cac(i, i)) << "entry " << i;
-}
-
 TEST(MapQueries, MeasurementsByChannelAndDescriptorCheck)
 {
 	const auto m = test::makeSyntheticMap();

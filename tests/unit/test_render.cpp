@@ -1,7 +1,12 @@
 /* Offscreen trajectory snapshots (CFBORender through EGL/Mesa, headless). */
 #include "../support/TestSupport.h"
 
+#include <shadyloc/render/SceneSnapshot.h>
 #include <shadyloc/render/TrajectorySnapshot.h>
+
+#include "test_map_support.h"
+
+#include <mrpt/opengl/CSetOfTriangles.h>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -21,7 +26,11 @@ bool isBlue(const cv::Vec3b& bgr) { return bgr[0] > 180 && bgr[1] < 90 && bgr[2]
 TEST(RenderSnapshot, PathsLandWhereTheProjectionPutsThem)
 {
 	const auto dir = shadyloc::test::tempDir("render");
-	TrajectoryLayer red{"red", {}, {255, 0, 0}}, blue{"blue", {}, {0, 0, 255}};
+	TrajectoryLayer red, blue;
+	red.name = "red";
+	red.colour = {255, 0, 0};
+	blue.name = "blue";
+	blue.colour = {0, 0, 255};
 	for (int i = 0; i <= 100; i++)
 	{
 		red.points.push_back({0, 0, double(i)});	// camera frame: straight ahead
@@ -32,6 +41,7 @@ TEST(RenderSnapshot, PathsLandWhereTheProjectionPutsThem)
 	o.height = 300;
 	o.grid = false;
 	o.marginFraction = 0.1;
+	o.legendBand = false;  // the projection alone decides where the paths go
 	renderTrajectories({red, blue}, o, dir + "/snap.png");
 	const cv::Mat img = cv::imread(dir + "/snap.png");
 	ASSERT_EQ(img.cols, 400);
@@ -66,11 +76,11 @@ TEST(RenderSnapshot, AppRendersTumFilesAndRejectsBadOnes)
 		g << "0 1 2\n";
 	}
 	std::string out;
-	ASSERT_EQ(shadyloc::test::runCommand(shadyloc::test::appPath() + " render-traj -t " + dir + "/a.tum:gt -o " + dir + "/a.png --width 320 --height 200", &out), 0) << out;
+	ASSERT_EQ(shadyloc::test::runCommand(shadyloc::test::appPath() + " render -t " + dir + "/a.tum:gt -o " + dir + "/a.png --width 320 --height 200", &out), 0) << out;
 	const cv::Mat img = cv::imread(dir + "/a.png");
 	EXPECT_EQ(img.cols, 320);
 	EXPECT_EQ(img.rows, 200);
-	EXPECT_NE(shadyloc::test::runCommand(shadyloc::test::appPath() + " render-traj -t " + dir + "/bad.tum -o " + dir + "/b.png", &out), 0);
+	EXPECT_NE(shadyloc::test::runCommand(shadyloc::test::appPath() + " render -t " + dir + "/bad.tum -o " + dir + "/b.png", &out), 0);
 	EXPECT_NE(out.find("bad.tum"), std::string::npos) << out;
 	EXPECT_FALSE(std::filesystem::exists(dir + "/b.png"));
 }
@@ -93,7 +103,7 @@ TEST(RenderSnapshot, AppAlignsEstimatesToTheFirstTrajectory)
 	}
 	auto blackPixels = [&](const std::string& extra) {
 		std::string out;
-		EXPECT_EQ(shadyloc::test::runCommand(shadyloc::test::appPath() + " render-traj --width 300 --height 200 -t " + dir +
+		EXPECT_EQ(shadyloc::test::runCommand(shadyloc::test::appPath() + " render --width 300 --height 200 -t " + dir +
 											  "/gt.tum -t " + dir + "/moved.tum -o " + dir + "/a.png " + extra, &out), 0)
 			<< out;
 		const cv::Mat img = cv::imread(dir + "/a.png");
@@ -109,4 +119,80 @@ TEST(RenderSnapshot, AppAlignsEstimatesToTheFirstTrajectory)
 	const int aligned = blackPixels("--align"), unaligned = blackPixels("");
 	EXPECT_LT(aligned, 20) << "ground truth should be hidden under the aligned copy";
 	EXPECT_GT(unaligned, 200);
+}
+
+// Any MRPT scene: auto framing puts a lone box in the middle of the picture
+// whatever its coordinates; an explicit camera puts it where asked.
+TEST(RenderSnapshot, SceneSnapshotFramesAnyScene)
+{
+	mrpt::opengl::COpenGLScene scene;
+	scene.getViewport()->setCustomBackgroundColor({1.0f, 1.0f, 1.0f});
+	// A red square, 4 m a side, 100 m and 200 m from the origin.
+	auto box = mrpt::opengl::CSetOfTriangles::Create();
+	const mrpt::math::TPoint3Df a(100, 200, 0), b(104, 200, 0), c(104, 204, 0), d(100, 204, 0);
+	mrpt::opengl::TTriangle t1(a, b, c), t2(a, c, d);
+	for (auto* t : {&t1, &t2})
+		for (auto& v : t->vertices) v.setColor(mrpt::img::TColor(255, 0, 0));
+	box->insertTriangle(t1);
+	box->insertTriangle(t2);
+	box->enableLight(false);
+	scene.insert(box);
+	const auto img = snapshotScene(scene, 200, 100).asCvMat<cv::Mat>(mrpt::img::DEEP_COPY);
+	ASSERT_EQ(img.cols, 200);
+	ASSERT_EQ(img.rows, 100);
+	auto red = [](const cv::Mat& m, int x, int y) {
+		const auto p = m.at<cv::Vec3b>(y, x);	// CImage stores BGR
+		return p[2] > 180 && p[1] < 90 && p[0] < 90;
+	};
+	EXPECT_TRUE(red(img, 100, 50));
+	EXPECT_FALSE(red(img, 5, 5));
+	EXPECT_FALSE(red(img, 195, 95));
+	// Looking at a point 30 m away from the box: it is out of the picture.
+	TSceneCamera cam;
+	cam.auto_frame = false;
+	cam.pointing_at = {130, 200, 0};
+	cam.zoom_distance = 20;
+	const auto away = snapshotScene(scene, 200, 100, cam).asCvMat<cv::Mat>(mrpt::img::DEEP_COPY);
+	EXPECT_FALSE(red(away, 100, 50));
+	// Written atomically; an empty scene is an error and writes nothing.
+	const auto dir = shadyloc::test::tempDir("render_scene");
+	snapshotSceneToPng(scene, 200, 100, dir + "/box.png");
+	EXPECT_EQ(cv::imread(dir + "/box.png").cols, 200);
+	mrpt::opengl::COpenGLScene empty;
+	EXPECT_THROW(snapshotSceneToPng(empty, 200, 100, dir + "/empty.png"), std::runtime_error);
+	EXPECT_FALSE(std::filesystem::exists(dir + "/empty.png"));
+}
+
+// `render -m` draws a keyframe map through its getVisualizationInto: the
+// measured path as a blue band, the part after the VO break in orange.
+TEST(RenderSnapshot, AppDrawsKeyframeMaps)
+{
+	const auto dir = shadyloc::test::tempDir("render_map");
+	shadyloc::test::makeSyntheticMap(30, 10, 20)->saveToFile(dir + "/m.kfmap");
+	std::string out;
+	ASSERT_EQ(shadyloc::test::runCommand(shadyloc::test::appPath() + " render -m " + dir + "/m.kfmap:synthetic -o " + dir +
+										  "/m.png --width 400 --height 300", &out), 0)
+		<< out;
+	const cv::Mat img = cv::imread(dir + "/m.png");
+	ASSERT_EQ(img.cols, 400);
+	int blue = 0, orange = 0;
+	for (int y = 60; y < img.rows; y++)	// below the legend
+		for (int x = 0; x < img.cols; x++)
+		{
+			const auto p = img.at<cv::Vec3b>(y, x);
+			blue += p[0] > 200 && p[1] > 100 && p[1] < 150 && p[2] < 100;
+			orange += p[2] > 200 && p[1] > 110 && p[1] < 170 && p[0] < 60;
+		}
+	// 20 measured links and 9 predicted ones, each a band ~12 px wide.
+	EXPECT_GT(blue, 1000);
+	EXPECT_GT(orange, 300);
+	// Nothing to render, a missing map, and the old name (still works, says so).
+	EXPECT_NE(shadyloc::test::runCommand(shadyloc::test::appPath() + " render -o " + dir + "/x.png", &out), 0);
+	EXPECT_NE(out.find("nothing to render"), std::string::npos) << out;
+	EXPECT_NE(shadyloc::test::runCommand(shadyloc::test::appPath() + " render -m " + dir + "/none.kfmap -o " + dir + "/x.png", &out), 0);
+	EXPECT_NE(out.find("none.kfmap"), std::string::npos) << out;
+	EXPECT_FALSE(std::filesystem::exists(dir + "/x.png"));
+	ASSERT_EQ(shadyloc::test::runCommand(shadyloc::test::appPath() + " render-traj -m " + dir + "/m.kfmap -o " + dir + "/old.png", &out), 0)
+		<< out;
+	EXPECT_NE(out.find("renamed to `shadyloc render`"), std::string::npos) << out;
 }

@@ -18,8 +18,10 @@
 #include <shadyloc/map/MapTypes.h>
 
 #include <mrpt/config/CLoadableOptions.h>
+#include <mrpt/img/TColor.h>
 #include <mrpt/maps/CMetricMap.h>
 
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <unordered_map>
@@ -46,7 +48,7 @@ struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 	double index_cell_m = 10.0;	 //!< cell size of the spatial hash grid [m]
 	bool draw_landmarks = false;  //!< getVisualizationInto draws landmarks, coloured by channel
 	double draw_landmark_max_depth_m = 30.0;  //!< farther landmarks are not drawn [m]
-	double draw_frame_every_m = 5.0;  //!< a keyframe axis triad at most every this far [m]
+	double draw_frame_every_m = 5.0;  //!< a keyframe marker (chevron) at most every this far [m]
 
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
@@ -122,6 +124,9 @@ class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
 	/** Reads a map file; throws std::runtime_error naming the file on any
 	 * damage (truncation, flipped bytes, another class, unknown version). */
 	static CKeyframeMap::Ptr LoadFromFile(const std::string& path);
+	/** The same on the bytes of a map file in memory (the loader's whole
+	 * entry point, e.g. for a fuzz target); `path` names them in errors. */
+	static CKeyframeMap::Ptr LoadFromBytes(const uint8_t* data, size_t size, const std::string& path = "(memory)");
 
 	/** Stored bytes per block, measured by serialising: the metadata block
 	 * (options, calibration, channels, keyframe poses) and one block per channel. */
@@ -139,8 +144,26 @@ class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
 	bool isEmpty() const override { return m_keyframes.empty(); }
 	/** Writes `<prefix>.kfmap` (the map) and `<prefix>_keyframes.tum` (keyframe poses). */
 	void saveMetricMapRepresentationToFile(const std::string& prefix) const override;
-	/** Path (per segment), keyframe axis triads, optionally landmarks coloured by channel. */
+	/** How the map is drawn: sizes of what is drawn as geometry (a software
+	 * renderer ignores line widths), a property of the picture, not stored. */
+	struct TDrawStyle
+	{
+		/** Width of the path ribbon [m]; 0 = 1/250 of the map's extent (at least 5 cm). */
+		double path_width_m = 0;
+		/** Size of a keyframe marker (a chevron pointing where the camera looks) [m]; 0 = 4 path widths. */
+		double marker_size_m = 0;
+	};
+	/** In the map frame: the path of each segment as a ribbon in the road
+	 * plane (blue where measured, orange where only predicted after a VO
+	 * break), a chevron at a keyframe at most every draw_frame_every_m, and,
+	 * with draw_landmarks, the landmarks coloured by channel. */
 	void getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const override;
+	void getVisualizationInto(mrpt::opengl::CSetOfObjects& o, const TDrawStyle& style) const;
+	/** Colours of the drawing: the path where measured, where predicted, and
+	 * the landmarks of channel c (for legends). */
+	static constexpr mrpt::img::TColor kDrawColourMeasured{70, 120, 230};
+	static constexpr mrpt::img::TColor kDrawColourPredicted{235, 140, 30};
+	static mrpt::img::TColor drawColourOfChannel(size_t c);
 	std::string asString() const override;
 
 	// Virtuals that make no sense for a keyframe map: they throw, naming the class.

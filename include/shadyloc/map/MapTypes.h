@@ -150,11 +150,4 @@ class KeyframeQueries
 	virtual TRelativePose relativePose(uint32_t a, uint32_t b) const = 0;
 };
 
-/** Composition of uncertain poses, left perturbation T = exp(xi) T_mean,
- * xi = (rho, phi): for T_ac = T_ab T_bc with independent errors,
- * cov_ac = cov_ab + Ad(T_ab) cov_bc Ad(T_ab)^T. */
-void composeWithCovariance(
-	const Eigen::Isometry3d& T_ab, const geometry::Matrix6d& cov_ab, const Eigen::Isometry3d& T_bc,
-	const geometry::Matrix6d& cov_bc, Eigen::Isometry3d& T_ac, geometry::Matrix6d& cov_ac);
-
 }  // namespace shadyloc::map

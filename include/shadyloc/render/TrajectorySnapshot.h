@@ -1,9 +1,14 @@
-/* ShadyLoc — offscreen top-down snapshots of trajectories through MRPT's 3D
- * scene (mrpt::opengl::CFBORender: EGL/Mesa, no window system needed). */
+/* ShadyLoc — offscreen top-down snapshots of trajectories and 3D content such
+ * as a keyframe map's drawing, through MRPT's 3D scene
+ * (render/SceneSnapshot.h: CFBORender, EGL/Mesa, no window system needed). */
 #pragma once
 
 #include <mrpt/img/TColor.h>
 #include <mrpt/math/TPoint3D.h>
+#include <mrpt/opengl/CSetOfObjects.h>
+
+#include <functional>
+#include <utility>
 
 #include <string>
 #include <vector>
@@ -24,6 +29,19 @@ struct TrajectoryLayer
 	double widthPx = 4.0;
 };
 
+/** 3D content under the paths, in the same frame as the trajectories' points:
+ * e.g. a keyframe map's getVisualizationInto. Made once the view is known,
+ * so that what is drawn as geometry (a ribbon) can be sized in pixels. */
+struct TObjectLayer
+{
+	/** Legend lines: text and colour (e.g. the map, then its channels' landmarks). */
+	std::vector<std::pair<std::string, mrpt::img::TColor>> legend;
+	/** Points the view must include (e.g. the map's keyframe positions). */
+	std::vector<mrpt::math::TPoint3D> extent;
+	/** Makes the objects, given the picture's scale [m per px]. */
+	std::function<mrpt::opengl::CSetOfObjects::Ptr(double metresPerPixel)> make;
+};
+
 struct SnapshotOptions
 {
 	unsigned width = 1000;	//!< image width, px
@@ -35,11 +53,18 @@ struct SnapshotOptions
 	double marginFraction = 0.08;  //!< empty border around the paths
 	bool grid = true;  //!< a metric grid under the paths
 	std::string title;	//!< text at the top left
+	/** Keep the band the title and legend take at the top free of content
+	 * (the view frames the content in the rest of the picture). */
+	bool legendBand = true;
 };
 
-/** Renders the layers top-down (orthographic) into a PNG written atomically.
- * Throws std::runtime_error if there is nothing to draw or rendering fails. */
+/** Renders the object layers and, on top of them, the trajectory layers
+ * top-down (orthographic) into a PNG written atomically, the view framing
+ * every trajectory point and every object layer's extent, with a legend (the
+ * trajectories, then the object layers) and a metric grid. Throws
+ * std::runtime_error if there is nothing to draw or rendering fails. */
 void renderTrajectories(
-	const std::vector<TrajectoryLayer>& layers, const SnapshotOptions& opts, const std::string& pngPath);
+	const std::vector<TrajectoryLayer>& layers, const SnapshotOptions& opts, const std::string& pngPath,
+	const std::vector<TObjectLayer>& objects = {});
 
 }  // namespace shadyloc::render
