@@ -208,6 +208,9 @@ int run(int argc, char** argv)
 	TCLAP::ValueArg<int> startKf("", "start-kf", "start at this map keyframe instead of by global search", false, -1, "id", cmd);
 	TCLAP::ValueArg<std::string> label("", "label", "sensor label of the live colour stereo camera", false, "", "label", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no progress output", cmd);
+	TCLAP::SwitchArg debug(
+		"", "debug",
+		"per frame and localiser on stderr: keyframe, predicted offset from it, matches, inliers, gate, status", cmd);
 	cmd.parse(argc, argv);
 	const bool talk = !quiet.getValue();
 
@@ -267,6 +270,7 @@ int run(int argc, char** argv)
 	{
 		throw std::runtime_error("map '" + mapPath + "' and config " + cfgWhat + ": " + e.what());
 	}
+	if (debug.getValue()) sys->setMinLoggingLevel(mrpt::system::LVL_DEBUG);
 	if (startKf.isSet())
 	{
 		if (startKf.getValue() < 0 || static_cast<size_t>(startKf.getValue()) >= map->keyframeCount())

@@ -89,6 +89,7 @@ void TSystemOptions::load(const mrpt::config::CConfigFileBase& c, const std::str
 	r.read("vo_lost_sigma_m", vo_lost_sigma_m);
 	r.read("vo_lost_sigma_deg", vo_lost_sigma_deg);
 	r.read("relocalise_after_frames", relocalise_after_frames);
+	r.read("seed_with_unconfirmed", seed_with_unconfirmed);
 	r.read("global_sigma_m", global_sigma_m);
 	r.read("global_sigma_deg", global_sigma_deg);
 	r.finish();
@@ -116,6 +117,8 @@ void TSystemOptions::dump(std::ostream& out) const
 	w.value("vo_lost_sigma_m", vo_lost_sigma_m, "[m]");
 	w.value("vo_lost_sigma_deg", vo_lost_sigma_deg, "[deg]");
 	w.value("relocalise_after_frames", relocalise_after_frames, "[frames]");
+	w.value("seed_with_unconfirmed", seed_with_unconfirmed,
+			"a consistent but unconfirmed solve predicts the next frame (never a fix)");
 	w.value("global_sigma_m", global_sigma_m, "[m]");
 	w.value("global_sigma_deg", global_sigma_deg, "[deg]");
 }
@@ -437,6 +440,25 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 	};
 	both(par, runFirst, runRest);
 
+	if (getMinLoggingLevel() <= mrpt::system::LVL_DEBUG)
+		for (size_t i = 0; i < n; i++)
+		{
+			const auto& r = res[i];
+			if (!m_pipes[i].localiser || search) continue;
+			// Where the prediction puts the live camera in the keyframe's
+			// frame: the distance that decides how much of it is re-found.
+			const Eigen::Vector3d t =
+				r.kf_id < m_map->keyframeCount()
+					? Eigen::Vector3d((m_map->keyframe(r.kf_id).T_map_kf.inverse() * m_map->keyframe(pred.kf).T_map_kf *
+									   pred.T_kf_live).translation())
+					: Eigen::Vector3d::Zero();
+			MRPT_LOG_DEBUG_FMT(
+				"frame %zu %s: kf %u, predicted at (%.2f %.2f %.2f) m from it, %d matches, %d inliers, gate median "
+				"%.1f px (%d of %d overflow), sigma %.3f m, %s",
+				u.frame, r.channel.c_str(), r.kf_id, t.x(), t.y(), t.z(), r.matches, r.inliers, r.gate.median_axis_px,
+				r.gate.overflow, r.gate.predicted, r.sigma_m, toString(r.status).c_str());
+		}
+
 	// ---- the policy
 	std::vector<size_t> order;
 	for (size_t i = 0; i < n; i++)
@@ -479,7 +501,28 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 		}
 		else
 		{
-			m_est = pred;  // dead reckoning
+			// A solve that passed its own failure tests but is not yet confirmed
+			// (fewer than K consistent frames) is no fix, yet it is a far better
+			// prediction for the next frame than dead reckoning: keeping the
+			// gates tight is what lets the localiser reach K consistent frames
+			// after a global search or a failure.
+			const TLocaliserResult* seed = nullptr;
+			if (m_opts.seed_with_unconfirmed)
+				for (const size_t i : order)
+					if (res[i].status == LocaliserStatus::Unconfirmed)
+					{
+						seed = &res[i];
+						break;
+					}
+			if (seed)
+			{
+				m_est.valid = true;
+				m_est.kf = seed->kf_id;
+				m_est.T_kf_live = seed->T_kf_live;
+				m_est.cov = seed->cov;
+			}
+			else
+				m_est = pred;  // dead reckoning
 			m_framesSinceFix++;
 			bool allLost = true;
 			for (const size_t i : order) allLost &= res[i].status == LocaliserStatus::Lost;

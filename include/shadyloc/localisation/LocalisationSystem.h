@@ -54,6 +54,10 @@ struct TSystemOptions
 	double vo_lost_sigma_deg = 3.0;
 	/** Without a fix for this many frames the place is searched for anew [frames]. */
 	int relocalise_after_frames = 30;
+	/** A solve that passed its own failure tests but is not yet confirmed (fewer
+	 * than K consistent frames) predicts the next frame instead of dead
+	 * reckoning; it is never reported or used as a fix. */
+	bool seed_with_unconfirmed = true;
 	/** Added to a global-search place's covariance (one frame's solve,
 	 * unconfirmed) [m], [deg]. */
 	double global_sigma_m = 0.1;

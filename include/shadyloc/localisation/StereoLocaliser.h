@@ -66,9 +66,10 @@ struct TLocaliserOptions
 	double kf_back_m = 6.0;	 //!< keyframes considered behind the predicted keyframe along the chain [m]
 	double kf_ahead_m = 12.0;  //!< ... and ahead of it [m]
 	/** The keyframe nearest the point this far in front of the predicted
-	 * camera is taken: a keyframe a little ahead sees what the live camera
-	 * sees, one behind has landmarks the camera has passed [m]. */
-	double kf_lookahead_m = 1.5;
+	 * camera is taken [m]. 0 = the nearest keyframe: on the simulator a live
+	 * frame re-finds about half as many landmarks of a keyframe 2.5 m ahead
+	 * as of one within 0.2 m (docs/localisation.md), so looking ahead costs. */
+	double kf_lookahead_m = 0.0;
 	double kf_max_distance_m = 6.0;	 //!< farther keyframes are not used [m]
 	double kf_max_angle_deg = 30.0;	 //!< optical axes farther apart are not used [deg]
 	double kf_angle_weight_m_per_deg = 0.1;	 //!< ranking: metres a degree of heading is worth [m/deg]

@@ -37,11 +37,11 @@ namespace shadyloc
  * back to the same values (core::SettingsWriter). */
 struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 {
-	double kf_spacing_m = 3.0;	//!< a new map keyframe after this distance along the VO path [m]
+	double kf_spacing_m = 1.5;	//!< a new map keyframe after this distance along the VO path [m]
 	double kf_spacing_deg = 15.0;  //!< ... or this change of heading (rotation angle) [deg]
 	/** Landmarks kept per keyframe and channel (0 = all): the strongest per
 	 * image bucket first, so they stay spread over the image (docs/map.md). */
-	int landmarks_per_keyframe = 120;
+	int landmarks_per_keyframe = 0;
 	int selection_grid_cols = 8;  //!< buckets across the image for landmark selection
 	int selection_grid_rows = 6;  //!< buckets down the image
 	int compression_level = 9;  //!< zstd level, 1 (fast) .. 22 (small); 19 saves 3 % for 5x the time
