@@ -61,7 +61,7 @@ std::map<std::string, int> labelsOf(const std::string& rawlog)
 
 TEST(FilterExternalInput, OutputWrittenElsewhereHasAllItsImages)
 {
-	for (const std::string& ext : {"", " --external-images"})
+	for (const char* ext : {"", " --external-images"})
 	{
 		const auto dir = test::tempDir("filter_ext_elsewhere");
 		fs::create_directories(dir + "/a");
@@ -89,7 +89,7 @@ TEST(FilterExternalInput, OutputWrittenElsewhereHasAllItsImages)
 
 TEST(FilterExternalInput, OutputWithTheInputsStemNeverTouchesItsImages)
 {
-	for (const std::string& ext : {"", " --external-images"})
+	for (const char* ext : {"", " --external-images"})
 	{
 		const auto dir = test::tempDir("filter_ext_stem");
 		writeExternalRawlog(dir + "/run.rawlog", 3);
