@@ -91,7 +91,7 @@ TEST(ImageFiles, ImportRefusesTruncatedImages)
 
 TEST(ImageFiles, TruncatedExternalImageInARawlogIsAnError)
 {
-	for (const std::string ext : std::vector<std::string>{".png", ".jpg"})
+	for (const std::string& ext : std::vector<std::string>{".png", ".jpg"})
 	{
 	const auto dir = test::tempDir("img_trunc_external");
 	{
