@@ -1,5 +1,8 @@
 /* ShadyLoc — streaming rawlog reading and atomic rawlog writing. */
 #include <shadyloc/io/Rawlog.h>
+#include <shadyloc/io/AllocationBound.h>
+
+#include "CheckedInputStream.h"
 
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CObservationImage.h>
@@ -23,14 +26,11 @@ std::string imagesDirFor(const std::string& rawlogPath)
 
 RawlogReader::RawlogReader(const std::string& path) : m_path(path)
 {
-	std::error_code ec;
-	if (!fs::is_regular_file(path, ec))
-		throw RawlogError("'" + path + "': no such rawlog file");
-	m_totalBytes = fs::file_size(path, ec);
-	std::string err;
-	if (!m_in.open(path, err)) throw RawlogError("'" + path + "': cannot open: " + err);
+	m_in = std::make_unique<detail::CheckedInputStream>(path);
 	mrpt::img::CImage::setImagesPathBase(imagesDirFor(path));
 }
+
+RawlogReader::~RawlogReader() = default;
 
 std::string RawlogReader::where(const std::string& what) const
 {
@@ -39,38 +39,69 @@ std::string RawlogReader::where(const std::string& what) const
 
 double RawlogReader::progress() const
 {
-	if (m_totalBytes == 0) return 1.0;
-	return std::min(1.0, double(m_in.getPosition()) / double(m_totalBytes));
+	const uint64_t total = m_in->getTotalBytesCount();
+	if (total == 0) return 1.0;
+	return std::min(1.0, double(m_in->filePosition()) / double(total));
 }
+
+namespace
+{
+/** The allocation bound while an object is deserialised: no single
+ * allocation larger than the bytes left in the stream (plus a little for
+ * containers whose elements are larger in memory than on disk). */
+[[maybe_unused]] bool withinStream(size_t bytes, void* stream)
+{
+	constexpr size_t kSlack = 64 * 1024;
+	auto* in = static_cast<detail::CheckedInputStream*>(stream);
+	return bytes <= kSlack || in->hasAtLeast(bytes - kSlack);
+}
+}  // namespace
 
 mrpt::serialization::CSerializable::Ptr RawlogReader::next()
 {
 	m_count++;	// index() now names the object being read
 	try
 	{
-		auto arch = mrpt::serialization::archiveFrom(m_in);
+		// A clean end lies exactly between two objects, with the trailer of a
+		// gzip stream read and checked; anything else throws below.
+		if (m_in->atCleanEnd())
+		{
+			m_count--;
+			return nullptr;
+		}
+	}
+	catch (const RawlogError& e)
+	{
+		m_count--;
+		throw RawlogError(
+			std::string(e.what()) +
+			(m_count == 0 ? std::string(" (before the first object)")
+						  : " (after object #" + std::to_string(m_count - 1) + ")"));
+	}
+	m_in->clearFailure();
+	try
+	{
+#ifndef SHADYLOC_NO_LENGTH_BOUND
+		AllocationBound bound(&withinStream, m_in.get());
+#endif
+		auto arch = mrpt::serialization::archiveFrom(*m_in);
 		auto obj = arch.ReadObject();
 		if (!obj) throw RawlogError(where("null object stored"));
 		return obj;
 	}
-	catch (const mrpt::serialization::CExceptionEOF&)
+	catch (const RawlogError& e)
 	{
-		// A clean end of file lands exactly on an object boundary. A gzip
-		// stream cut short also reports EOF there: tell them apart by whether
-		// the whole compressed file was consumed.
-		m_count--;
-		if (m_totalBytes > 0 && m_in.getPosition() + 8 < m_totalBytes)
-			throw RawlogError(
-				"'" + m_path + "': object #" + std::to_string(m_count) +
-				": unexpected end of data before the end of the file (corrupt?)");
-		return nullptr;
-	}
-	catch (const RawlogError&)
-	{
+		if (!m_in->failure().empty()) throw RawlogError(where(m_in->failure()));
 		throw;
 	}
 	catch (const std::exception& e)
 	{
+		// The stream's own diagnosis first: MRPT wraps what it throws.
+		if (!m_in->failure().empty()) throw RawlogError(where(m_in->failure()));
+		if (const size_t refused = AllocationBound::lastRefused())
+			throw RawlogError(where(
+				"corrupt data: a length field asks for " + std::to_string(refused) +
+				" bytes, more than remain in the file"));
 		std::string msg = e.what();
 		// MRPT exceptions nest messages with call traces; the innermost
 		// "Message:" line says what went wrong.
@@ -81,8 +112,6 @@ mrpt::serialization::CSerializable::Ptr RawlogReader::next()
 		}
 		if (msg.find("Stored object has class") != std::string::npos)
 			msg += " (unknown class: load the plugin that defines it, or the file is corrupt)";
-		else if (m_in.checkEOF())
-			msg = "truncated object (file ends in the middle of it)";
 		else
 			msg = "corrupt data: " + msg;
 		throw RawlogError(where(msg));

@@ -2,7 +2,10 @@
  *
  * MRPT's own readers stop at the first object they cannot read and report
  * success; these never do: every failure names the file, the object index and
- * the reason. Rawlogs reach gigabytes, so both sides hold one object at a time.
+ * the reason. Reading is checked end to end: a gzip stream must end with its
+ * trailer (CRC-32 and length match), the last object must be whole, and no
+ * length field may make the reader allocate more than remains in the stream.
+ * Rawlogs reach gigabytes, so both sides hold one object at a time.
  */
 #pragma once
 
@@ -21,6 +24,11 @@
 
 namespace shadyloc::io
 {
+namespace detail
+{
+class CheckedInputStream;
+}
+
 /** Error while reading or writing a rawlog; what() names file, object, reason. */
 class RawlogError : public std::runtime_error
 {
@@ -39,9 +47,14 @@ class RawlogReader
 	/** Opens the file; sets CImage's external-image base to imagesDirFor(path)
 	 * (MRPT 2.5.8's own detection drops the separator). Throws RawlogError. */
 	explicit RawlogReader(const std::string& path);
+	~RawlogReader();
+	RawlogReader(const RawlogReader&) = delete;
+	RawlogReader& operator=(const RawlogReader&) = delete;
 
-	/** The next object, or nullptr at a clean end of file. Throws RawlogError
-	 * on an unregistered class, a truncated or corrupt object. */
+	/** The next object, or nullptr at a clean end of file (every byte read
+	 * and, for gzip, the trailer checked). Throws RawlogError on an
+	 * unregistered class, a truncated or corrupt object, a length field
+	 * larger than what remains, a gzip stream without or with a wrong trailer. */
 	mrpt::serialization::CSerializable::Ptr next();
 
 	/** Index (0-based) of the object last returned by next(). */
@@ -55,9 +68,8 @@ class RawlogReader
 
    private:
 	std::string m_path;
-	mrpt::io::CFileGZInputStream m_in;
+	std::unique_ptr<detail::CheckedInputStream> m_in;
 	size_t m_count = 0;
-	uint64_t m_totalBytes = 0;
 };
 
 /** Observations carried by a top-level rawlog object: the object itself if it
