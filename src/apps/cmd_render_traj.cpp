@@ -1,11 +1,11 @@
 /* shadyloc render-traj: top-down PNG of one or more TUM trajectories, rendered
  * offscreen through MRPT's 3D scene (no display needed). */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/render/TrajectorySnapshot.h>
 
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 
 #include <filesystem>
 #include <iostream>
@@ -14,10 +14,10 @@ namespace
 {
 int run(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Renders TUM trajectories top-down into a PNG, offscreen (EGL). Each -t is "
-		"FILE or FILE:NAME; colours follow a fixed palette.",
-		' ', "0.1");
+		"FILE or FILE:NAME; colours follow a fixed palette.");
+	auto& cmd = cli.cmd();
 	TCLAP::MultiArg<std::string> trajs("t", "traj", "TUM trajectory (FILE or FILE:NAME)", true, "tum", cmd);
 	TCLAP::ValueArg<std::string> out("o", "output", "output PNG", true, "", "out.png", cmd);
 	TCLAP::ValueArg<std::string> title("", "title", "title text", false, "", "text", cmd);
@@ -26,9 +26,10 @@ int run(int argc, char** argv)
 	TCLAP::SwitchArg align(
 		"", "align", "align every trajectory to the first (SE(3), no scale, by timestamps), "
 		"e.g. a VO estimate to its ground truth", cmd);
-	TCLAP::ValueArg<unsigned> width("", "width", "image width [px]", false, 1000, "px", cmd);
-	TCLAP::ValueArg<unsigned> height("", "height", "image height [px]", false, 800, "px", cmd);
-	cmd.parse(argc, argv);
+	// Offscreen framebuffers of Mesa's software renderer stop at 16384 px.
+	shadyloc::apps::NumberArg<unsigned> width(cli, "", "width", "image width [px], 16..16384", 1000, "px", 16, 16384);
+	shadyloc::apps::NumberArg<unsigned> height(cli, "", "height", "image height [px], 16..16384", 800, "px", 16, 16384);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
 
 	static const mrpt::img::TColor palette[] = {
 		{0, 0, 0}, {215, 40, 40}, {30, 90, 210}, {40, 160, 60}, {230, 140, 0}, {140, 60, 170}};

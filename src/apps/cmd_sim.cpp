@@ -1,12 +1,12 @@
 /* shadyloc sim: render stereo traversals of the simulated route as rawlogs
  * with ground truth, and optional contact sheets to look at them. */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/image/ColourTransforms.h>
 #include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/sim/CStereoSimulator.h>
 
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/system/string_utils.h>
 
 #include <opencv2/imgcodecs.hpp>
@@ -90,27 +90,29 @@ class ContactSheet
 
 int run(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Renders colour stereo traversals of one simulated outdoor route under different lighting "
 		"(spectral sun + sky model, ray-cast shadows, dappled canopy light) as rawlogs: "
 		"OUTDIR/<traversal>.rawlog (CObservationStereoImages 'CAMERA', linear BGR) and "
-		"OUTDIR/<traversal>.tum (ground truth: left camera in the world).",
-		' ', "0.1");
+		"OUTDIR/<traversal>.tum (ground truth: left camera in the world).");
+	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> cfg("c", "config", "simulator .ini (see config/sim.ini)", true, "", "sim.ini", cmd);
 	TCLAP::ValueArg<std::string> out("o", "output", "output directory (created if missing)", true, "", "dir", cmd);
-	TCLAP::ValueArg<int> frames("", "frames", "frames per traversal (default: the .ini's)", false, -1, "N", cmd);
+	shadyloc::apps::NumberArg<int> frames(
+		cli, "", "frames", "frames per traversal, >= 1 (default: the .ini's)", -1, "N", 1, 10000000);
 	TCLAP::ValueArg<std::string> which(
 		"", "traversals", "comma-separated traversal names (default: all in [sim] traversals)", false, "", "a,b", cmd);
 	TCLAP::ValueArg<std::string> sheet(
 		"", "contact-sheet", "also write <PREFIX><traversal>.png: a few left frames, right/mono/invariant of one",
 		false, "", "PREFIX", cmd);
-	TCLAP::ValueArg<int> tiles("", "sheet-frames", "left frames per contact sheet", false, 6, "N", cmd);
-	TCLAP::ValueArg<double> sheetScale("", "sheet-scale", "contact sheet tile size / image size", false, 0.375, "f", cmd);
-	TCLAP::ValueArg<double> startS(
-		"", "start-s", "route position of the first frame, m (default: each traversal's start_s_m)", false, 0, "m", cmd);
+	shadyloc::apps::NumberArg<int> tiles(cli, "", "sheet-frames", "left frames per contact sheet, 1..30", 6, "N", 1, 30);
+	shadyloc::apps::NumberArg<double> sheetScale(
+		cli, "", "sheet-scale", "contact sheet tile size / image size, in [0.05, 1]", 0.375, "f", 0.05, 1.0);
+	shadyloc::apps::NumberArg<double> startS(
+		cli, "", "start-s", "route position of the first frame, m (default: each traversal's start_s_m)", 0, "m");
 	TCLAP::SwitchArg dump("", "dump-options", "print the effective options and exit", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no progress output", cmd);
-	cmd.parse(argc, argv);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
 
 	const auto opts = shadyloc::sim::TSimOptions::FromFile(cfg.getValue());
 	if (dump.getValue())
@@ -135,10 +137,6 @@ int run(int argc, char** argv)
 	}
 	else
 		todo = opts.traversals;
-	if (frames.isSet() && frames.getValue() < 1) throw std::invalid_argument("--frames must be >= 1");
-	if (tiles.getValue() < 1 || tiles.getValue() > 30) throw std::invalid_argument("--sheet-frames must be in [1, 30]");
-	if (!(sheetScale.getValue() > 0.05 && sheetScale.getValue() <= 1))
-		throw std::invalid_argument("--sheet-scale must be in (0.05, 1]");
 	if (startS.isSet())
 		for (auto& t : todo) t.start_s_m = startS.getValue();
 

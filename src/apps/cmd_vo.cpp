@@ -1,5 +1,6 @@
 /* shadyloc vo: stereo visual odometry over a rawlog, on one image channel. */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/filters/FilterPipeline.h>
@@ -9,7 +10,6 @@
 #include <shadyloc/vo/Channel.h>
 #include <shadyloc/vo/StereoVO.h>
 
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/obs/CObservationStereoImages.h>
@@ -66,12 +66,12 @@ std::string findFilteredLabel(const std::string& path, const std::string& suffix
 
 int run(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Keyframe-based stereo visual odometry on one image channel. Reads a rawlog of "
 		"CObservationStereoImages (rectified); uses the <label>_mono / <label>_inv observations "
 		"of a filtered rawlog when present, otherwise converts the colour images on the fly. "
-		"Writes the left camera's poses in the first frame (TUM).",
-		' ', "0.1");
+		"Writes the left camera's poses in the first frame (TUM).");
+	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> in("i", "input", "input rawlog", true, "", "run.rawlog", cmd);
 	TCLAP::ValueArg<std::string> out("o", "output", "trajectory (TUM)", true, "", "traj.tum", cmd);
 	TCLAP::ValueArg<std::string> channel(
@@ -88,7 +88,7 @@ int run(int argc, char** argv)
 		"", "label", "sensor label of the stereo camera (default: the first one found)", false, "",
 		"label", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no option dump or progress", cmd);
-	cmd.parse(argc, argv);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
 
 	std::unique_ptr<mrpt::config::CConfigFileBase> cfg;
 	if (cfgArg.isSet())

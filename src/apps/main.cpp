@@ -1,5 +1,6 @@
 /* shadyloc — the command line. `shadyloc <command> --help` for each command. */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/core/Registration.h>
 
@@ -30,6 +31,11 @@ int main(int argc, char** argv)
 	{
 		usage(argc < 2 ? std::cerr : std::cout);
 		return argc < 2 ? 2 : 0;
+	}
+	if (!std::strcmp(argv[1], "--version"))
+	{
+		std::cout << "shadyloc " << shadyloc::apps::version() << "\n";
+		return 0;
 	}
 	const std::string name = argv[1];
 	auto it = shadyloc::apps::commands().find(name);
