@@ -5,7 +5,7 @@
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/filters/FilterPipeline.h>
 #include <shadyloc/filters/Filters.h>
-#include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/vo/Channel.h>
 #include <shadyloc/vo/StereoVO.h>
@@ -89,6 +89,17 @@ int run(int argc, char** argv)
 		"label", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no option dump or progress", cmd);
 	if (const auto rc = cli.parse(argc, argv)) return *rc;
+
+	// Outputs first: refused before any work if one of them is an input or
+	// cannot be written; committed together at the end.
+	io::OutputTransaction outputs;
+	outputs.addInput(in.getValue(), "input rawlog");
+	if (std::filesystem::is_directory(io::imagesDirFor(in.getValue())))
+		outputs.addInput(io::imagesDirFor(in.getValue()), "images folder of the input");
+	if (cfgArg.isSet()) outputs.addInput(cfgArg.getValue(), "config");
+	const std::string trajTmp = outputs.addFile(out.getValue(), "trajectory (-o)");
+	const std::string statsTmp = stats.isSet() ? outputs.addFile(stats.getValue(), "--stats") : "";
+	const std::string kfTmp = kfOut.isSet() ? outputs.addFile(kfOut.getValue(), "--keyframes") : "";
 
 	std::unique_ptr<mrpt::config::CConfigFileBase> cfg;
 	if (cfgArg.isSet())
@@ -215,31 +226,34 @@ int run(int argc, char** argv)
 		throw std::runtime_error(
 			in.getValue() + ": no stereo observations" +
 			(useLabel.empty() ? std::string() : " labelled '" + useLabel + "'"));
-	eval::writeTum(out.getValue(), traj);
+	eval::writeTum(trajTmp, traj);
 	if (stats.isSet())
-		io::writeAtomically(stats.getValue(), [&](const std::string& tmp) {
-			std::ofstream f(tmp);
-			f << csv.str();
-			if (!f) throw std::runtime_error("cannot write '" + tmp + "'");
-		});
+	{
+		std::ofstream f(statsTmp);
+		f << csv.str();
+		f.close();
+		if (!f) throw std::runtime_error("--stats '" + stats.getValue() + "': write failed (disk full?)");
+	}
 	if (kfOut.isSet())
-		io::writeAtomically(kfOut.getValue(), [&](const std::string& tmp) {
-			std::ofstream f(tmp);
-			f << "id,frame,timestamp,tx,ty,tz,qx,qy,qz,qw,chain_break,landmarks,"
-				 "var_x,var_y,var_z,var_rx,var_ry,var_rz\n"
-			  << std::setprecision(9);
-			for (const auto& k : vo.keyframes())
-			{
-				const Eigen::Quaterniond q(k.T_prevkf_kf.linear());
-				const auto& p = k.T_prevkf_kf.translation();
-				f << k.id << ',' << k.frame << ',' << k.timestamp << ',' << p.x() << ',' << p.y() << ','
-				  << p.z() << ',' << q.x() << ',' << q.y() << ',' << q.z() << ',' << q.w() << ','
-				  << int(k.chain_break) << ',' << k.meas.size();
-				for (int i = 0; i < 6; i++) f << ',' << k.cov(i, i);
-				f << '\n';
-			}
-			if (!f) throw std::runtime_error("cannot write '" + tmp + "'");
-		});
+	{
+		std::ofstream f(kfTmp);
+		f << "id,frame,timestamp,tx,ty,tz,qx,qy,qz,qw,chain_break,landmarks,"
+			 "var_x,var_y,var_z,var_rx,var_ry,var_rz\n"
+		  << std::setprecision(9);
+		for (const auto& k : vo.keyframes())
+		{
+			const Eigen::Quaterniond q(k.T_prevkf_kf.linear());
+			const auto& p = k.T_prevkf_kf.translation();
+			f << k.id << ',' << k.frame << ',' << k.timestamp << ',' << p.x() << ',' << p.y() << ','
+			  << p.z() << ',' << q.x() << ',' << q.y() << ',' << q.z() << ',' << q.w() << ','
+			  << int(k.chain_break) << ',' << k.meas.size();
+			for (int i = 0; i < 6; i++) f << ',' << k.cov(i, i);
+			f << '\n';
+		}
+		f.close();
+		if (!f) throw std::runtime_error("--keyframes '" + kfOut.getValue() + "': write failed (disk full?)");
+	}
+	outputs.commit();
 	std::cout << std::setprecision(2) << std::fixed << "frames: " << traj.size() << ", tracked: " << nTracked
 			  << ", keyframes: " << vo.keyframes().size() << ", mean " << msSum / traj.size()
 			  << " ms/frame; trajectory -> " << out.getValue() << "\n";

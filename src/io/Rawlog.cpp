@@ -1,6 +1,7 @@
 /* ShadyLoc — streaming rawlog reading and atomic rawlog writing. */
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/io/AllocationBound.h>
+#include <shadyloc/io/OutputTransaction.h>
 
 #include "CheckedInputStream.h"
 
@@ -159,33 +160,46 @@ void loadExternalImages(mrpt::obs::CObservation& obs)
 		load(im->image, "");
 }
 
-RawlogWriter::RawlogWriter(const std::string& path, bool externalImages)
+RawlogWriter::RawlogWriter(const std::string& path, bool externalImages, OutputTransaction* tx)
 	: m_path(path), m_externalImages(externalImages)
 {
-	const fs::path p(path);
-	if (!p.parent_path().empty() && !fs::is_directory(p.parent_path()))
-		throw RawlogError("'" + path + "': output directory does not exist");
-	m_tmpPath = (p.parent_path() / ("." + p.filename().string() + ".tmp")).string();
+	if (!tx)
+	{
+		m_ownTx = std::make_unique<OutputTransaction>();
+		tx = m_ownTx.get();
+	}
+	m_tx = tx;
 	m_imagesDir = imagesDirFor(path);
-	m_tmpImagesDir = m_imagesDir + ".tmp";
+	try
+	{
+		m_tmpPath = m_tx->addFile(path, "output rawlog");
+		if (m_externalImages) stagedImagesDir();
+	}
+	catch (const std::invalid_argument& e)
+	{
+		throw RawlogError(e.what());
+	}
 	m_out = std::make_unique<mrpt::io::CFileGZOutputStream>();
 	if (!m_out->open(m_tmpPath, 1 /* fast compression */))
 		throw RawlogError("'" + path + "': cannot create output file '" + m_tmpPath + "'");
-	if (m_externalImages)
-	{
-		std::error_code ec;
-		fs::remove_all(m_tmpImagesDir, ec);
-		fs::create_directories(m_tmpImagesDir);
-	}
 }
 
-RawlogWriter::~RawlogWriter()
+RawlogWriter::~RawlogWriter() = default;  // the transaction removes what was not committed
+
+const std::string& RawlogWriter::stagedImagesDir()
 {
-	if (m_committed) return;
-	m_out.reset();
-	std::error_code ec;
-	fs::remove(m_tmpPath, ec);
-	if (m_externalImages) fs::remove_all(m_tmpImagesDir, ec);
+	if (m_tmpImagesDir.empty())
+	{
+		try
+		{
+			m_tmpImagesDir = m_tx->addDirectory(m_imagesDir, "images folder '" + fs::path(m_imagesDir).filename().string() + "' of the output");
+		}
+		catch (const std::invalid_argument& e)
+		{
+			throw RawlogError(e.what());
+		}
+	}
+	return m_tmpImagesDir;
 }
 
 void RawlogWriter::write(const mrpt::serialization::CSerializable& obj)
@@ -198,23 +212,51 @@ void RawlogWriter::write(const mrpt::serialization::CSerializable& obj)
 void RawlogWriter::externalise(mrpt::img::CImage& img, const std::string& name)
 {
 	if (!m_externalImages) return;
-	const std::string file = (fs::path(m_tmpImagesDir) / name).string();
-	if (!img.saveToFile(file))
-		throw RawlogError("'" + m_path + "': cannot write external image '" + file + "'");
+	const fs::path file = fs::path(stagedImagesDir()) / name;
+	std::error_code ec;
+	if (fs::exists(file, ec))
+		throw RawlogError("'" + m_path + "': two images would be written as '" + name + "'");
+	if (file.has_parent_path()) fs::create_directories(file.parent_path(), ec);
+	if (!img.saveToFile(file.string()))
+		throw RawlogError("'" + m_path + "': cannot write external image '" + file.string() + "'");
 	img.setExternalStorage(name);
+}
+
+void RawlogWriter::carryExternalImage(const mrpt::img::CImage& img, const std::string& sourceImagesDir)
+{
+	if (!img.isExternallyStored()) return;
+	const std::string name = img.getExternalStorageFile();
+	if (name.empty() || fs::path(name).is_absolute()) return;
+	const fs::path src = fs::path(sourceImagesDir) / name;
+	const fs::path dst = fs::path(stagedImagesDir()) / name;
+	std::error_code ec;
+	if (fs::exists(dst, ec))
+	{
+		if (fs::equivalent(src, dst, ec)) return;  // carried already (one image in several observations)
+		throw RawlogError("'" + m_path + "': two images would be written as '" + name + "'");
+	}
+	if (!fs::is_regular_file(src, ec))
+		throw RawlogError("'" + m_path + "': external image '" + src.string() + "' of the input is missing");
+	if (dst.has_parent_path()) fs::create_directories(dst.parent_path(), ec);
+	// A hard link costs nothing; across file systems, a copy.
+	fs::create_hard_link(src, dst, ec);
+	if (ec)
+	{
+		ec.clear();
+		fs::copy_file(src, dst, ec);
+		if (ec)
+			throw RawlogError(
+				"'" + m_path + "': cannot copy external image '" + src.string() + "' to '" + dst.string() +
+				"': " + ec.message());
+	}
 }
 
 void RawlogWriter::commit()
 {
+	if (m_committed) return;
 	m_out->close();
 	m_out.reset();
-	if (m_externalImages)
-	{
-		std::error_code ec;
-		fs::remove_all(m_imagesDir, ec);
-		fs::rename(m_tmpImagesDir, m_imagesDir);
-	}
-	fs::rename(m_tmpPath, m_path);
+	if (m_ownTx) m_ownTx->commit();
 	m_committed = true;
 }
 

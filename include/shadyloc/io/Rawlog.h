@@ -28,6 +28,7 @@ namespace detail
 {
 class CheckedInputStream;
 }
+class OutputTransaction;
 
 /** Error while reading or writing a rawlog; what() names file, object, reason. */
 class RawlogError : public std::runtime_error
@@ -81,15 +82,21 @@ std::vector<mrpt::obs::CObservation::Ptr> observationsIn(
  * shows up here (with its path) rather than deep inside a filter. */
 void loadExternalImages(mrpt::obs::CObservation& obs);
 
-/** Writes a rawlog to "<path>.tmp" and renames it into place on commit().
- * Without commit() (an exception, an early return) the destructor deletes the
- * temporary file and images: no half-written output is ever left behind. */
+/** Writes a rawlog to a temporary sibling and renames it into place on
+ * commit(). Without commit() (an exception, an early return) the temporary
+ * file and images are deleted: no half-written output is ever left behind.
+ * The rawlog and its images folder are outputs of an OutputTransaction: the
+ * writer's own, or the command's (then they are put in place together with
+ * the command's other outputs, by the transaction's commit()). */
 class RawlogWriter
 {
    public:
 	/** externalImages: write images given to externalise() as PNG files in
-	 * imagesDirFor(path) (staged as "<dir>.tmp" until commit()). */
-	explicit RawlogWriter(const std::string& path, bool externalImages = false);
+	 * imagesDirFor(path) (staged in a temporary folder until commit()).
+	 * tx: the command's transaction (which must outlive the writer), or
+	 * nullptr for one of the writer's own. Throws RawlogError if the output
+	 * cannot be reserved (missing directory, an input of tx, ...). */
+	explicit RawlogWriter(const std::string& path, bool externalImages = false, OutputTransaction* tx = nullptr);
 	~RawlogWriter();
 	RawlogWriter(const RawlogWriter&) = delete;
 	RawlogWriter& operator=(const RawlogWriter&) = delete;
@@ -102,16 +109,30 @@ class RawlogWriter
 	void externalise(mrpt::img::CImage& img, const std::string& name);
 	bool externalImages() const { return m_externalImages; }
 
-	/** Flushes, closes and renames into place (replacing an old file). */
+	/** For an image an input rawlog stores externally (relative to
+	 * sourceImagesDir) and that is written out unchanged: links (or copies)
+	 * its file into this rawlog's images folder under the same name, so that
+	 * the output does not point at files that are not beside it. Images
+	 * stored inline or with an absolute path need nothing. */
+	void carryExternalImage(const mrpt::img::CImage& img, const std::string& sourceImagesDir);
+
+	/** Flushes and closes; with the writer's own transaction, also renames
+	 * into place (replacing an old file). With the command's transaction,
+	 * its commit() does that. */
 	void commit();
 
 	const std::string& path() const { return m_path; }
 
    private:
+	/** The staged images folder, reserved in the transaction on first use. */
+	const std::string& stagedImagesDir();
+
 	std::string m_path, m_tmpPath, m_imagesDir, m_tmpImagesDir;
 	bool m_externalImages = false;
 	bool m_committed = false;
 	size_t m_written = 0;
+	std::unique_ptr<OutputTransaction> m_ownTx;
+	OutputTransaction* m_tx = nullptr;
 	std::unique_ptr<mrpt::io::CFileGZOutputStream> m_out;
 };
 
