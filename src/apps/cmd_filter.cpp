@@ -30,6 +30,7 @@ int run(int argc, char** argv)
 									  : shadyloc::filters::FilterPipeline::Default();
 	shadyloc::filters::RawlogFilterProcessor proc;
 	proc.externalImages = ext.getValue();
+	if (cfg.isSet()) proc.otherInputs.push_back(cfg.getValue());
 	proc.setMinLoggingLevel(quiet.getValue() ? mrpt::system::LVL_WARN : mrpt::system::LVL_INFO);
 	if (!quiet.getValue()) std::cout << "Pipeline options:\n" << pipeline.asIni() << "\n";
 	proc.run(in.getValue(), out.getValue(), pipeline);
