@@ -192,11 +192,12 @@ const std::string& RawlogWriter::stagedImagesDir()
 	{
 		try
 		{
-			m_tmpImagesDir = m_tx->addDirectory(m_imagesDir, "images folder '" + fs::path(m_imagesDir).filename().string() + "' of the output");
+			m_tmpImagesDir = m_tx->addDirectory(m_imagesDir, "'" + m_path + "': its images folder");
 		}
 		catch (const std::invalid_argument& e)
 		{
-			throw RawlogError(e.what());
+			// Images folders are named after the rawlog's stem.
+			throw RawlogError(std::string(e.what()) + " (give the output a name whose stem differs from the input's)");
 		}
 	}
 	return m_tmpImagesDir;
