@@ -3,7 +3,8 @@
 #include "CommandLine.h"
 
 #include <shadyloc/image/ColourTransforms.h>
-#include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/io/ImageFile.h>
+#include <shadyloc/io/OutputTransaction.h>
 
 #include <opencv2/imgcodecs.hpp>
 
@@ -68,10 +69,19 @@ int run(int argc, char** argv)
 		peaks = l;
 	}
 
-	if (!std::filesystem::is_regular_file(in.getValue()))
-		throw std::runtime_error("'" + in.getValue() + "': no such image file");
-	const cv::Mat img = cv::imread(in.getValue(), cv::IMREAD_UNCHANGED);
-	if (img.empty()) throw std::runtime_error("'" + in.getValue() + "': cannot read image");
+	shadyloc::io::OutputTransaction outputs;
+	outputs.addInput(in.getValue(), "input image");
+	const std::string outTmp = outputs.addFile(out.getValue(), "output image");
+	shadyloc::io::checkImageWritable(out.getValue());
+	cv::Mat img;
+	try
+	{
+		img = shadyloc::io::readImageFile(in.getValue());
+	}
+	catch (const shadyloc::io::ImageFileError& e)
+	{
+		throw std::runtime_error(std::string("cannot read image ") + e.what());
+	}
 	if (img.depth() != CV_8U)
 		throw std::runtime_error("'" + in.getValue() + "': only 8-bit images are supported");
 
@@ -105,10 +115,17 @@ int run(int argc, char** argv)
 		std::cout << "invariant: " << p.asString() << "\n";
 		InvariantTransform(p).apply(img, result);
 	}
-	shadyloc::io::writeAtomically(out.getValue(), [&](const std::string& tmp) {
-		if (!cv::imwrite(tmp, result))
-			throw std::runtime_error("'" + out.getValue() + "': cannot write image");
-	});
+	bool written = false;
+	try
+	{
+		written = cv::imwrite(outTmp, result);
+	}
+	catch (const cv::Exception& e)
+	{
+		throw std::runtime_error("'" + out.getValue() + "': cannot write image: " + e.err);
+	}
+	if (!written) throw std::runtime_error("'" + out.getValue() + "': cannot write image");
+	outputs.commit();
 	return 0;
 }
 shadyloc::apps::RegisterCommand reg("image", {"one image file -> mono or invariant image file", run});

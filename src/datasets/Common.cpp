@@ -2,6 +2,7 @@
 #include "Detail.h"
 
 #include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/io/ImageFile.h>
 
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/obs/CObservationStereoImages.h>
@@ -50,15 +51,13 @@ cv::Mat readImage(const std::string& path, const std::string& what)
 	cv::Mat m;
 	try
 	{
-		if (fs::is_regular_file(path)) m = cv::imread(path, cv::IMREAD_UNCHANGED);
+		// Checked: a truncated file is an error, not rows filled grey.
+		m = io::readImageFile(path, cv::IMREAD_UNCHANGED);
 	}
-	catch (const cv::Exception& e)
+	catch (const io::ImageFileError& e)
 	{
-		throw DatasetError(what + ": cannot read image '" + path + "': " + e.what());
+		throw DatasetError(what + ": cannot read image " + e.what());
 	}
-	if (m.empty())
-		throw DatasetError(
-			what + ": cannot read image '" + path + "' (missing, unreadable or not an image)");
 	if (m.depth() != CV_8U)
 		throw DatasetError(
 			what + ": image '" + path + "' is not 8-bit per channel (only 8-bit images are imported)");

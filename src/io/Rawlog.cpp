@@ -1,6 +1,7 @@
 /* ShadyLoc — streaming rawlog reading and atomic rawlog writing. */
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/io/AllocationBound.h>
+#include <shadyloc/io/ImageFile.h>
 #include <shadyloc/io/OutputTransaction.h>
 
 #include "CheckedInputStream.h"
@@ -138,17 +139,25 @@ void loadExternalImages(mrpt::obs::CObservation& obs)
 	using namespace mrpt::obs;
 	auto load = [&](const mrpt::img::CImage& img, const char* which) {
 		if (!img.isExternallyStored()) return;
+		const std::string file = img.getExternalStorageFileAbsolutePath();
+		const std::string what = std::string("external ") + which + (*which ? " " : "") + "image of sensor '" +
+			obs.sensorLabel + "'";
 		try
 		{
+			// The file's structure first: OpenCV decodes a truncated JPEG
+			// without complaint, filling the missing rows grey.
+			checkImageFile(file);
 			img.forceLoad();
+		}
+		catch (const ImageFileError& e)
+		{
+			throw RawlogError(what + ": " + e.what());
 		}
 		catch (const std::exception&)
 		{
-			throw RawlogError(
-				std::string("missing or unreadable external ") + which + " image '" +
-				img.getExternalStorageFileAbsolutePath() + "' of sensor '" + obs.sensorLabel +
-				"'");
+			throw RawlogError(what + ": '" + file + "': missing or unreadable");
 		}
+		if (img.asCvMatRef().empty()) throw RawlogError(what + ": '" + file + "': cannot decode");
 	};
 	if (auto* st = dynamic_cast<CObservationStereoImages*>(&obs))
 	{
