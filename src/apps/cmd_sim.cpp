@@ -4,7 +4,8 @@
 #include "CommandLine.h"
 
 #include <shadyloc/image/ColourTransforms.h>
-#include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/io/ImageFile.h>
+#include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/sim/CStereoSimulator.h>
 
 #include <mrpt/system/string_utils.h>
@@ -50,7 +51,8 @@ class ContactSheet
 				   label(half(grey3), "mono #" + std::to_string(f.index)),
 				   label(half(inv3), "invariant #" + std::to_string(f.index))};
 	}
-	void write(const std::string& path, const std::string& title) const
+	/** Writes the sheet to `tmp` (the transaction's temporary for `path`). */
+	void write(const std::string& tmp, const std::string& path, const std::string& title) const
 	{
 		std::vector<cv::Mat> all = m_tiles;
 		all.insert(all.end(), m_extra.begin(), m_extra.end());
@@ -61,10 +63,8 @@ class ContactSheet
 		cv::putText(sheet, title, {6, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.42, {255, 255, 255}, 1, cv::LINE_AA);
 		for (size_t i = 0; i < all.size(); i++)
 			all[i].copyTo(sheet(cv::Rect(static_cast<int>(i % cols) * w, 22 + static_cast<int>(i / cols) * h, w, h)));
-		shadyloc::io::writeAtomically(path, [&](const std::string& tmp) {
-			if (!cv::imwrite(tmp, sheet, {cv::IMWRITE_PNG_COMPRESSION, 9}))
-				throw std::runtime_error("'" + path + "': cannot write contact sheet");
-		});
+		if (!cv::imwrite(tmp, sheet, {cv::IMWRITE_PNG_COMPRESSION, 9}))
+			throw std::runtime_error("'" + path + "': cannot write contact sheet");
 		std::cout << "contact sheet: " << path << "\n";
 	}
 
@@ -142,8 +142,31 @@ int run(int argc, char** argv)
 
 	const fs::path dir(out.getValue());
 	std::error_code ec;
+	// Every rawlog, ground truth and contact sheet is put in place together
+	// at the end, or none is; a folder made here goes again on failure.
+	const bool made = !fs::exists(dir, ec);
 	fs::create_directories(dir, ec);
 	if (!fs::is_directory(dir)) throw std::runtime_error("'" + dir.string() + "': cannot create output directory");
+	struct RemoveIfMade
+	{
+		fs::path dir;
+		bool armed;
+		~RemoveIfMade()
+		{
+			std::error_code e;
+			if (armed) fs::remove(dir, e);	// only if left empty
+		}
+	} removeIfMade{dir, made};
+	shadyloc::io::OutputTransaction outputs;
+	outputs.addInput(cfg.getValue(), "simulator config");
+	std::vector<std::string> sheetTmps;
+	if (sheet.isSet())
+		for (const auto& t : todo)
+		{
+			const std::string path = sheet.getValue() + t.name + ".png";
+			sheetTmps.push_back(outputs.addFile(path, "contact sheet"));
+			shadyloc::io::checkImageWritable(path);
+		}
 
 	shadyloc::sim::CStereoSimulator sim(opts);
 	sim.setMinLoggingLevel(quiet.getValue() ? mrpt::system::LVL_WARN : mrpt::system::LVL_INFO);
@@ -157,7 +180,8 @@ int run(int argc, char** argv)
 		sim.generate((dir / (t.name + ".rawlog")).string(), (dir / (t.name + ".tum")).string(), n,
 			[&](const shadyloc::sim::TSimFrame& f) {
 				if (sheet.isSet()) cs.add(f);
-			});
+			},
+			&outputs);
 		total += n;
 		if (sheet.isSet())
 		{
@@ -169,9 +193,11 @@ int run(int argc, char** argv)
 				std::snprintf(title, sizeof(title), "%s: sun az %.0f el %.0f, %.0f K, sky %.0f K, sigma %.0f nm",
 					t.name.c_str(), t.sun_azimuth_deg, t.sun_elevation_deg, t.sun_temperature_K,
 					t.sky_temperature_K, opts.camera.spectral.sigma_nm);
-			cs.write(sheet.getValue() + t.name + ".png", title);
+			cs.write(sheetTmps[static_cast<size_t>(&t - todo.data())], sheet.getValue() + t.name + ".png", title);
 		}
 	}
+	outputs.commit();
+	removeIfMade.armed = false;
 	const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 	if (!quiet.getValue())
 		std::cout << "sim: " << todo.size() << " traversal(s), " << total << " stereo frames in " << el << " s ("

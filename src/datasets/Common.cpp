@@ -88,8 +88,8 @@ double parseDouble(const std::string& token, const std::string& where)
 	char* end = nullptr;
 	errno = 0;
 	const double v = std::strtod(s, &end);
-	if (end == s || *end != '\0' || errno == ERANGE)
-		throw DatasetError(where + ": '" + token + "' is not a number");
+	if (end == s || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+		throw DatasetError(where + ": '" + token + "' is not a (finite) number");
 	return v;
 }
 
@@ -111,9 +111,21 @@ std::vector<double> readTimes(const std::string& path)
 
 StereoSink::StereoSink(
 	const std::string& outRawlog, const TImportOptions& opts, mrpt::system::COutputLogger& log)
-	: m_opts(opts), m_log(log), m_writer(outRawlog, opts.externalImages)
+	: m_opts(opts), m_log(log), m_writer(outRawlog, opts.externalImages, &m_outputs)
 {
 	m_result.rawlogPath = outRawlog;
+}
+
+void StereoSink::addInput(const std::string& path, const std::string& what)
+{
+	try
+	{
+		m_outputs.addInput(path, what);
+	}
+	catch (const std::invalid_argument& e)
+	{
+		throw DatasetError(e.what());
+	}
 }
 
 void StereoSink::setCalibration(
@@ -172,18 +184,20 @@ TImportResult StereoSink::commit()
 	std::error_code ec;
 	if (!groundTruth.empty())
 	{
-		writeTum(gtPath, groundTruth, "ground truth of '" + fs::path(m_result.rawlogPath).filename().string() + "'");
+		std::string tmp;
+		try
+		{
+			tmp = m_outputs.addFile(gtPath, "ground truth");
+		}
+		catch (const std::invalid_argument& e)
+		{
+			throw DatasetError(e.what());
+		}
+		writeTum(tmp, groundTruth, "ground truth of '" + fs::path(m_result.rawlogPath).filename().string() + "'");
 		m_result.groundTruthPath = gtPath;
 	}
-	try
-	{
-		m_writer.commit();
-	}
-	catch (...)
-	{
-		if (!groundTruth.empty()) fs::remove(gtPath, ec);
-		throw;
-	}
+	m_writer.commit();
+	m_outputs.commit();	 // rawlog, images and ground truth together
 	if (groundTruth.empty() && fs::exists(gtPath, ec))
 	{
 		// A ground truth left by an earlier import to the same path would now

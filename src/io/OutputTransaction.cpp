@@ -196,9 +196,8 @@ void OutputTransaction::checkAgainst(const TEntry& out, const TEntry& other, boo
 			(otherIsInput ? ": an output may not replace an input" : ""));
 	if (out.isDir && isInside(other.canonical, out.canonical))
 		throw std::invalid_argument(a + " would replace the folder that holds the " + b);
-	if (other.isDir && isInside(out.canonical, other.canonical))
-		throw std::invalid_argument(
-			a + " lies inside the " + b + (otherIsInput ? ": outputs go outside input folders" : ""));
+	if (!otherIsInput && other.isDir && isInside(out.canonical, other.canonical))
+		throw std::invalid_argument(a + " lies inside the " + b + ", which is replaced as a whole");
 }
 
 void OutputTransaction::addInput(const std::string& path, const std::string& what)

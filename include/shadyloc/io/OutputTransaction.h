@@ -12,8 +12,8 @@
  *
  * No output may be an input: each output is compared with the declared
  * inputs by canonical path (through symbolic links) and by device/inode
- * (hard links), and may neither contain an input (a directory replaced as a
- * whole) nor lie inside an input directory.
+ * (hard links), and may not contain an input (a directory replaced as a
+ * whole). Outputs may not coincide or nest either.
  */
 #pragma once
 
