@@ -4,6 +4,8 @@
 #include "CommandLine.h"
 
 #include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/io/ImageFile.h>
+#include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/render/TrajectorySnapshot.h>
 
 
@@ -21,26 +23,39 @@ int run(int argc, char** argv)
 	TCLAP::MultiArg<std::string> trajs("t", "traj", "TUM trajectory (FILE or FILE:NAME)", true, "tum", cmd);
 	TCLAP::ValueArg<std::string> out("o", "output", "output PNG", true, "", "out.png", cmd);
 	TCLAP::ValueArg<std::string> title("", "title", "title text", false, "", "text", cmd);
+	std::vector<std::string> axes{"x", "y", "z", "a"};
+	TCLAP::ValuesConstraint<std::string> axesC(axes);
 	TCLAP::ValueArg<std::string> up(
-		"", "up", "axis out of the picture: x, y (camera frames), z, or a (auto)", false, "a", "axis", cmd);
+		"", "up", "axis out of the picture: x, y (camera frames), z, or a (auto)", false, "a", &axesC, cmd);
 	TCLAP::SwitchArg align(
 		"", "align", "align every trajectory to the first (SE(3), no scale, by timestamps), "
 		"e.g. a VO estimate to its ground truth", cmd);
 	// Offscreen framebuffers of Mesa's software renderer stop at 16384 px.
 	shadyloc::apps::NumberArg<unsigned> width(cli, "", "width", "image width [px], 16..16384", 1000, "px", 16, 16384);
 	shadyloc::apps::NumberArg<unsigned> height(cli, "", "height", "image height [px], 16..16384", 800, "px", 16, 16384);
+	cli.allowEmpty(title);
 	if (const auto rc = cli.parse(argc, argv)) return *rc;
 
-	static const mrpt::img::TColor palette[] = {
-		{0, 0, 0}, {215, 40, 40}, {30, 90, 210}, {40, 160, 60}, {230, 140, 0}, {140, 60, 170}};
-	std::vector<shadyloc::render::TrajectoryLayer> layers;
-	shadyloc::eval::Trajectory reference;  // the first trajectory, for --align
+	shadyloc::io::OutputTransaction outputs;
+	std::vector<std::pair<std::string, std::string>> files;	 // file, name
 	for (const auto& spec : trajs.getValue())
 	{
 		auto colon = spec.rfind(':');
 		std::string file = spec, name = std::filesystem::path(spec).stem().string();
 		if (colon != std::string::npos && !std::filesystem::exists(spec))
 			file = spec.substr(0, colon), name = spec.substr(colon + 1);
+		outputs.addInput(file, "trajectory");
+		files.emplace_back(file, name);
+	}
+	const std::string outTmp = outputs.addFile(out.getValue(), "output image");
+	shadyloc::io::checkImageWritable(out.getValue());
+
+	static const mrpt::img::TColor palette[] = {
+		{0, 0, 0}, {215, 40, 40}, {30, 90, 210}, {40, 160, 60}, {230, 140, 0}, {140, 60, 170}};
+	std::vector<shadyloc::render::TrajectoryLayer> layers;
+	shadyloc::eval::Trajectory reference;  // the first trajectory, for --align
+	for (const auto& [file, name] : files)
+	{
 		shadyloc::render::TrajectoryLayer l;
 		l.name = name;
 		l.colour = palette[layers.size() % std::size(palette)];
@@ -67,9 +82,9 @@ int run(int argc, char** argv)
 	o.title = title.getValue();
 	o.width = width.getValue();
 	o.height = height.getValue();
-	if (up.getValue().size() != 1) throw std::invalid_argument("--up: one of x, y, z, a");
 	o.upAxis = up.getValue()[0];
-	shadyloc::render::renderTrajectories(layers, o, out.getValue());
+	shadyloc::render::renderTrajectories(layers, o, outTmp);
+	outputs.commit();
 	std::cout << "wrote " << out.getValue() << "\n";
 	return 0;
 }

@@ -179,8 +179,10 @@ int run(int argc, char** argv)
 			const cv::Mat& L = st->imageLeft.asCvMatRef();
 			const cv::Mat& R = st->imageRight.asCvMatRef();
 			const std::string where = rd.where("stereo observation '" + st->sensorLabel + "'");
-			if (L.empty() || R.empty() || L.size() != R.size())
-				throw std::runtime_error(where + ": empty or mismatched left/right images");
+			if (L.empty() || R.empty() || L.size() != R.size() || L.type() != R.type())
+				throw std::runtime_error(
+					where + ": empty left/right images, or of different sizes or types (grey/colour)" +
+					io::externalImagesOf(*st));
 			if (traj.empty())
 			{
 				calib = geometry::TStereoCalib::FromObservation(*st);

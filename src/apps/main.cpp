@@ -3,6 +3,7 @@
 #include "CommandLine.h"
 
 #include <shadyloc/core/Registration.h>
+#include <shadyloc/io/OutputTransaction.h>
 
 
 #include <cstring>
@@ -26,6 +27,9 @@ static void usage(std::ostream& o)
 
 int main(int argc, char** argv)
 {
+	// First, before any thread starts: SIGINT/SIGTERM/SIGHUP/SIGQUIT remove
+	// the temporary outputs of the interrupted command.
+	shadyloc::io::installSignalCleanup();
 	shadyloc::registerAllClasses();
 	if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h"))
 	{

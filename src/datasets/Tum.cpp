@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -16,6 +17,11 @@ namespace shadyloc::datasets
 {
 TTrajectory readTum(const std::string& path)
 {
+	std::error_code ec;
+	if (std::filesystem::is_directory(path, ec))
+		throw std::runtime_error("'" + path + "': is a directory, not a TUM trajectory file");
+	if (!std::filesystem::is_regular_file(path, ec))
+		throw std::runtime_error("'" + path + "': no such TUM trajectory file");
 	std::ifstream f(path);
 	if (!f) throw std::runtime_error("'" + path + "': cannot open TUM trajectory file");
 	TTrajectory out;
@@ -42,8 +48,15 @@ TTrajectory readTum(const std::string& path)
 				"'" + path + "':" + std::to_string(n) + ": quaternion norm " + std::to_string(norm) +
 				" is not 1 (is the order qx qy qz qw?)");
 		mrpt::math::CQuaternionDouble q(v[7] / norm, v[4] / norm, v[5] / norm, v[6] / norm);
+		for (int i = 0; i < 4; i++)
+			if (!std::isfinite(v[i]))
+				throw std::runtime_error(
+					"'" + path + "':" + std::to_string(n) + ": timestamp and position must be finite numbers: '" +
+					line + "'");
 		out.push_back({v[0], mrpt::poses::CPose3D(q, v[1], v[2], v[3])});
 	}
+	if (f.bad()) throw std::runtime_error("'" + path + "': read error");
+	if (out.empty()) throw std::runtime_error("'" + path + "': holds no poses (empty TUM trajectory file)");
 	return out;
 }
 

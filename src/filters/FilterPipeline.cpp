@@ -195,7 +195,7 @@ FilterRunStats RawlogFilterProcessor::run(
 			}
 			catch (const std::exception& e)
 			{
-				throw io::RawlogError(reader.where(e.what()));
+				throw io::RawlogError(reader.where(e.what() + io::externalImagesOf(*obs)));
 			}
 			if (inputLabels.count(d->sensorLabel)) throw clash(d->sensorLabel);
 			derivedLabels.insert(d->sensorLabel);

@@ -169,6 +169,24 @@ void loadExternalImages(mrpt::obs::CObservation& obs)
 		load(im->image, "");
 }
 
+std::string externalImagesOf(const mrpt::obs::CObservation& obs)
+{
+	using namespace mrpt::obs;
+	std::string s;
+	auto add = [&](const mrpt::img::CImage& img, const char* which) {
+		if (!img.isExternallyStored()) return;
+		s += std::string(s.empty() ? " (" : ", ") + which + "image '" + img.getExternalStorageFileAbsolutePath() + "'";
+	};
+	if (auto* st = dynamic_cast<const CObservationStereoImages*>(&obs))
+	{
+		add(st->imageLeft, "left ");
+		if (st->hasImageRight) add(st->imageRight, "right ");
+	}
+	else if (auto* im = dynamic_cast<const CObservationImage*>(&obs))
+		add(im->image, "");
+	return s.empty() ? s : s + ")";
+}
+
 RawlogWriter::RawlogWriter(const std::string& path, bool externalImages, OutputTransaction* tx)
 	: m_path(path), m_externalImages(externalImages)
 {

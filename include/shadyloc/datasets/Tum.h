@@ -21,7 +21,8 @@ using TTrajectory = std::vector<TTimedPose>;
 
 /** Reads a TUM file in file order. Blank lines and lines starting with '#'
  * are skipped; quaternions are normalised (a norm off by more than 1% is an
- * error). Throws std::runtime_error naming "file:line" on any bad line. */
+ * error). Throws std::runtime_error naming "file:line" on any bad line, and
+ * naming the file if it is missing, a directory or holds no pose. */
 TTrajectory readTum(const std::string& path);
 
 /** Writes a TUM file atomically (no half-written file on failure): times and

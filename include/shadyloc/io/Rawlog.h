@@ -79,8 +79,13 @@ std::vector<mrpt::obs::CObservation::Ptr> observationsIn(
 	const mrpt::serialization::CSerializable::Ptr& obj);
 
 /** Loads every image an observation stores externally, so a missing file
- * shows up here (with its path) rather than deep inside a filter. */
+ * shows up here (with its path) rather than deep inside a filter. Each file
+ * is checked first (io::checkImageFile): a truncated one is an error. */
 void loadExternalImages(mrpt::obs::CObservation& obs);
+
+/** " (left image 'f', right image 'g')" for the images an observation
+ * stores externally, "" if it stores none: for messages about its images. */
+std::string externalImagesOf(const mrpt::obs::CObservation& obs);
 
 /** Writes a rawlog to a temporary sibling and renames it into place on
  * commit(). Without commit() (an exception, an early return) the temporary
