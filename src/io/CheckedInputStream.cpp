@@ -187,7 +187,70 @@ size_t CheckedInputStream::Read(void* buf, size_t n)
 	std::memcpy(buf, m_buf.data() + m_pos, n);
 	m_pos += n;
 	m_consumed += n;
+	// An object header is the name's length byte (0x80 | length), then the name.
+	static constexpr char kImageClass[] = "mrpt::img::CImage";
+	constexpr size_t kLen = sizeof(kImageClass) - 1;
+	const bool imageHeader = n == kLen && m_prevLast == (0x80 | kLen) && std::memcmp(buf, kImageClass, n) == 0;
+	m_prevLast = static_cast<const uint8_t*>(buf)[n - 1];
+	if (imageHeader) checkImageHeaderAhead();
 	return n;
+}
+
+uint32_t CheckedInputStream::peek32(size_t offset) const
+{
+	const uint8_t* p = m_buf.data() + m_pos + offset;  // MRPT archives are little-endian
+	return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24;
+}
+
+void CheckedInputStream::checkImageHeaderAhead()
+{
+	// Most lengths MRPT reads are bounded by the allocation bound (operator
+	// new, cv::Mat). Two in CImage's format are not: a JPEG-compressed image
+	// (versions 1..9) goes into a CMemoryStream sized with realloc() from its
+	// byte count, and version 0 copies a stored byte count into a pixel
+	// buffer sized from width x height x channels without comparing the two.
+	// Both fields sit at fixed offsets after the version byte, so they are
+	// checked here, ahead of MRPT, against what the stream still holds.
+	if (!hasAtLeast(1)) return;	 // the truncation shows up at the next read
+	const uint8_t version = m_buf[m_pos];
+	auto announce = [&](uint64_t bytes, size_t dataAt) {
+		if (!hasAtLeast(dataAt)) return;
+		if (!hasAtLeast(dataAt + bytes))
+			fail(
+				"corrupt data: an image announces " + std::to_string(bytes) + " bytes, more than remain in the file");
+	};
+	if (version == 0)
+	{
+		if (!hasAtLeast(18)) return;
+		const uint64_t w = peek32(1), h = peek32(5), c = peek32(9);
+		const uint64_t len = peek32(14);
+		if (len > w * h * c) fail("corrupt data: an image stores " + std::to_string(len) + " bytes for " +
+								  std::to_string(w) + "x" + std::to_string(h) + "x" + std::to_string(c) + " pixels");
+		announce(len, 18);
+	}
+	else if (version == 1)
+	{
+		if (hasAtLeast(5)) announce(peek32(1), 5);
+	}
+	else if (version <= 9)
+	{
+		size_t at = 1;
+		if (version >= 6)
+		{
+			if (!hasAtLeast(at + 1) || m_buf[m_pos + at] != 0) return;	// stored externally: a file name
+			at++;
+		}
+		if (!hasAtLeast(at + 1) || m_buf[m_pos + at] == 0) return;	// grey: raw bytes, sized by cv::Mat
+		at++;
+		if (version >= 7)
+		{
+			if (!hasAtLeast(at + 8)) return;
+			const int32_t w = static_cast<int32_t>(peek32(at)), h = static_cast<int32_t>(peek32(at + 4));
+			if (!(w >= 1 && h >= 1)) return;	 // raw colour: sized by cv::Mat
+			at += 8;
+		}
+		if (hasAtLeast(at + 4)) announce(peek32(at), at + 4);
+	}
 }
 
 }  // namespace shadyloc::io::detail

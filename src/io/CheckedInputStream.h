@@ -61,6 +61,10 @@ class CheckedInputStream : public mrpt::io::CStream
    private:
 	/** Appends decompressed bytes to the buffer; false at the end of data. */
 	bool fill();
+	/** Just after the class name of an mrpt::img::CImage was read: checks the
+	 * sizes its header announces before MRPT reads them (see the .cpp). */
+	void checkImageHeaderAhead();
+	uint32_t peek32(size_t offset) const;
 	[[noreturn]] void fail(const std::string& why);
 	void compact();
 
@@ -76,6 +80,7 @@ class CheckedInputStream : public mrpt::io::CStream
 	std::vector<uint8_t> m_buf;	 //!< decompressed bytes [m_pos, m_end) not yet read
 	size_t m_pos = 0, m_end = 0;
 	std::string m_failure;
+	uint8_t m_prevLast = 0;	 //!< last byte of the previous Read() (a class name's length byte)
 };
 
 }  // namespace shadyloc::io::detail

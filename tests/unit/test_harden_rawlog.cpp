@@ -5,8 +5,11 @@
 
 #include <shadyloc/io/Rawlog.h>
 
+#include <mrpt/img/CImage.h>
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/serialization/CArchive.h>
+
+#include <opencv2/core.hpp>
 
 #include <zlib.h>
 
@@ -181,4 +184,36 @@ TEST(RawlogIntegrity, AppRefusesTruncatedRawlogAndWritesNothing)
 		<< out;
 	EXPECT_NE(out.find(dir + "/cut.rawlog"), std::string::npos) << out;
 	EXPECT_FALSE(fs::exists(dir + "/out.rawlog"));
+}
+
+TEST(RawlogIntegrity, ImageByteCountsAreCheckedBeforeMrptReadsThem)
+{
+	// A colour image stored JPEG-compressed (MRPT's format when
+	// DISABLE_JPEG_COMPRESSION is off): MRPT sizes a buffer with realloc()
+	// from its byte count, which no allocation bound sees.
+	const auto dir = test::tempDir("rawlog_jpeg_count");
+	cv::Mat m(24, 32, CV_8UC3);
+	cv::randu(m, 0, 255);
+	mrpt::img::CImage img(m, mrpt::img::DEEP_COPY);
+	mrpt::io::CMemoryStream mem;
+	mrpt::img::CImage::DISABLE_JPEG_COMPRESSION(false);
+	mrpt::serialization::archiveFrom(mem) << img;
+	mrpt::img::CImage::DISABLE_JPEG_COMPRESSION(true);
+	const auto* p = static_cast<const uint8_t*>(mem.getRawBufferData());
+	Bytes b(p, p + mem.getPosition());
+	writeFile(dir + "/ok.rawlog", b);
+	EXPECT_EQ(readAll(dir + "/ok.rawlog"), 1u);
+	// Header: 0x91 "mrpt::img::CImage" version external hasColor w h nBytes.
+	const size_t nBytesAt = 1 + 17 + 1 + 1 + 1 + 4 + 4;
+	b[nBytesAt + 3] = 0xF0;	 // ~4 GB announced
+	writeFile(dir + "/bad.rawlog", b);
+	try
+	{
+		readAll(dir + "/bad.rawlog");
+		ADD_FAILURE() << "4 GB image byte count accepted";
+	}
+	catch (const io::RawlogError& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("more than remain"), std::string::npos) << e.what();
+	}
 }
