@@ -14,6 +14,8 @@ packages=(
   libopencv-dev libeigen3-dev
   libgtest-dev libbenchmark-dev
   libegl-mesa0 libgl1-mesa-dri   # headless offscreen rendering (EGL/Mesa)
+  zlib1g-dev                     # checked gzip reading of rawlogs
+  clang libclang-rt-14-dev       # sanitizer build and libFuzzer targets (scripts/ci-hardening.sh)
 )
 
 missing=()

@@ -84,6 +84,8 @@ class CommandLine::Output : public TCLAP::StdOutput
 CommandLine::CommandLine(const std::string& description)
 	: m_cmd(description, ' ', version()), m_output(std::make_unique<Output>())
 {
+	// TCLAP frees its own default output only if none was set: free it here.
+	delete m_cmd.getOutput();
 	m_cmd.setOutput(m_output.get());
 }
 

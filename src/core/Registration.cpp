@@ -3,7 +3,6 @@
 #include <shadyloc/core/Registration.h>
 #include <shadyloc/filters/Filters.h>
 
-#include <mrpt/core/initializer.h>
 #include <mrpt/rtti/CObject.h>
 
 void shadyloc::registerAllClasses()
@@ -15,4 +14,8 @@ void shadyloc::registerAllClasses()
 	registerClass(CLASS_ID(shadyloc::CFilterLinearise));
 }
 
-MRPT_INITIALIZER(shadyloc_register_all_classes) { shadyloc::registerAllClasses(); }
+// At load time each class is registered by a static object in the file that
+// defines it, after its class id is initialised (the ids are initialised
+// dynamically, in an order across files the compiler chooses; clang ran an
+// initializer here first, which registered nothing). registerAllClasses() is
+// for the plugin and the programs, which call it once everything is loaded.

@@ -133,3 +133,17 @@ void CObservationFilter::deserializeCommon(mrpt::serialization::CArchive& in)
 {
 	in >> common.output_suffix >> common.sensor_labels;
 }
+
+// Registered after this file's class id is initialised (see Filters.cpp).
+namespace
+{
+/** A static object, not MRPT_INITIALIZER (a constructor function, which
+ * clang may run before this file's dynamic initialisation). */
+struct TRegister
+{
+	TRegister()
+	{
+		mrpt::rtti::registerClass(CLASS_ID(shadyloc::CObservationFilter));
+	}
+} s_register;
+}  // namespace

@@ -4,7 +4,7 @@
  * OUT_DIR/rawlog: small synthetic stereo rawlogs (bare observations and
  *   sensory frames, gzip and plain, external images, filtered);
  * OUT_DIR/image: tiny PNG/JPEG/PPM/PGM/BMP/TIFF files in the formats read;
- * OUT_DIR/settings: config/*.ini; OUT_DIR/tum: TUM trajectories. */
+ * OUT_DIR/settings: the .ini files of config/; OUT_DIR/tum: TUM trajectories. */
 #include <shadyloc/core/Registration.h>
 #include <shadyloc/datasets/Tum.h>
 #include <shadyloc/filters/FilterPipeline.h>
