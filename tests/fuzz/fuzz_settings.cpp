@@ -21,7 +21,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 {
 	if (size > 64 * 1024) return 0;
 	const std::string text(reinterpret_cast<const char*>(data), size);
-	const mrpt::config::CConfigFileMemory cfg(text);
+	mrpt::config::CConfigFileMemory cfg;
+	try
+	{
+		cfg.setContent(text);  // MRPT's own parser may refuse it (e.g. a bad $eval{})
+	}
+	catch (const std::exception&)
+	{
+		return 0;
+	}
 	auto attempt = [](auto&& f) {
 		try
 		{
