@@ -264,7 +264,7 @@ void RawlogWriter::carryExternalImage(const mrpt::img::CImage& img, const std::s
 		throw RawlogError("'" + m_path + "': two images would be written as '" + name + "'");
 	}
 	if (!fs::is_regular_file(src, ec))
-		throw RawlogError("'" + m_path + "': external image '" + src.string() + "' of the input is missing");
+		throw RawlogError("external image '" + src.string() + "' is missing");
 	if (dst.has_parent_path()) fs::create_directories(dst.parent_path(), ec);
 	// A hard link costs nothing; across file systems, a copy.
 	fs::create_hard_link(src, dst, ec);
