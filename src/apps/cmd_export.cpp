@@ -1,9 +1,9 @@
 /* shadyloc export kitti: stereo rawlog -> KITTI odometry layout. */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/datasets/Kitti.h>
 
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 
 #include <cstring>
 #include <iostream>
@@ -14,22 +14,22 @@ using namespace shadyloc::datasets;
 
 int runKitti(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Writes the stereo observations of one sensor as a KITTI odometry sequence: "
 		"ROOT/sequences/NN/{image_2,image_3,calib.txt,times.txt}, and ROOT/poses/NN.txt from a "
-		"TUM ground truth when given.",
-		' ', "0.1");
+		"TUM ground truth when given.");
+	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> in("i", "input", "input rawlog", true, "", "in.rawlog", cmd);
 	TCLAP::ValueArg<std::string> out("o", "output", "KITTI root directory", true, "", "ROOT", cmd);
 	TCLAP::ValueArg<std::string> seq("s", "sequence", "sequence number", false, "00", "NN", cmd);
 	TCLAP::ValueArg<std::string> label(
 		"", "sensor-label", "stereo observations to export", false, "CAMERA", "label", cmd);
 	TCLAP::ValueArg<std::string> gt("", "gt", "TUM ground truth -> poses/NN.txt", false, "", "gt.tum", cmd);
-	TCLAP::ValueArg<double> tol(
-		"", "gt-tolerance", "max time difference frame / ground-truth pose [s]", false, 1e-3, "s", cmd);
+	shadyloc::apps::NumberArg<double> tol(
+		cli, "", "gt-tolerance", "max time difference frame / ground-truth pose [s] (>= 0)", 1e-3, "s", 0.0);
 	TCLAP::SwitchArg abs("", "absolute-times", "times.txt in absolute seconds (default: since frame 0)", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no progress output", cmd);
-	cmd.parse(argc, argv);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
 
 	KittiExporter exp;
 	exp.options.sequence = seq.getValue();
@@ -47,6 +47,11 @@ int runKitti(int argc, char** argv)
 
 int run(int argc, char** argv)
 {
+	if (argc >= 2 && !std::strcmp(argv[1], "--version"))
+	{
+		std::cout << argv[0] << " " << shadyloc::apps::version() << "\n";
+		return 0;
+	}
 	if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h"))
 	{
 		(argc < 2 ? std::cerr : std::cout)

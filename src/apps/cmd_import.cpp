@@ -1,11 +1,11 @@
 /* shadyloc import <kitti|middlebury|folder>: datasets -> stereo rawlog. */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/datasets/Folder.h>
 #include <shadyloc/datasets/Kitti.h>
 #include <shadyloc/datasets/Middlebury.h>
 
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 
 #include <cstring>
 #include <iostream>
@@ -18,21 +18,21 @@ using namespace shadyloc::datasets;
 /** The options every importer takes. */
 struct CommonArgs
 {
+	explicit CommonArgs(shadyloc::apps::CommandLine& cli)
+		: maxFrames(cli, "", "max-frames", "import at most N frames (0: all)", 0, "N"),
+		  every(cli, "", "progress-every", "report progress every N frames (0: never)", 100, "N")
+	{
+		for (TCLAP::Arg* a : std::initializer_list<TCLAP::Arg*>{&out, &label, &ext, &quiet}) cli.cmd().add(a);
+	}
 	TCLAP::ValueArg<std::string> out{"o", "output", "output rawlog", true, "", "out.rawlog"};
 	TCLAP::ValueArg<std::string> label{
 		"", "sensor-label", "sensor label of the stereo observations", false, "CAMERA", "label"};
 	TCLAP::SwitchArg ext{
 		"", "external-images", "store images as PNG files in <out>_Images/ (not inside the rawlog)"};
-	TCLAP::ValueArg<size_t> maxFrames{"", "max-frames", "import at most N frames (0: all)", false, 0, "N"};
-	TCLAP::ValueArg<size_t> every{
-		"", "progress-every", "report progress every N frames", false, 100, "N"};
+	shadyloc::apps::NumberArg<size_t> maxFrames;
+	shadyloc::apps::NumberArg<size_t> every;
 	TCLAP::SwitchArg quiet{"q", "quiet", "no progress output"};
 
-	void addTo(TCLAP::CmdLine& cmd)
-	{
-		for (TCLAP::Arg* a : std::initializer_list<TCLAP::Arg*>{&out, &label, &ext, &maxFrames, &every, &quiet})
-			cmd.add(a);
-	}
 	TImportOptions options()
 	{
 		TImportOptions o;
@@ -62,16 +62,15 @@ void report(const TImportResult& r)
 
 int runKitti(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Imports a KITTI odometry sequence (colour cameras image_2 / image_3, calib.txt P2/P3, "
 		"times.txt, poses/NN.txt if present -> <out>_gt.tum) into a rawlog of "
-		"CObservationStereoImages.",
-		' ', "0.1");
+		"CObservationStereoImages.");
+	auto& cmd = cli.cmd();
 	TCLAP::UnlabeledValueArg<std::string> root("root", "KITTI root (holds sequences/ and poses/)", true, "", "ROOT", cmd);
 	TCLAP::ValueArg<std::string> seq("s", "sequence", "sequence number, e.g. 00", false, "00", "NN", cmd);
-	CommonArgs common;
-	common.addTo(cmd);
-	cmd.parse(argc, argv);
+	CommonArgs common(cli);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
 	KittiImporter imp;
 	imp.options = common.options();
 	common.setup(imp);
@@ -81,18 +80,17 @@ int runKitti(int argc, char** argv)
 
 int runMiddlebury(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Imports a Middlebury 2014 stereo scene (im0.png, im1.png, calib.txt) as a rawlog with "
-		"one stereo frame; both principal points and the baseline kept exactly.",
-		' ', "0.1");
+		"one stereo frame; both principal points and the baseline kept exactly.");
+	auto& cmd = cli.cmd();
 	TCLAP::UnlabeledValueArg<std::string> scene("scene", "scene directory", true, "", "SCENE_DIR", cmd);
 	TCLAP::ValueArg<std::string> left("", "left-image", "left image file in the scene", false, "im0.png", "name", cmd);
 	TCLAP::ValueArg<std::string> right(
 		"", "right-image", "right image file (im1E.png, im1L.png: lighting variants)", false, "im1.png", "name", cmd);
-	TCLAP::ValueArg<double> stamp("", "timestamp", "frame timestamp [s since Unix epoch]", false, 0.0, "s", cmd);
-	CommonArgs common;
-	common.addTo(cmd);
-	cmd.parse(argc, argv);
+	shadyloc::apps::NumberArg<double> stamp(cli, "", "timestamp", "frame timestamp [s since Unix epoch] (>= 0)", 0.0, "s", 0.0);
+	CommonArgs common(cli);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
 	MiddleburyImporter imp;
 	imp.options = common.options();
 	imp.leftImage = left.getValue();
@@ -105,21 +103,20 @@ int runMiddlebury(int argc, char** argv)
 
 int runFolder(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Imports a folder of left images and a folder of right images (paired by sorted file "
-		"name) with a calibration .ini (see config/folder_calib_example.ini).",
-		' ', "0.1");
+		"name) with a calibration .ini (see config/folder_calib_example.ini).");
+	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> left("", "left", "left image directory", true, "", "DIR", cmd);
 	TCLAP::ValueArg<std::string> right("", "right", "right image directory", true, "", "DIR", cmd);
 	TCLAP::ValueArg<std::string> calib("", "calib", "calibration .ini", true, "", "calib.ini", cmd);
-	TCLAP::ValueArg<double> rate("", "rate", "frame rate [Hz] (timestamps start + i/rate)", false, 0, "HZ", cmd);
+	shadyloc::apps::NumberArg<double> rate(cli, "", "rate", "frame rate [Hz] (> 0; timestamps start + i/rate)", 0, "HZ", 1e-9);
 	TCLAP::ValueArg<std::string> times("", "times", "timestamps file, one [s] per pair", false, "", "times.txt", cmd);
-	TCLAP::ValueArg<double> start("", "start-time", "timestamp of frame 0 with --rate [s]", false, 0, "s", cmd);
-	CommonArgs common;
-	common.addTo(cmd);
-	cmd.parse(argc, argv);
-	if (rate.isSet() == times.isSet())
-		throw std::invalid_argument("import folder: give exactly one of --rate HZ or --times FILE");
+	shadyloc::apps::NumberArg<double> start(cli, "", "start-time", "timestamp of frame 0 with --rate [s] (>= 0)", 0, "s", 0.0);
+	CommonArgs common(cli);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
+	if (rate.isSet() == times.isSet()) return cli.usageError("give exactly one of --rate HZ or --times FILE");
+	if (start.isSet() && !rate.isSet()) return cli.usageError("--start-time goes with --rate (--times gives every timestamp)");
 	FolderImporter imp;
 	imp.options = common.options();
 	imp.rateHz = rate.getValue();
@@ -140,6 +137,11 @@ int run(int argc, char** argv)
 			 "  middlebury SCENE_DIR -o out.rawlog          Middlebury 2014 scene\n"
 			 "  folder --left DIR --right DIR --calib calib.ini -o out.rawlog (--rate HZ | --times FILE)\n";
 	};
+	if (argc >= 2 && !std::strcmp(argv[1], "--version"))
+	{
+		std::cout << argv[0] << " " << shadyloc::apps::version() << "\n";
+		return 0;
+	}
 	if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h"))
 	{
 		usage(argc < 2 ? std::cerr : std::cout);

@@ -1,12 +1,13 @@
 /* shadyloc sim: render stereo traversals of the simulated route as rawlogs
  * with ground truth, and optional contact sheets to look at them. */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/image/ColourTransforms.h>
-#include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/io/ImageFile.h>
+#include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/sim/CStereoSimulator.h>
 
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/system/string_utils.h>
 
 #include <opencv2/imgcodecs.hpp>
@@ -50,7 +51,8 @@ class ContactSheet
 				   label(half(grey3), "mono #" + std::to_string(f.index)),
 				   label(half(inv3), "invariant #" + std::to_string(f.index))};
 	}
-	void write(const std::string& path, const std::string& title) const
+	/** Writes the sheet to `tmp` (the transaction's temporary for `path`). */
+	void write(const std::string& tmp, const std::string& path, const std::string& title) const
 	{
 		std::vector<cv::Mat> all = m_tiles;
 		all.insert(all.end(), m_extra.begin(), m_extra.end());
@@ -61,10 +63,8 @@ class ContactSheet
 		cv::putText(sheet, title, {6, 16}, cv::FONT_HERSHEY_SIMPLEX, 0.42, {255, 255, 255}, 1, cv::LINE_AA);
 		for (size_t i = 0; i < all.size(); i++)
 			all[i].copyTo(sheet(cv::Rect(static_cast<int>(i % cols) * w, 22 + static_cast<int>(i / cols) * h, w, h)));
-		shadyloc::io::writeAtomically(path, [&](const std::string& tmp) {
-			if (!cv::imwrite(tmp, sheet, {cv::IMWRITE_PNG_COMPRESSION, 9}))
-				throw std::runtime_error("'" + path + "': cannot write contact sheet");
-		});
+		if (!cv::imwrite(tmp, sheet, {cv::IMWRITE_PNG_COMPRESSION, 9}))
+			throw std::runtime_error("'" + path + "': cannot write contact sheet");
 		std::cout << "contact sheet: " << path << "\n";
 	}
 
@@ -90,27 +90,29 @@ class ContactSheet
 
 int run(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Renders colour stereo traversals of one simulated outdoor route under different lighting "
 		"(spectral sun + sky model, ray-cast shadows, dappled canopy light) as rawlogs: "
 		"OUTDIR/<traversal>.rawlog (CObservationStereoImages 'CAMERA', linear BGR) and "
-		"OUTDIR/<traversal>.tum (ground truth: left camera in the world).",
-		' ', "0.1");
+		"OUTDIR/<traversal>.tum (ground truth: left camera in the world).");
+	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> cfg("c", "config", "simulator .ini (see config/sim.ini)", true, "", "sim.ini", cmd);
 	TCLAP::ValueArg<std::string> out("o", "output", "output directory (created if missing)", true, "", "dir", cmd);
-	TCLAP::ValueArg<int> frames("", "frames", "frames per traversal (default: the .ini's)", false, -1, "N", cmd);
+	shadyloc::apps::NumberArg<int> frames(
+		cli, "", "frames", "frames per traversal, >= 1 (default: the .ini's)", -1, "N", 1, 10000000);
 	TCLAP::ValueArg<std::string> which(
 		"", "traversals", "comma-separated traversal names (default: all in [sim] traversals)", false, "", "a,b", cmd);
 	TCLAP::ValueArg<std::string> sheet(
 		"", "contact-sheet", "also write <PREFIX><traversal>.png: a few left frames, right/mono/invariant of one",
 		false, "", "PREFIX", cmd);
-	TCLAP::ValueArg<int> tiles("", "sheet-frames", "left frames per contact sheet", false, 6, "N", cmd);
-	TCLAP::ValueArg<double> sheetScale("", "sheet-scale", "contact sheet tile size / image size", false, 0.375, "f", cmd);
-	TCLAP::ValueArg<double> startS(
-		"", "start-s", "route position of the first frame, m (default: each traversal's start_s_m)", false, 0, "m", cmd);
+	shadyloc::apps::NumberArg<int> tiles(cli, "", "sheet-frames", "left frames per contact sheet, 1..30", 6, "N", 1, 30);
+	shadyloc::apps::NumberArg<double> sheetScale(
+		cli, "", "sheet-scale", "contact sheet tile size / image size, in [0.05, 1]", 0.375, "f", 0.05, 1.0);
+	shadyloc::apps::NumberArg<double> startS(
+		cli, "", "start-s", "route position of the first frame, m (default: each traversal's start_s_m)", 0, "m");
 	TCLAP::SwitchArg dump("", "dump-options", "print the effective options and exit", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no progress output", cmd);
-	cmd.parse(argc, argv);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
 
 	const auto opts = shadyloc::sim::TSimOptions::FromFile(cfg.getValue());
 	if (dump.getValue())
@@ -135,17 +137,36 @@ int run(int argc, char** argv)
 	}
 	else
 		todo = opts.traversals;
-	if (frames.isSet() && frames.getValue() < 1) throw std::invalid_argument("--frames must be >= 1");
-	if (tiles.getValue() < 1 || tiles.getValue() > 30) throw std::invalid_argument("--sheet-frames must be in [1, 30]");
-	if (!(sheetScale.getValue() > 0.05 && sheetScale.getValue() <= 1))
-		throw std::invalid_argument("--sheet-scale must be in (0.05, 1]");
 	if (startS.isSet())
 		for (auto& t : todo) t.start_s_m = startS.getValue();
 
 	const fs::path dir(out.getValue());
 	std::error_code ec;
+	// Every rawlog, ground truth and contact sheet is put in place together
+	// at the end, or none is; a folder made here goes again on failure.
+	const bool made = !fs::exists(dir, ec);
 	fs::create_directories(dir, ec);
 	if (!fs::is_directory(dir)) throw std::runtime_error("'" + dir.string() + "': cannot create output directory");
+	struct RemoveIfMade
+	{
+		fs::path dir;
+		bool armed;
+		~RemoveIfMade()
+		{
+			std::error_code e;
+			if (armed) fs::remove(dir, e);	// only if left empty
+		}
+	} removeIfMade{dir, made};
+	shadyloc::io::OutputTransaction outputs;
+	outputs.addInput(cfg.getValue(), "simulator config");
+	std::vector<std::string> sheetTmps;
+	if (sheet.isSet())
+		for (const auto& t : todo)
+		{
+			const std::string path = sheet.getValue() + t.name + ".png";
+			sheetTmps.push_back(outputs.addFile(path, "contact sheet"));
+			shadyloc::io::checkImageWritable(path);
+		}
 
 	shadyloc::sim::CStereoSimulator sim(opts);
 	sim.setMinLoggingLevel(quiet.getValue() ? mrpt::system::LVL_WARN : mrpt::system::LVL_INFO);
@@ -159,7 +180,8 @@ int run(int argc, char** argv)
 		sim.generate((dir / (t.name + ".rawlog")).string(), (dir / (t.name + ".tum")).string(), n,
 			[&](const shadyloc::sim::TSimFrame& f) {
 				if (sheet.isSet()) cs.add(f);
-			});
+			},
+			&outputs);
 		total += n;
 		if (sheet.isSet())
 		{
@@ -171,9 +193,11 @@ int run(int argc, char** argv)
 				std::snprintf(title, sizeof(title), "%s: sun az %.0f el %.0f, %.0f K, sky %.0f K, sigma %.0f nm",
 					t.name.c_str(), t.sun_azimuth_deg, t.sun_elevation_deg, t.sun_temperature_K,
 					t.sky_temperature_K, opts.camera.spectral.sigma_nm);
-			cs.write(sheet.getValue() + t.name + ".png", title);
+			cs.write(sheetTmps[static_cast<size_t>(&t - todo.data())], sheet.getValue() + t.name + ".png", title);
 		}
 	}
+	outputs.commit();
+	removeIfMade.armed = false;
 	const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 	if (!quiet.getValue())
 		std::cout << "sim: " << todo.size() << " traversal(s), " << total << " stereo frames in " << el << " s ("

@@ -1,10 +1,10 @@
 /* shadyloc traj-error: ATE, RPE and KITTI-style drift of a trajectory. */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/io/Tum.h>
 
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 
 #include <iostream>
 
@@ -12,17 +12,17 @@ namespace
 {
 int run(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Trajectory error of an estimate against ground truth (both TUM): poses associated by "
 		"timestamp, SE(3) alignment without scale (Horn/Umeyama), ATE RMSE, per-step RPE, and "
 		"KITTI-style translational [%] / rotational [deg/m] error over sub-sequences of 100..800 m "
-		"(scaled down for runs shorter than 1 km; the lengths used are printed).",
-		' ', "0.1");
+		"(scaled down for runs shorter than 1 km; the lengths used are printed).");
+	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> gt("", "gt", "ground truth (TUM)", true, "", "gt.tum", cmd);
 	TCLAP::ValueArg<std::string> est("", "est", "estimate (TUM)", true, "", "traj.tum", cmd);
-	TCLAP::ValueArg<double> maxDt(
-		"", "max-dt", "largest timestamp difference of an associated pair [s]", false, 0.02, "s", cmd);
-	cmd.parse(argc, argv);
+	shadyloc::apps::NumberArg<double> maxDt(
+		cli, "", "max-dt", "largest timestamp difference of an associated pair [s] (>= 0)", 0.02, "s", 0.0);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
 	auto g = shadyloc::io::readTum(gt.getValue());
 	auto e = shadyloc::io::readTum(est.getValue());
 	shadyloc::io::sortByTime(g);

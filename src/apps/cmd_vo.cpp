@@ -1,15 +1,16 @@
 /* shadyloc vo: stereo visual odometry over a rawlog, on one image channel. */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/filters/Channel.h>
 #include <shadyloc/io/Csv.h>
 #include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/vo/ChannelOptions.h>
+#include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/vo/StereoVO.h>
 #include <shadyloc/vo/VOConfig.h>
 
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
 
@@ -23,12 +24,12 @@ using namespace shadyloc;
 
 int run(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Keyframe-based stereo visual odometry on one image channel. Reads a rawlog of "
 		"CObservationStereoImages (rectified); uses the <label>_mono / <label>_inv observations "
 		"of a filtered rawlog when present, otherwise converts the colour images on the fly. "
-		"Writes the left camera's poses in the first frame (TUM).",
-		' ', "0.1");
+		"Writes the left camera's poses in the first frame (TUM).");
+	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> in("i", "input", "input rawlog", true, "", "run.rawlog", cmd);
 	TCLAP::ValueArg<std::string> out("o", "output", "trajectory (TUM)", true, "", "traj.tum", cmd);
 	TCLAP::ValueArg<std::string> channel(
@@ -45,7 +46,18 @@ int run(int argc, char** argv)
 		"", "label", "sensor label of the stereo camera (default: the first one found)", false, "",
 		"label", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no option dump or progress", cmd);
-	cmd.parse(argc, argv);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
+
+	// Outputs first: refused before any work if one of them is an input or
+	// cannot be written; committed together at the end.
+	io::OutputTransaction outputs;
+	outputs.addInput(in.getValue(), "input rawlog");
+	if (std::filesystem::is_directory(io::imagesDirFor(in.getValue())))
+		outputs.addInput(io::imagesDirFor(in.getValue()), "images folder of the input");
+	if (cfgArg.isSet()) outputs.addInput(cfgArg.getValue(), "config");
+	const std::string trajTmp = outputs.addFile(out.getValue(), "trajectory (-o)");
+	const std::string statsTmp = stats.isSet() ? outputs.addFile(stats.getValue(), "--stats") : "";
+	const std::string kfTmp = kfOut.isSet() ? outputs.addFile(kfOut.getValue(), "--keyframes") : "";
 
 	std::unique_ptr<mrpt::config::CConfigFileBase> cfg;
 	if (cfgArg.isSet())
@@ -109,7 +121,7 @@ int run(int argc, char** argv)
 	if (stats.isSet())
 	{
 		csv = std::make_unique<io::CsvWriter>(
-			stats.getValue(),
+			statsTmp,
 			"frame,timestamp,features,stereo_matches,tracked,inliers,keyframe,status,rms_px,"
 			"ms_detect,ms_stereo,ms_describe,ms_match,ms_ransac,ms_solve,ms_total");
 		csv->out() << std::fixed;
@@ -140,12 +152,12 @@ int run(int argc, char** argv)
 					  << "%)\n";
 	}
 	if (traj.empty()) throw std::runtime_error(source.noFramesMessage());
-	io::writeTum(out.getValue(), traj);
+	io::writeTum(trajTmp, traj);
 	if (csv) csv->commit();
 	if (kfOut.isSet())
 	{
 		io::CsvWriter f(
-			kfOut.getValue(),
+			kfTmp,
 			"id,frame,timestamp,tx,ty,tz,qx,qy,qz,qw,chain_break,landmarks,"
 			"var_x,var_y,var_z,var_rx,var_ry,var_rz");
 		f.out() << std::setprecision(9);
@@ -161,6 +173,7 @@ int run(int argc, char** argv)
 		}
 		f.commit();
 	}
+	outputs.commit();
 	std::cout << std::setprecision(2) << std::fixed << "frames: " << traj.size() << ", tracked: " << nTracked
 			  << ", keyframes: " << vo.keyframes().size() << ", mean " << msSum / traj.size()
 			  << " ms/frame; trajectory -> " << out.getValue() << "\n";

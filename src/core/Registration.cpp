@@ -4,7 +4,6 @@
 #include <shadyloc/filters/Filters.h>
 #include <shadyloc/map/CKeyframeMap.h>
 
-#include <mrpt/core/initializer.h>
 #include <mrpt/rtti/CObject.h>
 
 void shadyloc::registerAllClasses()
@@ -17,4 +16,8 @@ void shadyloc::registerAllClasses()
 	registerClass(CLASS_ID(shadyloc::CKeyframeMap));
 }
 
-MRPT_INITIALIZER(shadyloc_register_all_classes) { shadyloc::registerAllClasses(); }
+// At load time each class is registered by a static object in the file that
+// defines it, after its class id is initialised (the ids are initialised
+// dynamically, in an order across files the compiler chooses; clang ran an
+// initializer here first, which registered nothing). registerAllClasses() is
+// for the plugin and the programs, which call it once everything is loaded.

@@ -3,6 +3,7 @@
 
 #include <shadyloc/core/Settings.h>
 #include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/io/ImageFile.h>
 
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/obs/CObservationStereoImages.h>
@@ -60,15 +61,13 @@ cv::Mat readImage(const std::string& path, const std::string& what)
 	cv::Mat m;
 	try
 	{
-		if (fs::is_regular_file(path)) m = cv::imread(path, cv::IMREAD_UNCHANGED);
+		// Checked: a truncated file is an error, not rows filled grey.
+		m = io::readImageFile(path, cv::IMREAD_UNCHANGED);
 	}
-	catch (const cv::Exception& e)
+	catch (const io::ImageFileError& e)
 	{
-		throw DatasetError(what + ": cannot read image '" + path + "': " + e.what());
+		throw DatasetError(what + ": cannot read image " + e.what());
 	}
-	if (m.empty())
-		throw DatasetError(
-			what + ": cannot read image '" + path + "' (missing, unreadable or not an image)");
 	if (m.depth() != CV_8U)
 		throw DatasetError(
 			what + ": image '" + path + "' is not 8-bit per channel (only 8-bit images are imported)");
@@ -99,8 +98,8 @@ double parseDouble(const std::string& token, const std::string& where)
 	char* end = nullptr;
 	errno = 0;
 	const double v = std::strtod(s, &end);
-	if (end == s || *end != '\0' || errno == ERANGE)
-		throw DatasetError(where + ": '" + token + "' is not a number");
+	if (end == s || *end != '\0' || errno == ERANGE || !std::isfinite(v))
+		throw DatasetError(where + ": '" + token + "' is not a (finite) number");
 	return v;
 }
 
@@ -122,9 +121,21 @@ std::vector<double> readTimes(const std::string& path)
 
 StereoSink::StereoSink(
 	const std::string& outRawlog, const TImportOptions& opts, mrpt::system::COutputLogger& log)
-	: m_opts(opts), m_log(log), m_writer(outRawlog, opts.externalImages)
+	: m_opts(opts), m_log(log), m_writer(outRawlog, opts.externalImages, &m_outputs)
 {
 	m_result.rawlogPath = outRawlog;
+}
+
+void StereoSink::addInput(const std::string& path, const std::string& what)
+{
+	try
+	{
+		m_outputs.addInput(path, what);
+	}
+	catch (const std::invalid_argument& e)
+	{
+		throw DatasetError(e.what());
+	}
 }
 
 void StereoSink::setCalibration(
@@ -183,18 +194,20 @@ TImportResult StereoSink::commit()
 	std::error_code ec;
 	if (!groundTruth.empty())
 	{
-		io::writeTum(gtPath, groundTruth, "ground truth of '" + fs::path(m_result.rawlogPath).filename().string() + "'");
+		std::string tmp;
+		try
+		{
+			tmp = m_outputs.addFile(gtPath, "ground truth");
+		}
+		catch (const std::invalid_argument& e)
+		{
+			throw DatasetError(e.what());
+		}
+		io::writeTum(tmp, groundTruth, "ground truth of '" + fs::path(m_result.rawlogPath).filename().string() + "'");
 		m_result.groundTruthPath = gtPath;
 	}
-	try
-	{
-		m_writer.commit();
-	}
-	catch (...)
-	{
-		if (!groundTruth.empty()) fs::remove(gtPath, ec);
-		throw;
-	}
+	m_writer.commit();
+	m_outputs.commit();	 // rawlog, images and ground truth together
 	if (groundTruth.empty() && fs::exists(gtPath, ec))
 	{
 		// A ground truth left by an earlier import to the same path would now

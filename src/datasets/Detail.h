@@ -2,6 +2,7 @@
 #pragma once
 
 #include <shadyloc/datasets/Common.h>
+#include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/io/Tum.h>
 
@@ -46,6 +47,9 @@ class StereoSink
 	/** Checks sizes (error names `frameName`), builds and writes one frame. */
 	void add(const cv::Mat& left, const cv::Mat& right, double t, const std::string& frameName);
 
+	/** Declares an input of the import (file or folder): no output may replace it. */
+	void addInput(const std::string& path, const std::string& what);
+
 	/** Ground truth to write on commit() (empty: none). */
 	io::Trajectory groundTruth;
 
@@ -57,6 +61,7 @@ class StereoSink
    private:
 	TImportOptions m_opts;
 	mrpt::system::COutputLogger& m_log;
+	io::OutputTransaction m_outputs;  //!< rawlog, images folder, ground truth: together
 	io::RawlogWriter m_writer;
 	TImportResult m_result;
 	size_t m_frames = 0;

@@ -131,6 +131,13 @@ TImportResult FolderImporter::run(
 			throw DatasetError(
 				"'" + timesFile + "' has " + std::to_string(times.size()) + " timestamps for " +
 				std::to_string(filesL.size()) + " image pairs");
+		// Frames are paired by sorted file name: their times must increase too.
+		for (size_t i = 1; i < times.size(); i++)
+			if (!(times[i] > times[i - 1]))
+				throw DatasetError(
+					"'" + timesFile + "': timestamp #" + std::to_string(i) + " (" + std::to_string(times[i]) +
+					" s) is not after #" + std::to_string(i - 1) + " (" + std::to_string(times[i - 1]) +
+					" s): timestamps must increase with the (sorted) image names");
 	}
 	else
 	{
@@ -154,6 +161,10 @@ TImportResult FolderImporter::run(
 		return c;
 	};
 	detail::StereoSink sink(outRawlog, options, *this);
+	sink.addInput(leftDir, "left image folder");
+	sink.addInput(rightDir, "right image folder");
+	sink.addInput(calibIni, "calibration");
+	if (!timesFile.empty()) sink.addInput(timesFile, "timestamps file");
 	sink.setCalibration(
 		camera(calib.fx_l, calib.fy_l, calib.cx_l, calib.cy_l),
 		camera(calib.fx_r, calib.fy_r, calib.cx_r, calib.cy_r), calib.baseline_m);

@@ -3,6 +3,7 @@
 #include <shadyloc/datasets/Kitti.h>
 #include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/io/StereoFrameSource.h>
+#include <shadyloc/io/OutputTransaction.h>
 
 #include "Detail.h"
 
@@ -261,6 +262,8 @@ TImportResult KittiImporter::run(
 
 	const cv::Mat first = detail::readImage(filesL[0], "frame 0 (left)");
 	detail::StereoSink sink(outRawlog, options, *this);
+	sink.addInput(seqDir, "KITTI sequence folder");
+	if (fs::exists(posesPath)) sink.addInput(posesPath, "KITTI poses");
 	sink.setCalibration(
 		cameraFromProjection(P2, first.cols, first.rows), cameraFromProjection(P3, first.cols, first.rows),
 		baseline);
@@ -319,18 +322,16 @@ KittiExporter::KittiExporter() : mrpt::system::COutputLogger("shadyloc.export.ki
 
 namespace
 {
-/** Removes the staging directory (and directories we created, if left empty)
- * unless dismissed. */
+/** Removes the directories we created (if left empty) unless dismissed; the
+ * output transaction removes the staged sequence. */
 struct StagingGuard
 {
-	std::string staging;
 	std::vector<fs::path> created;	//!< innermost last
 	bool dismissed = false;
 	~StagingGuard()
 	{
 		if (dismissed) return;
 		std::error_code ec;
-		fs::remove_all(staging, ec);
 		for (auto it = created.rbegin(); it != created.rend(); ++it) fs::remove(*it, ec);  // only if empty
 	}
 };
@@ -363,15 +364,36 @@ KittiExporter::TResult KittiExporter::run(const std::string& inRawlog, const std
 		io::sortByTime(gt);
 	}
 
+	if (outRoot.empty()) throw DatasetError("the KITTI output root is empty (give a directory)");
+	if (options.sequence.empty() || options.sequence.find('/') != std::string::npos || options.sequence == "." ||
+		options.sequence == "..")
+		throw DatasetError("sequence '" + options.sequence + "': not a sequence name (e.g. 00)");
 	io::TStereoFrameSourceOptions sourceOpts;
 	sourceOpts.sensorLabel = options.sensorLabel;
 	io::StereoFrameSource source(inRawlog, sourceOpts);  // throws naming the file if missing
 	const fs::path seqDir = fs::path(outRoot) / "sequences" / options.sequence;
+	const fs::path posesPath = fs::path(outRoot) / "poses" / (options.sequence + ".txt");
+	// The sequence folder and its poses file are put in place together, or
+	// neither; folders made here go again if the export fails.
 	StagingGuard guard;
 	createDirs(seqDir.parent_path(), guard.created);
-	const fs::path staging = seqDir.parent_path() / ("." + options.sequence + ".tmp");
-	guard.staging = staging.string();
-	fs::remove_all(staging);
+	if (!gt.empty()) createDirs(posesPath.parent_path(), guard.created);
+	io::OutputTransaction outputs;
+	outputs.addInput(inRawlog, "input rawlog");
+	if (fs::is_directory(io::imagesDirFor(inRawlog)))
+		outputs.addInput(io::imagesDirFor(inRawlog), "images folder of the input");
+	if (!gt.empty()) outputs.addInput(options.groundTruthTum, "ground truth");
+	fs::path staging;
+	std::string posesTmp;
+	try
+	{
+		staging = outputs.addDirectory(seqDir.string(), "sequence folder");
+		if (!gt.empty()) posesTmp = outputs.addFile(posesPath.string(), "poses file");
+	}
+	catch (const std::invalid_argument& e)
+	{
+		throw DatasetError(e.what());
+	}
 	fs::create_directories(staging / "image_2");
 	fs::create_directories(staging / "image_3");
 
@@ -464,24 +486,19 @@ KittiExporter::TResult KittiExporter::run(const std::string& inRawlog, const std
 		if (!f) throw DatasetError("'" + (staging / "times.txt").string() + "': write failed");
 	}
 
-	// Commit: replace any old sequence, then its poses.
-	std::error_code ec;
-	fs::remove_all(seqDir, ec);
-	fs::rename(staging, seqDir);
-	guard.dismissed = true;
-	const fs::path posesPath = fs::path(outRoot) / "poses" / (options.sequence + ".txt");
 	if (!gt.empty())
 	{
-		fs::create_directories(posesPath.parent_path());
-		io::writeAtomically(posesPath.string(), [&](const std::string& tmp) {
-			std::ofstream f(tmp);
-			f << poses;
-			f.close();
-			if (!f) throw DatasetError("'" + posesPath.string() + "': write failed");
-		});
+		std::ofstream f(posesTmp);
+		f << poses;
+		f.close();
+		if (!f) throw DatasetError("'" + posesPath.string() + "': write failed");
 		res.poses = true;
 	}
-	else if (fs::exists(posesPath, ec))
+	// Commit: the sequence (replacing an old one) and its poses together.
+	outputs.commit();
+	guard.dismissed = true;
+	std::error_code ec;
+	if (gt.empty() && fs::exists(posesPath, ec))
 	{
 		fs::remove(posesPath, ec);	// stale: belonged to the sequence just replaced
 		MRPT_LOG_WARN_STREAM("removed stale poses '" << posesPath.string() << "'");

@@ -121,6 +121,8 @@ TImportResult MiddleburyImporter::run(const std::string& sceneDir, const std::st
 		"Middlebury scene '%s': %ux%u, f = %g px, baseline %g mm, doffs %g px", sceneDir.c_str(),
 		calib.width, calib.height, calib.cam0(0, 0), calib.baseline_mm, calib.doffs);
 	detail::StereoSink sink(outRawlog, options, *this);
+	sink.addInput(sceneDir, "scene folder");
+	sink.addInput(calibPath, "calibration");
 	sink.setCalibration(camera(calib.cam0), camera(calib.cam1), calib.baseline_mm / 1000.0);
 	sink.add(L, R, timestamp, "frame 0 ('" + pathL + "')");
 	return sink.commit();

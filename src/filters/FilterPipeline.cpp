@@ -2,6 +2,7 @@
 #include <shadyloc/core/Settings.h>
 #include <shadyloc/filters/FilterPipeline.h>
 #include <shadyloc/filters/Filters.h>
+#include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Rawlog.h>
 
 #include <mrpt/config/CConfigFile.h>
@@ -15,6 +16,8 @@
 #include <mrpt/system/string_utils.h>
 
 #include <filesystem>
+#include <map>
+#include <set>
 #include <sstream>
 
 using namespace shadyloc;
@@ -81,6 +84,32 @@ FilterPipeline FilterPipeline::FromSections(
 			p.filters.push_back(f);
 			p.labels.push_back(sect);
 		}
+		// One derived channel, one filter: two filters with the same suffix for
+		// the same sensor would write two streams under one label.
+		auto labelsOf = [](const CObservationFilter& f) {
+			std::vector<std::string> v;
+			mrpt::system::tokenize(f.common.sensor_labels, ", \t", v);
+			return std::set<std::string>(v.begin(), v.end());
+		};
+		for (size_t i = 0; i < p.filters.size(); i++)
+			for (size_t j = i + 1; j < p.filters.size(); j++)
+			{
+				const auto& a = *p.filters[i];
+				const auto& b = *p.filters[j];
+				if (a.common.output_suffix != b.common.output_suffix) continue;
+				const auto la = labelsOf(a), lb = labelsOf(b);
+				std::string shared;
+				if (la.empty() || lb.empty())
+					shared = "every camera";
+				else
+					for (const auto& l : la)
+						if (lb.count(l)) shared += (shared.empty() ? "" : ", ") + l;
+				if (shared.empty()) continue;
+				throw std::invalid_argument(
+					"[" + p.labels[i] + "] and [" + p.labels[j] + "] both write the channel '<sensor>" +
+					a.common.output_suffix + "' (output_suffix = " + a.common.output_suffix + ", sensors: " + shared +
+					"): give one of them another output_suffix");
+			}
 		return p;
 	}
 	catch (const std::exception& e)
@@ -112,14 +141,54 @@ FilterRunStats RawlogFilterProcessor::run(
 	const std::string& inPath, const std::string& outPath, const FilterPipeline& pipeline)
 {
 	using namespace mrpt::obs;
-	if (std::filesystem::exists(inPath) && std::filesystem::exists(outPath) &&
-		std::filesystem::equivalent(inPath, outPath))
-		throw std::invalid_argument("input and output are the same file: '" + inPath + "'");
-
 	FilterRunStats st;
 	mrpt::system::CTicTac timer, progressTimer;
 	io::RawlogReader reader(inPath);
-	io::RawlogWriter writer(outPath, externalImages);
+	// The output (rawlog and images folder) may replace none of the inputs.
+	io::OutputTransaction outputs;
+	outputs.addInput(inPath, "input rawlog");
+	const std::string inImages = io::imagesDirFor(inPath);
+	if (std::filesystem::is_directory(inImages)) outputs.addInput(inImages, "images folder of the input");
+	for (const auto& f : otherInputs) outputs.addInput(f, "input '" + f + "'");
+	io::RawlogWriter writer(outPath, externalImages, &outputs);
+
+	// Labels seen in the input and labels derived: a derived channel may not
+	// duplicate a stream the input holds (a filtered rawlog filtered again).
+	std::set<std::string> inputLabels, derivedLabels;
+	std::vector<size_t> accepted(pipeline.filters.size(), 0);
+	auto sectionOf = [&](size_t i) {
+		return i < pipeline.labels.size() ? "[" + pipeline.labels[i] + "]" : "filter #" + std::to_string(i);
+	};
+	auto clash = [&](const std::string& label) {
+		return io::RawlogError(reader.where(
+			"the input already holds observations labelled '" + label +
+			"', the channel this pipeline derives (is it filtered already? filter the original, or change "
+			"output_suffix)"));
+	};
+	// Input observations are written unchanged: their external images must
+	// exist beside the output too.
+	auto carry = [&](const CObservation& o) {
+		if (!inputLabels.count(o.sensorLabel))
+		{
+			if (derivedLabels.count(o.sensorLabel)) throw clash(o.sensorLabel);
+			inputLabels.insert(o.sensorLabel);
+		}
+		try
+		{
+			if (auto* s = dynamic_cast<const CObservationStereoImages*>(&o))
+			{
+				writer.carryExternalImage(s->imageLeft, inImages);
+				if (s->hasImageRight) writer.carryExternalImage(s->imageRight, inImages);
+				if (s->hasImageDisparity) writer.carryExternalImage(s->imageDisparity, inImages);
+			}
+			else if (auto* im = dynamic_cast<const CObservationImage*>(&o))
+				writer.carryExternalImage(im->image, inImages);
+		}
+		catch (const io::RawlogError& e)
+		{
+			throw io::RawlogError(reader.where(e.what()));
+		}
+	};
 
 	// The record takes the first observation's timestamp, so that it does not
 	// stretch the rawlog's time span in tools that report one.
@@ -133,9 +202,11 @@ FilterRunStats RawlogFilterProcessor::run(
 	auto derive = [&](const CObservation::Ptr& obs) {
 		std::vector<CObservation::Ptr> out;
 		bool any = false;
-		for (const auto& f : pipeline.filters)
+		for (size_t fi = 0; fi < pipeline.filters.size(); fi++)
 		{
+			const auto& f = pipeline.filters[fi];
 			if (!f->accepts(*obs)) continue;
+			accepted[fi]++;
 			CObservation::Ptr d;
 			try
 			{
@@ -145,8 +216,10 @@ FilterRunStats RawlogFilterProcessor::run(
 			}
 			catch (const std::exception& e)
 			{
-				throw io::RawlogError(reader.where(e.what()));
+				throw io::RawlogError(reader.where(e.what() + io::externalImagesOf(*obs)));
 			}
+			if (inputLabels.count(d->sensorLabel)) throw clash(d->sensorLabel);
+			derivedLabels.insert(d->sensorLabel);
 			if (writer.externalImages())
 			{
 				const std::string stem = d->sensorLabel + "_" + std::to_string(imageCounter);
@@ -182,6 +255,7 @@ FilterRunStats RawlogFilterProcessor::run(
 			}
 			for (const auto& o : *sf)
 			{
+				carry(*o);
 				outSf->insert(o);
 				for (const auto& d : derive(o)) outSf->insert(d);
 			}
@@ -195,6 +269,7 @@ FilterRunStats RawlogFilterProcessor::run(
 				writer.write(*record);
 				recordWritten = true;
 			}
+			carry(*obs);
 			writer.write(*obs);
 			for (const auto& d : derive(obs)) writer.write(*d);
 		}
@@ -212,8 +287,21 @@ FilterRunStats RawlogFilterProcessor::run(
 	}
 	if (st.objectsIn == 0)
 		throw io::RawlogError("'" + inPath + "': the rawlog holds no objects");
+	// A filter restricted to sensors the rawlog does not have did nothing:
+	// most likely a misspelt label.
+	for (size_t fi = 0; fi < pipeline.filters.size(); fi++)
+		if (accepted[fi] == 0 && !pipeline.filters[fi]->common.sensor_labels.empty())
+		{
+			std::string labels;
+			for (const auto& l : inputLabels) labels += (labels.empty() ? "'" : ", '") + l + "'";
+			throw std::invalid_argument(
+				sectionOf(fi) + " sensor_labels = " + pipeline.filters[fi]->common.sensor_labels +
+				": matches no camera observation in '" + inPath + "' (its labels: " +
+				(labels.empty() ? std::string("none") : labels) + ")");
+		}
 	st.objectsOut = writer.written();
 	writer.commit();
+	outputs.commit();
 	st.seconds = timer.Tac();
 	MRPT_LOG_INFO_FMT(
 		"Done: %zu objects in, %zu out, %zu camera observations filtered, %zu channels "

@@ -1,5 +1,10 @@
 /* ShadyLoc — streaming rawlog reading and atomic rawlog writing. */
 #include <shadyloc/io/Rawlog.h>
+#include <shadyloc/io/AllocationBound.h>
+#include <shadyloc/io/ImageFile.h>
+#include <shadyloc/io/OutputTransaction.h>
+
+#include "CheckedInputStream.h"
 
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CObservationImage.h>
@@ -23,15 +28,13 @@ std::string imagesDirFor(const std::string& rawlogPath)
 
 RawlogReader::RawlogReader(const std::string& path) : m_path(path)
 {
-	std::error_code ec;
-	if (!fs::is_regular_file(path, ec))
-		throw RawlogError("'" + path + "': no such rawlog file");
-	m_totalBytes = fs::file_size(path, ec);
-	std::string err;
-	if (!m_in.open(path, err)) throw RawlogError("'" + path + "': cannot open: " + err);
+	m_in = std::make_unique<detail::CheckedInputStream>(path);
 	// Not CImage::setImagesPathBase(): that is one folder for the whole process.
+	std::error_code ec;
 	m_imagesDir = fs::absolute(imagesDirFor(path), ec).lexically_normal().string();
 }
+
+RawlogReader::~RawlogReader() = default;
 
 std::string RawlogReader::where(const std::string& what) const
 {
@@ -40,39 +43,70 @@ std::string RawlogReader::where(const std::string& what) const
 
 double RawlogReader::progress() const
 {
-	if (m_totalBytes == 0) return 1.0;
-	return std::min(1.0, double(m_in.getPosition()) / double(m_totalBytes));
+	const uint64_t total = m_in->getTotalBytesCount();
+	if (total == 0) return 1.0;
+	return std::min(1.0, double(m_in->filePosition()) / double(total));
 }
+
+namespace
+{
+/** The allocation bound while an object is deserialised: no single
+ * allocation larger than the bytes left in the stream (plus a little for
+ * containers whose elements are larger in memory than on disk). */
+[[maybe_unused]] bool withinStream(size_t bytes, void* stream)
+{
+	constexpr size_t kSlack = 64 * 1024;
+	auto* in = static_cast<detail::CheckedInputStream*>(stream);
+	return bytes <= kSlack || in->hasAtLeast(bytes - kSlack);
+}
+}  // namespace
 
 mrpt::serialization::CSerializable::Ptr RawlogReader::next()
 {
 	m_count++;	// index() now names the object being read
 	try
 	{
-		auto arch = mrpt::serialization::archiveFrom(m_in);
+		// A clean end lies exactly between two objects, with the trailer of a
+		// gzip stream read and checked; anything else throws below.
+		if (m_in->atCleanEnd())
+		{
+			m_count--;
+			return nullptr;
+		}
+	}
+	catch (const RawlogError& e)
+	{
+		m_count--;
+		throw RawlogError(
+			std::string(e.what()) +
+			(m_count == 0 ? std::string(" (before the first object)")
+						  : " (after object #" + std::to_string(m_count - 1) + ")"));
+	}
+	m_in->clearFailure();
+	try
+	{
+#ifndef SHADYLOC_NO_LENGTH_BOUND
+		AllocationBound bound(&withinStream, m_in.get());
+#endif
+		auto arch = mrpt::serialization::archiveFrom(*m_in);
 		auto obj = arch.ReadObject();
 		if (!obj) throw RawlogError(where("null object stored"));
 		for (const auto& o : observationsIn(obj)) resolveExternalImages(*o, m_imagesDir);
 		return obj;
 	}
-	catch (const mrpt::serialization::CExceptionEOF&)
+	catch (const RawlogError& e)
 	{
-		// A clean end of file lands exactly on an object boundary. A gzip
-		// stream cut short also reports EOF there: tell them apart by whether
-		// the whole compressed file was consumed.
-		m_count--;
-		if (m_totalBytes > 0 && m_in.getPosition() + 8 < m_totalBytes)
-			throw RawlogError(
-				"'" + m_path + "': object #" + std::to_string(m_count) +
-				": unexpected end of data before the end of the file (corrupt?)");
-		return nullptr;
-	}
-	catch (const RawlogError&)
-	{
+		if (!m_in->failure().empty()) throw RawlogError(where(m_in->failure()));
 		throw;
 	}
 	catch (const std::exception& e)
 	{
+		// The stream's own diagnosis first: MRPT wraps what it throws.
+		if (!m_in->failure().empty()) throw RawlogError(where(m_in->failure()));
+		if (const size_t refused = AllocationBound::lastRefused())
+			throw RawlogError(where(
+				"corrupt data: a length field asks for " + std::to_string(refused) +
+				" bytes, more than remain in the file"));
 		std::string msg = e.what();
 		// MRPT exceptions nest messages with call traces; the innermost
 		// "Message:" line says what went wrong.
@@ -83,8 +117,6 @@ mrpt::serialization::CSerializable::Ptr RawlogReader::next()
 		}
 		if (msg.find("Stored object has class") != std::string::npos)
 			msg += " (unknown class: load the plugin that defines it, or the file is corrupt)";
-		else if (m_in.checkEOF())
-			msg = "truncated object (file ends in the middle of it)";
 		else
 			msg = "corrupt data: " + msg;
 		throw RawlogError(where(msg));
@@ -129,17 +161,25 @@ void loadExternalImages(mrpt::obs::CObservation& obs)
 	using namespace mrpt::obs;
 	auto load = [&](const mrpt::img::CImage& img, const char* which) {
 		if (!img.isExternallyStored()) return;
+		const std::string file = img.getExternalStorageFileAbsolutePath();
+		const std::string what = std::string("external ") + which + (*which ? " " : "") + "image of sensor '" +
+			obs.sensorLabel + "'";
 		try
 		{
+			// The file's structure first: OpenCV decodes a truncated JPEG
+			// without complaint, filling the missing rows grey.
+			checkImageFile(file);
 			img.forceLoad();
+		}
+		catch (const ImageFileError& e)
+		{
+			throw RawlogError(what + ": " + e.what());
 		}
 		catch (const std::exception&)
 		{
-			throw RawlogError(
-				std::string("missing or unreadable external ") + which + " image '" +
-				img.getExternalStorageFileAbsolutePath() + "' of sensor '" + obs.sensorLabel +
-				"'");
+			throw RawlogError(what + ": '" + file + "': missing or unreadable");
 		}
+		if (img.asCvMatRef().empty()) throw RawlogError(what + ": '" + file + "': cannot decode");
 	};
 	if (auto* st = dynamic_cast<CObservationStereoImages*>(&obs))
 	{
@@ -151,33 +191,65 @@ void loadExternalImages(mrpt::obs::CObservation& obs)
 		load(im->image, "");
 }
 
-RawlogWriter::RawlogWriter(const std::string& path, bool externalImages)
+std::string externalImagesOf(const mrpt::obs::CObservation& obs)
+{
+	using namespace mrpt::obs;
+	std::string s;
+	auto add = [&](const mrpt::img::CImage& img, const char* which) {
+		if (!img.isExternallyStored()) return;
+		s += std::string(s.empty() ? " (" : ", ") + which + "image '" + img.getExternalStorageFileAbsolutePath() + "'";
+	};
+	if (auto* st = dynamic_cast<const CObservationStereoImages*>(&obs))
+	{
+		add(st->imageLeft, "left ");
+		if (st->hasImageRight) add(st->imageRight, "right ");
+	}
+	else if (auto* im = dynamic_cast<const CObservationImage*>(&obs))
+		add(im->image, "");
+	return s.empty() ? s : s + ")";
+}
+
+RawlogWriter::RawlogWriter(const std::string& path, bool externalImages, OutputTransaction* tx)
 	: m_path(path), m_externalImages(externalImages)
 {
-	const fs::path p(path);
-	if (!p.parent_path().empty() && !fs::is_directory(p.parent_path()))
-		throw RawlogError("'" + path + "': output directory does not exist");
-	m_tmpPath = (p.parent_path() / ("." + p.filename().string() + ".tmp")).string();
+	if (!tx)
+	{
+		m_ownTx = std::make_unique<OutputTransaction>();
+		tx = m_ownTx.get();
+	}
+	m_tx = tx;
 	m_imagesDir = imagesDirFor(path);
-	m_tmpImagesDir = m_imagesDir + ".tmp";
+	try
+	{
+		m_tmpPath = m_tx->addFile(path, "output rawlog");
+		if (m_externalImages) stagedImagesDir();
+	}
+	catch (const std::invalid_argument& e)
+	{
+		throw RawlogError(e.what());
+	}
 	m_out = std::make_unique<mrpt::io::CFileGZOutputStream>();
 	if (!m_out->open(m_tmpPath, 1 /* fast compression */))
 		throw RawlogError("'" + path + "': cannot create output file '" + m_tmpPath + "'");
-	if (m_externalImages)
-	{
-		std::error_code ec;
-		fs::remove_all(m_tmpImagesDir, ec);
-		fs::create_directories(m_tmpImagesDir);
-	}
 }
 
-RawlogWriter::~RawlogWriter()
+RawlogWriter::~RawlogWriter() = default;  // the transaction removes what was not committed
+
+const std::string& RawlogWriter::stagedImagesDir()
 {
-	if (m_committed) return;
-	m_out.reset();
-	std::error_code ec;
-	fs::remove(m_tmpPath, ec);
-	if (m_externalImages) fs::remove_all(m_tmpImagesDir, ec);
+	if (m_tmpImagesDir.empty())
+	{
+		try
+		{
+			m_tmpImagesDir = m_tx->addDirectory(m_imagesDir, "'" + m_path + "': its images folder");
+		}
+		catch (const std::invalid_argument& e)
+		{
+			// Images folders are named after the rawlog's stem.
+			throw RawlogError(std::string(e.what()) + " (give the output a name whose stem differs from the input's)");
+		}
+	}
+	return m_tmpImagesDir;
 }
 
 void RawlogWriter::write(const mrpt::serialization::CSerializable& obj)
@@ -190,23 +262,51 @@ void RawlogWriter::write(const mrpt::serialization::CSerializable& obj)
 void RawlogWriter::externalise(mrpt::img::CImage& img, const std::string& name)
 {
 	if (!m_externalImages) return;
-	const std::string file = (fs::path(m_tmpImagesDir) / name).string();
-	if (!img.saveToFile(file))
-		throw RawlogError("'" + m_path + "': cannot write external image '" + file + "'");
+	const fs::path file = fs::path(stagedImagesDir()) / name;
+	std::error_code ec;
+	if (fs::exists(file, ec))
+		throw RawlogError("'" + m_path + "': two images would be written as '" + name + "'");
+	if (file.has_parent_path()) fs::create_directories(file.parent_path(), ec);
+	if (!img.saveToFile(file.string()))
+		throw RawlogError("'" + m_path + "': cannot write external image '" + file.string() + "'");
 	img.setExternalStorage(name);
+}
+
+void RawlogWriter::carryExternalImage(const mrpt::img::CImage& img, const std::string& sourceImagesDir)
+{
+	if (!img.isExternallyStored()) return;
+	const std::string name = img.getExternalStorageFile();
+	if (name.empty() || fs::path(name).is_absolute()) return;
+	const fs::path src = fs::path(sourceImagesDir) / name;
+	const fs::path dst = fs::path(stagedImagesDir()) / name;
+	std::error_code ec;
+	if (fs::exists(dst, ec))
+	{
+		if (fs::equivalent(src, dst, ec)) return;  // carried already (one image in several observations)
+		throw RawlogError("'" + m_path + "': two images would be written as '" + name + "'");
+	}
+	if (!fs::is_regular_file(src, ec))
+		throw RawlogError("external image '" + src.string() + "' is missing");
+	if (dst.has_parent_path()) fs::create_directories(dst.parent_path(), ec);
+	// A hard link costs nothing; across file systems, a copy.
+	fs::create_hard_link(src, dst, ec);
+	if (ec)
+	{
+		ec.clear();
+		fs::copy_file(src, dst, ec);
+		if (ec)
+			throw RawlogError(
+				"'" + m_path + "': cannot copy external image '" + src.string() + "' to '" + dst.string() +
+				"': " + ec.message());
+	}
 }
 
 void RawlogWriter::commit()
 {
+	if (m_committed) return;
 	m_out->close();
 	m_out.reset();
-	if (m_externalImages)
-	{
-		std::error_code ec;
-		fs::remove_all(m_imagesDir, ec);
-		fs::rename(m_tmpImagesDir, m_imagesDir);
-	}
-	fs::rename(m_tmpPath, m_path);
+	if (m_ownTx) m_ownTx->commit();
 	m_committed = true;
 }
 

@@ -8,6 +8,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -16,6 +17,11 @@ namespace shadyloc::io
 {
 Trajectory readTum(const std::string& path)
 {
+	std::error_code ec;
+	if (std::filesystem::is_directory(path, ec))
+		throw std::runtime_error("'" + path + "': is a directory, not a TUM trajectory file");
+	if (!std::filesystem::is_regular_file(path, ec))
+		throw std::runtime_error("'" + path + "': no such TUM trajectory file");
 	std::ifstream f(path);
 	if (!f) throw std::runtime_error("'" + path + "': cannot open TUM trajectory file");
 	Trajectory out;
@@ -41,12 +47,19 @@ Trajectory readTum(const std::string& path)
 			throw std::runtime_error(
 				"'" + path + "':" + std::to_string(n) + ": quaternion norm " + std::to_string(norm) +
 				" is not 1 (is the order qx qy qz qw?)");
+		for (int i = 0; i < 4; i++)
+			if (!std::isfinite(v[i]))
+				throw std::runtime_error(
+					"'" + path + "':" + std::to_string(n) + ": timestamp and position must be finite numbers: '" +
+					line + "'");
 		// Through MRPT's quaternion-to-matrix, as the library always read TUM
 		// files: the same rotation bits as before the trajectory types merged.
 		const mrpt::math::CQuaternionDouble q(v[7] / norm, v[4] / norm, v[5] / norm, v[6] / norm);
 		const mrpt::poses::CPose3D pose(q, v[1], v[2], v[3]);
 		out.push_back({v[0], toIsometry(pose)});
 	}
+	if (f.bad()) throw std::runtime_error("'" + path + "': read error");
+	if (out.empty()) throw std::runtime_error("'" + path + "': holds no poses (empty TUM trajectory file)");
 	return out;
 }
 

@@ -1,5 +1,6 @@
 /* ShadyLoc simulator — rendering, exposure, noise, rawlog output. */
 #include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/sim/CStereoSimulator.h>
@@ -345,11 +346,23 @@ mrpt::obs::CObservationStereoImages::Ptr CStereoSimulator::makeObservation(const
 }
 
 void CStereoSimulator::generate(const std::string& rawlogPath, const std::string& tumPath, int frames,
-	const std::function<void(const TSimFrame&)>& onFrame)
+	const std::function<void(const TSimFrame&)>& onFrame, io::OutputTransaction* outputs)
 {
 	const int n = frames > 0 ? frames : m_trav.frames;
 	m_prevGain = 0;
-	io::RawlogWriter writer(rawlogPath);
+	// Rawlog and ground truth: one transaction, ours or the caller's.
+	std::unique_ptr<io::OutputTransaction> own;
+	if (!outputs) outputs = (own = std::make_unique<io::OutputTransaction>()).get();
+	io::RawlogWriter writer(rawlogPath, false, outputs);
+	std::string tumTmp;
+	try
+	{
+		tumTmp = outputs->addFile(tumPath, "ground truth");
+	}
+	catch (const std::invalid_argument& e)
+	{
+		throw std::runtime_error(e.what());
+	}
 	io::Trajectory groundTruth;
 	const auto t0 = std::chrono::steady_clock::now();
 	// Compressing and writing frame i (~20 ms, one thread) overlaps with
@@ -371,19 +384,12 @@ void CStereoSimulator::generate(const std::string& rawlogPath, const std::string
 	}
 	if (pending.valid()) pending.get();
 	io::writeTum(
-		tumPath, groundTruth,
+		tumTmp, groundTruth,
 		"ground truth of " + std::filesystem::path(rawlogPath).filename().string() + " (traversal " + m_trav.name +
 			"): T_world_left, pose of the LEFT camera (z forward, x right, y down) in the world (x east, y north, "
 			"z up)");
-	try
-	{
-		writer.commit();
-	}
-	catch (...)
-	{
-		std::remove(tumPath.c_str());  // no ground truth without its rawlog
-		throw;
-	}
+	writer.commit();
+	if (own) own->commit();
 	const double el = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 	MRPT_LOG_INFO_STREAM(
 		m_trav.name << ": " << n << " frames in " << std::setprecision(3) << el << " s (" << n / el

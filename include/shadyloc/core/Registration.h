@@ -3,7 +3,8 @@
 
 namespace shadyloc
 {
-/** Registers every RTTI/serialisable class of ShadyLoc (idempotent). Runs by
- * itself when libshadyloc loads; the plugin and apps call it explicitly too. */
+/** Registers every RTTI/serialisable class of ShadyLoc (idempotent). The
+ * classes also register themselves when libshadyloc loads (each in the file
+ * that defines it); the plugin and apps call this explicitly too. */
 void registerAllClasses();
 }  // namespace shadyloc

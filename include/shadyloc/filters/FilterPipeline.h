@@ -36,7 +36,10 @@ class FilterPipeline
 	/** The default: monochrome and invariant (paper's alpha, beta), labelled
 	 * "mono" and "invariant" as in config/filters.ini. */
 	static FilterPipeline Default();
-	/** Builds from an .ini file; throws naming the file, section and key. */
+	/** Builds from an .ini file; throws naming the file, section and key.
+	 * Two filters that would write the same derived channel (same
+	 * output_suffix for an overlapping set of sensors) are an error naming
+	 * both sections. */
 	static FilterPipeline FromConfigFile(const std::string& iniPath);
 	static FilterPipeline FromConfig(const mrpt::config::CConfigFileBase& cfg, const std::string& what);
 	/** Builds the filters of the given sections, each by its `class` key. */
@@ -64,13 +67,20 @@ struct FilterRunStats
  * unchanged, each accepted camera observation followed by its derived
  * channels (in the same sensory frame, for rawlogs in that style). The output
  * starts with a record (kRecordLabel) of the pipeline's options. Writes
- * atomically; on any error throws naming the object and leaves no output. */
+ * atomically; on any error throws naming the object and leaves no output.
+ * Images the input stores externally are linked (or copied) into the
+ * output's images folder, so the output stands on its own; the output's
+ * images folder may not be the input's. A derived channel whose label the
+ * input already holds (a filtered rawlog filtered again), or a filter whose
+ * sensor_labels match no observation, is an error. */
 class RawlogFilterProcessor : public mrpt::system::COutputLogger
 {
    public:
 	RawlogFilterProcessor();
 	bool externalImages = false;	 //!< write derived images as PNG files
 	double progressPeriodSeconds = 2.0;	 //!< how often to log progress
+	/** Further inputs the output may not replace (e.g. the pipeline's .ini). */
+	std::vector<std::string> otherInputs;
 
 	FilterRunStats run(
 		const std::string& inPath, const std::string& outPath, const FilterPipeline& pipeline);

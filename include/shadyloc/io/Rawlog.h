@@ -2,7 +2,10 @@
  *
  * MRPT's own readers stop at the first object they cannot read and report
  * success; these never do: every failure names the file, the object index and
- * the reason. Rawlogs reach gigabytes, so both sides hold one object at a time.
+ * the reason. Reading is checked end to end: a gzip stream must end with its
+ * trailer (CRC-32 and length match), the last object must be whole, and no
+ * length field may make the reader allocate more than remains in the stream.
+ * Rawlogs reach gigabytes, so both sides hold one object at a time.
  */
 #pragma once
 
@@ -21,6 +24,12 @@
 
 namespace shadyloc::io
 {
+namespace detail
+{
+class CheckedInputStream;
+}
+class OutputTransaction;
+
 /** Error while reading or writing a rawlog; what() names file, object, reason. */
 class RawlogError : public std::runtime_error
 {
@@ -44,10 +53,15 @@ class RawlogReader
    public:
 	/** Opens the file. Throws RawlogError. */
 	explicit RawlogReader(const std::string& path);
+	~RawlogReader();
+	RawlogReader(const RawlogReader&) = delete;
+	RawlogReader& operator=(const RawlogReader&) = delete;
 
-	/** The next object, or nullptr at a clean end of file; its observations'
-	 * external image names are absolute paths in imagesDir(). Throws
-	 * RawlogError on an unregistered class, a truncated or corrupt object. */
+	/** The next object, or nullptr at a clean end of file (every byte read
+	 * and, for gzip, the trailer checked); its observations' external image
+	 * names are absolute paths in imagesDir(). Throws RawlogError on an
+	 * unregistered class, a truncated or corrupt object, a length field
+	 * larger than what remains, a gzip stream without or with a wrong trailer. */
 	mrpt::serialization::CSerializable::Ptr next();
 
 	/** Absolute imagesDirFor(path()): where relative image names resolve. */
@@ -64,9 +78,8 @@ class RawlogReader
 
    private:
 	std::string m_path, m_imagesDir;
-	mrpt::io::CFileGZInputStream m_in;
+	std::unique_ptr<detail::CheckedInputStream> m_in;
 	size_t m_count = 0;
-	uint64_t m_totalBytes = 0;
 };
 
 /** Observations carried by a top-level rawlog object: the object itself if it
@@ -80,18 +93,29 @@ std::vector<mrpt::obs::CObservation::Ptr> observationsIn(
 void resolveExternalImages(mrpt::obs::CObservation& obs, const std::string& imagesDir);
 
 /** Loads every image an observation stores externally, so a missing file
- * shows up here (with its path) rather than deep inside a filter. */
+ * shows up here (with its path) rather than deep inside a filter. Each file
+ * is checked first (io::checkImageFile): a truncated one is an error. */
 void loadExternalImages(mrpt::obs::CObservation& obs);
 
-/** Writes a rawlog to "<path>.tmp" and renames it into place on commit().
- * Without commit() (an exception, an early return) the destructor deletes the
- * temporary file and images: no half-written output is ever left behind. */
+/** " (left image 'f', right image 'g')" for the images an observation
+ * stores externally, "" if it stores none: for messages about its images. */
+std::string externalImagesOf(const mrpt::obs::CObservation& obs);
+
+/** Writes a rawlog to a temporary sibling and renames it into place on
+ * commit(). Without commit() (an exception, an early return) the temporary
+ * file and images are deleted: no half-written output is ever left behind.
+ * The rawlog and its images folder are outputs of an OutputTransaction: the
+ * writer's own, or the command's (then they are put in place together with
+ * the command's other outputs, by the transaction's commit()). */
 class RawlogWriter
 {
    public:
 	/** externalImages: write images given to externalise() as PNG files in
-	 * imagesDirFor(path) (staged as "<dir>.tmp" until commit()). */
-	explicit RawlogWriter(const std::string& path, bool externalImages = false);
+	 * imagesDirFor(path) (staged in a temporary folder until commit()).
+	 * tx: the command's transaction (which must outlive the writer), or
+	 * nullptr for one of the writer's own. Throws RawlogError if the output
+	 * cannot be reserved (missing directory, an input of tx, ...). */
+	explicit RawlogWriter(const std::string& path, bool externalImages = false, OutputTransaction* tx = nullptr);
 	~RawlogWriter();
 	RawlogWriter(const RawlogWriter&) = delete;
 	RawlogWriter& operator=(const RawlogWriter&) = delete;
@@ -104,16 +128,30 @@ class RawlogWriter
 	void externalise(mrpt::img::CImage& img, const std::string& name);
 	bool externalImages() const { return m_externalImages; }
 
-	/** Flushes, closes and renames into place (replacing an old file). */
+	/** For an image an input rawlog stores externally (relative to
+	 * sourceImagesDir) and that is written out unchanged: links (or copies)
+	 * its file into this rawlog's images folder under the same name, so that
+	 * the output does not point at files that are not beside it. Images
+	 * stored inline or with an absolute path need nothing. */
+	void carryExternalImage(const mrpt::img::CImage& img, const std::string& sourceImagesDir);
+
+	/** Flushes and closes; with the writer's own transaction, also renames
+	 * into place (replacing an old file). With the command's transaction,
+	 * its commit() does that. */
 	void commit();
 
 	const std::string& path() const { return m_path; }
 
    private:
+	/** The staged images folder, reserved in the transaction on first use. */
+	const std::string& stagedImagesDir();
+
 	std::string m_path, m_tmpPath, m_imagesDir, m_tmpImagesDir;
 	bool m_externalImages = false;
 	bool m_committed = false;
 	size_t m_written = 0;
+	std::unique_ptr<OutputTransaction> m_ownTx;
+	OutputTransaction* m_tx = nullptr;
 	std::unique_ptr<mrpt::io::CFileGZOutputStream> m_out;
 };
 

@@ -42,6 +42,11 @@
 #include <functional>
 #include <string>
 
+namespace shadyloc::io
+{
+class OutputTransaction;
+}
+
 namespace shadyloc::sim
 {
 /** Per-pixel by-products of a render, for tests and inspection. */
@@ -116,9 +121,11 @@ class CStereoSimulator : public mrpt::system::COutputLogger
 
 	/** Renders the current traversal (frames <= 0: the traversal's count) to
 	 * rawlogPath and its ground truth (TUM, T_world_left) to tumPath. Both
-	 * appear only if everything succeeded. onFrame sees each frame. */
+	 * appear only if everything succeeded. onFrame sees each frame. With
+	 * `outputs`, both are outputs of that transaction (put in place by its
+	 * commit(), with the command's other outputs); otherwise of their own. */
 	void generate(const std::string& rawlogPath, const std::string& tumPath, int frames = -1,
-		const std::function<void(const TSimFrame&)>& onFrame = {});
+		const std::function<void(const TSimFrame&)>& onFrame = {}, io::OutputTransaction* outputs = nullptr);
 
    private:
 	TSimOptions m_opts;

@@ -1,0 +1,117 @@
+/* Image files: a truncated JPEG or PNG is an error naming the file (OpenCV
+ * alone fills the missing rows grey); absurd dimensions are refused before
+ * decoding; unknown formats get a clear message. */
+#include "../support/TestSupport.h"
+
+#include <shadyloc/io/Rawlog.h>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include <fstream>
+#include <sstream>
+
+using namespace shadyloc;
+namespace fs = std::filesystem;
+
+namespace
+{
+std::string contents(const std::string& path)
+{
+	std::ifstream f(path, std::ios::binary);
+	std::ostringstream s;
+	s << f.rdbuf();
+	return s.str();
+}
+void writeBytes(const std::string& path, const std::string& b) { std::ofstream(path, std::ios::binary) << b; }
+
+/** A textured colour image (so that JPEG has real entropy-coded data). */
+cv::Mat texture(int w, int h)
+{
+	cv::Mat m(h, w, CV_8UC3);
+	cv::randu(m, 0, 255);
+	return m;
+}
+
+/** Writes `name` (format by extension) and a copy cut to `fraction` of its size. */
+std::string truncatedCopy(const std::string& dir, const std::string& name, double fraction)
+{
+	const std::string whole = dir + "/whole_" + name, cut = dir + "/cut_" + name;
+	EXPECT_TRUE(cv::imwrite(whole, texture(64, 48)));
+	const std::string b = contents(whole);
+	writeBytes(cut, b.substr(0, static_cast<size_t>(b.size() * fraction)));
+	return cut;
+}
+}  // namespace
+
+TEST(ImageFiles, TruncatedJpegAndPngAreErrorsNamingTheFile)
+{
+	const auto dir = test::tempDir("img_trunc");
+	for (const char* name : {"a.jpg", "a.png"})
+		for (double fraction : {0.5, 0.9, 0.99})
+		{
+			const std::string cut = truncatedCopy(dir, name, fraction);
+			std::string out;
+			EXPECT_NE(test::runCommand(test::appPath() + " image " + cut + " " + dir + "/out.png", &out), 0)
+				<< name << " cut to " << fraction << ": accepted\n" << out;
+			EXPECT_NE(out.find(cut), std::string::npos) << out;
+			EXPECT_FALSE(fs::exists(dir + "/out.png"));
+			fs::remove(dir + "/out.png");
+		}
+}
+
+TEST(ImageFiles, ImportRefusesTruncatedImages)
+{
+	for (const char* ext : {".png", ".jpg"})
+	{
+	const auto dir = test::tempDir("img_trunc_import");
+	fs::create_directories(dir + "/L");
+	fs::create_directories(dir + "/R");
+	for (int i = 0; i < 2; i++)
+	{
+		const std::string n = "/" + std::to_string(i) + ext;
+		ASSERT_TRUE(cv::imwrite(dir + "/L" + n, texture(64, 48)));
+		ASSERT_TRUE(cv::imwrite(dir + "/R" + n, texture(64, 48)));
+	}
+	const std::string victim = dir + "/R/1" + ext;
+	const std::string b = contents(victim);
+	writeBytes(victim, b.substr(0, b.size() * 3 / 4));
+	std::ofstream(dir + "/calib.ini") << "[left]\nfx = 50\nfy = 50\ncx = 32\ncy = 24\n"
+										 "[stereo]\nbaseline_m = 0.1\nwidth = 64\nheight = 48\n";
+	std::string out;
+	EXPECT_NE(test::runCommand(test::appPath() + " import folder -q --left " + dir + "/L --right " + dir + "/R --calib " +
+								   dir + "/calib.ini --rate 10 -o " + dir + "/out.rawlog",
+				  &out),
+		0)
+		<< out;
+	EXPECT_NE(out.find(victim), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(dir + "/out.rawlog"));
+	}
+}
+
+TEST(ImageFiles, TruncatedExternalImageInARawlogIsAnError)
+{
+	for (const std::string& ext : std::vector<std::string>{".png", ".jpg"})
+	{
+	const auto dir = test::tempDir("img_trunc_external");
+	{
+		io::RawlogWriter w(dir + "/r.rawlog", true);
+		for (int i = 0; i < 2; i++)
+		{
+			auto obs = test::syntheticStereoFrame(i, 64, 48);
+			w.externalise(obs->imageLeft, "L" + std::to_string(i) + ext);
+			w.externalise(obs->imageRight, "R" + std::to_string(i) + ext);
+			w.write(*obs);
+		}
+		w.commit();
+	}
+	const std::string victim = dir + "/r_Images/L1" + ext;
+	const std::string b = contents(victim);
+	writeBytes(victim, b.substr(0, b.size() * 2 / 3));
+	std::string out;
+	EXPECT_NE(test::runCommand(test::appPath() + " filter -q -i " + dir + "/r.rawlog -o " + dir + "/f.rawlog", &out), 0)
+		<< out;
+	EXPECT_NE(out.find("L1" + ext), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(dir + "/f.rawlog"));
+	}
+}
