@@ -1,6 +1,7 @@
 /* shadyloc calibrate-alpha: alpha (beta = 1 - alpha) and the 8-bit mapping of
  * the invariant transform from data (docs/calibration.md). */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/filters/Filters.h>
 #include <shadyloc/image/InvariantCalibration.h>
@@ -209,12 +210,12 @@ void plotCurves(
 
 int run(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Calibrates the illumination-invariant transform of a camera from data: alpha (with beta = 1 - alpha), "
 		"from shadow/no-shadow pairs, from same-view pairs under different light, or unsupervised from ordinary "
 		"images/a rawlog (entropy minimisation); then the 8-bit mapping (scale, offset). Writes OUT.ini (an "
-		"[invariant] section for config/filters.ini), OUT_curve.csv and OUT_curve.png.",
-		' ', "0.1");
+		"[invariant] section for config/filters.ini), OUT_curve.csv and OUT_curve.png.");
+	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> pairsDir(
 		"", "pairs", "directory of <name>_free.<ext> / <name>_shadow*.<ext> pairs of one view", false, "", "dir", cmd);
 	TCLAP::MultiArg<std::string> pair("", "pair", "one shadow pair FREE,SHADOW (repeatable)", false, "free,shadow", cmd);
@@ -225,8 +226,10 @@ int run(int argc, char** argv)
 	TCLAP::ValueArg<std::string> imagesDir("", "images", "a directory of ordinary images (entropy method)", false, "", "dir", cmd);
 	TCLAP::ValueArg<std::string> rawlog("", "rawlog", "a rawlog; left/colour images (entropy method)", false, "", "file", cmd);
 	TCLAP::ValueArg<std::string> sensor("", "sensor", "only this sensor label of --rawlog", false, "", "label", cmd);
-	TCLAP::ValueArg<int> maxFrames("", "max-frames", "at most this many rawlog frames (0 = all)", false, 200, "n", cmd);
-	TCLAP::ValueArg<int> every("", "every", "use every n-th rawlog frame", false, 1, "n", cmd);
+	shadyloc::apps::NumberArg<int> maxFrames(
+		cli, "", "max-frames", "at most this many rawlog frames (0 = all)", 200, "n", 0, 1000000000);
+	shadyloc::apps::NumberArg<int> every(
+		cli, "", "every", "use every n-th rawlog frame", 1, "n", 1, 1000000);
 	std::vector<std::string> methods{"auto", "pairs", "same-view", "edges", "entropy"};
 	TCLAP::ValuesConstraint<std::string> methodC(methods);
 	TCLAP::ValueArg<std::string> method(
@@ -235,22 +238,32 @@ int run(int argc, char** argv)
 	TCLAP::ValueArg<std::string> lin(
 		"", "linearise", "REQUIRED: the camera's transfer curve, none|srgb|gamma (an input, not estimated)", true, "",
 		"mode", cmd);
-	TCLAP::ValueArg<double> gamma("", "gamma", "exponent for --linearise gamma", false, 2.2, "g", cmd);
+	shadyloc::apps::NumberArg<double> gamma(
+		cli, "", "gamma", "exponent for --linearise gamma", 2.2, "g", 0.1, 10.0);
 	TCLAP::ValueArg<std::string> order("", "channel-order", "memory order of the images (files: bgr)", false, "bgr", "bgr|rgb", cmd);
-	TCLAP::ValueArg<int> minCode("", "min-code", "skip pixels with a channel below this code (dark)", false, 8, "v", cmd);
-	TCLAP::ValueArg<int> maxCode("", "max-code", "skip pixels with a channel at/above this code (saturated)", false, 250, "v", cmd);
-	TCLAP::ValueArg<double> skipTop("", "skip-top", "fraction of top rows to ignore (sky)", false, 0.0, "f", cmd);
-	TCLAP::ValueArg<int> edgeStep(
-		"", "edge-step", "edges method: pixels between the two sides of an edge (> chroma blur)", false, 4, "px", cmd);
-	TCLAP::ValueArg<int> stride("", "stride", "sample every n-th pixel in x and y", false, 2, "n", cmd);
-	TCLAP::ValueArg<double> aMin("", "alpha-min", "search range, low end", false, 0.05, "a", cmd);
-	TCLAP::ValueArg<double> aMax("", "alpha-max", "search range, high end", false, 0.95, "a", cmd);
-	TCLAP::ValueArg<double> step("", "step", "grid step of alpha", false, 0.005, "s", cmd);
-	TCLAP::ValueArg<int> boot("", "bootstrap", "bootstrap rounds over images for the interval (0 = none)", false, 200, "n", cmd);
-	TCLAP::ValueArg<double> tail("", "tail", "share of pixels clipped at each end of the 8-bit mapping", false, 0.002, "q", cmd);
+	shadyloc::apps::NumberArg<int> minCode(
+		cli, "", "min-code", "skip pixels with a channel below this code (dark)", 8, "v", 0, 255);
+	shadyloc::apps::NumberArg<int> maxCode(
+		cli, "", "max-code", "skip pixels with a channel at/above this code (saturated)", 250, "v", 1, 256);
+	shadyloc::apps::NumberArg<double> skipTop(
+		cli, "", "skip-top", "fraction of top rows to ignore (sky)", 0.0, "f", 0.0, 0.95);
+	shadyloc::apps::NumberArg<int> edgeStep(
+		cli, "", "edge-step", "edges method: pixels between the two sides of an edge (> chroma blur)", 4, "px", 1, 64);
+	shadyloc::apps::NumberArg<int> stride(
+		cli, "", "stride", "sample every n-th pixel in x and y", 2, "n", 1, 64);
+	shadyloc::apps::NumberArg<double> aMin(
+		cli, "", "alpha-min", "search range, low end", 0.05, "a", 0.0, 1.0);
+	shadyloc::apps::NumberArg<double> aMax(
+		cli, "", "alpha-max", "search range, high end", 0.95, "a", 0.0, 1.0);
+	shadyloc::apps::NumberArg<double> step(
+		cli, "", "step", "grid step of alpha", 0.005, "s", 0.0001, 0.5);
+	shadyloc::apps::NumberArg<int> boot(
+		cli, "", "bootstrap", "bootstrap rounds over images for the interval (0 = none)", 200, "n", 0, 100000);
+	shadyloc::apps::NumberArg<double> tail(
+		cli, "", "tail", "share of pixels clipped at each end of the 8-bit mapping", 0.002, "q", 0.0, 0.1);
 	TCLAP::SwitchArg noPlot("", "no-plot", "do not draw OUT_curve.png (no gnuplot needed)", cmd);
 	TCLAP::ValueArg<std::string> out("o", "output", "output prefix: OUT.ini, OUT_curve.csv, OUT_curve.png", true, "", "OUT", cmd);
-	cmd.parse(argc, argv);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
 
 	TCalibrationInput in;
 	in.linearisation = parseLinearisation(lin.getValue());

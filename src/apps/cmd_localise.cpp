@@ -1,6 +1,7 @@
 /* shadyloc localise: a live stereo run against a dual-channel keyframe map
  * with the combined system (docs/localisation.md). */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/core/Settings.h>
 #include <shadyloc/filters/Channel.h>
@@ -184,13 +185,13 @@ std::vector<std::string> splitList(const std::string& s)
 
 int run(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Localises a live stereo run against a dual-channel keyframe map (shadyloc survey) with the combined "
 		"system: live VO on the monochrome channel predicts for the localisers (mono, invariant), which run in "
 		"parallel; the monochrome fix is used when it succeeds, else the invariant one, else VO dead-reckons. "
 		"The run starts by a global search over the map (or at --start-kf). Writes OUTDIR/frames.csv, "
-		"trajectory.tum, summary.json and timing.json (docs/localisation.md).",
-		' ', "0.1");
+		"trajectory.tum, summary.json and timing.json (docs/localisation.md).");
+	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> mapArg("m", "map", "keyframe map (.kfmap)", true, "", "map.kfmap", cmd);
 	TCLAP::ValueArg<std::string> in("i", "input", "live rawlog (colour stereo)", true, "", "live.rawlog", cmd);
 	TCLAP::ValueArg<std::string> out("o", "output", "output directory (replaced as a whole)", true, "", "OUTDIR", cmd);
@@ -204,14 +205,16 @@ int run(int argc, char** argv)
 	TCLAP::ValueArg<std::string> locArg(
 		"", "localisers", "localisers in policy order (default: [localise] localisers, else mono,invariant)", false, "",
 		"mono,invariant", cmd);
-	TCLAP::ValueArg<int> threads("", "threads", "threads (default: [localise] threads, else 2)", false, 0, "N", cmd);
-	TCLAP::ValueArg<int> startKf("", "start-kf", "start at this map keyframe instead of by global search", false, -1, "id", cmd);
+	shadyloc::apps::NumberArg<int> threads(
+		cli, "", "threads", "threads (default: [localise] threads, else 2)", 0, "N", 0, 64);
+	shadyloc::apps::NumberArg<int> startKf(
+		cli, "", "start-kf", "start at this map keyframe instead of by global search", -1, "id", -1, 1000000000);
 	TCLAP::ValueArg<std::string> label("", "label", "sensor label of the live colour stereo camera", false, "", "label", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no progress output", cmd);
 	TCLAP::SwitchArg debug(
 		"", "debug",
 		"per frame and localiser on stderr: keyframe, predicted offset from it, matches, inliers, gate, status", cmd);
-	cmd.parse(argc, argv);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
 	const bool talk = !quiet.getValue();
 
 	// ---- inputs, checked before any work

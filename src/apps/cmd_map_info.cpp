@@ -1,5 +1,6 @@
 /* shadyloc map-info: the summary of a keyframe map. */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/map/CKeyframeMap.h>
@@ -15,14 +16,14 @@ using namespace shadyloc;
 
 int run(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Prints a keyframe map's summary: keyframes, path length, runs, segments, channels and their "
 		"descriptor parameters, stored bytes per channel, options; with ground truth stored beside the "
-		"keyframes, the chain's error against it (ATE after SE(3) alignment, drift).",
-		' ', "0.1");
+		"keyframes, the chain's error against it (ATE after SE(3) alignment, drift).");
+	auto& cmd = cli.cmd();
 	TCLAP::UnlabeledValueArg<std::string> in("map", "map file", true, "", "map.kfmap", cmd);
 	TCLAP::SwitchArg perKf("k", "keyframes", "one line per keyframe", cmd);
-	cmd.parse(argc, argv);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
 
 	const auto m = CKeyframeMap::LoadFromFile(in.getValue());
 	std::cout << in.getValue() << ": " << m->asString() << "\n";

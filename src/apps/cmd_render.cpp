@@ -2,8 +2,11 @@
  * rendered offscreen through MRPT's 3D scene (no display needed). The one
  * render command; `render-traj` is its old name. */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/io/ImageFile.h>
+#include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/render/TrajectorySnapshot.h>
@@ -30,31 +33,42 @@ std::pair<std::string, std::string> fileAndName(const std::string& spec)
 
 int run(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Renders trajectories (TUM) and keyframe maps (" + std::string(CKeyframeMap::kFileExtension) +
 			") top-down into a PNG, offscreen (EGL). Each -t / -m is FILE or FILE:NAME; a map is drawn "
 			"as CKeyframeMap::getVisualizationInto draws it (its path as a band, blue where measured and "
 			"orange where predicted after a VO break, chevrons at keyframes), the trajectories over it in "
-			"a fixed palette.",
-		' ', "0.1");
+			"a fixed palette.");
+	auto& cmd = cli.cmd();
 	TCLAP::MultiArg<std::string> trajs("t", "traj", "TUM trajectory (FILE or FILE:NAME)", false, "tum", cmd);
 	TCLAP::MultiArg<std::string> maps(
 		"m", "map", "keyframe map (FILE or FILE:NAME)", false, std::string("map") + CKeyframeMap::kFileExtension, cmd);
 	TCLAP::ValueArg<std::string> out("o", "output", "output PNG", true, "", "out.png", cmd);
 	TCLAP::ValueArg<std::string> title("", "title", "title text", false, "", "text", cmd);
+	std::vector<std::string> upAxisNames{"x", "y", "z", "a"};
+	TCLAP::ValuesConstraint<std::string> upAxes(upAxisNames);
 	TCLAP::ValueArg<std::string> up(
-		"", "up", "axis out of the picture: x, y (camera frames), z, or a (auto)", false, "a", "axis", cmd);
+		"", "up", "axis out of the picture: x, y (camera frames), z, or a (auto)", false, "a", &upAxes, cmd);
 	TCLAP::SwitchArg align(
 		"", "align",
 		"align every other trajectory and every map (by its keyframes' timestamps) to the first trajectory "
 		"(SE(3), no scale), e.g. a VO estimate or a map to its ground truth",
 		cmd);
 	TCLAP::SwitchArg landmarks("", "landmarks", "draw the maps' landmarks, coloured by channel", cmd);
-	TCLAP::ValueArg<unsigned> width("", "width", "image width [px]", false, 1000, "px", cmd);
-	TCLAP::ValueArg<unsigned> height("", "height", "image height [px]", false, 800, "px", cmd);
-	cmd.parse(argc, argv);
+	shadyloc::apps::NumberArg<unsigned> width(
+		cli, "", "width", "image width [px]", 1000, "px", 16u, 16384u);
+	shadyloc::apps::NumberArg<unsigned> height(
+		cli, "", "height", "image height [px]", 800, "px", 16u, 16384u);
+	cli.allowEmpty(title);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
 	if (trajs.getValue().empty() && maps.getValue().empty())
 		throw std::invalid_argument("nothing to render: give trajectories (-t FILE[:NAME]) and/or maps (-m FILE[:NAME])");
+	// The picture is the one output; no input may be overwritten by it.
+	io::OutputTransaction outputs;
+	for (const auto& spec : trajs.getValue()) outputs.addInput(fileAndName(spec).first, "trajectory");
+	for (const auto& spec : maps.getValue()) outputs.addInput(fileAndName(spec).first, "map");
+	const std::string outTmp = outputs.addFile(out.getValue(), "output image");
+	io::checkImageWritable(out.getValue());
 
 	// The first trajectory's frame is the picture's, for --align.
 	io::Trajectory reference;
@@ -143,9 +157,9 @@ int run(int argc, char** argv)
 	o.title = title.getValue();
 	o.width = width.getValue();
 	o.height = height.getValue();
-	if (up.getValue().size() != 1) throw std::invalid_argument("--up: one of x, y, z, a");
 	o.upAxis = up.getValue()[0];
-	render::renderTrajectories(layers, o, out.getValue(), objects);
+	render::renderTrajectories(layers, o, outTmp, objects);
+	outputs.commit();
 	std::cout << "wrote " << out.getValue() << "\n";
 	return 0;
 }

@@ -1,5 +1,6 @@
 /* shadyloc survey: a dual-channel keyframe map from a survey rawlog. */
 #include "Command.h"
+#include "CommandLine.h"
 
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/filters/Channel.h>
@@ -53,14 +54,14 @@ bool sameCalib(const geometry::TStereoCalib& a, const geometry::TStereoCalib& b)
 
 int run(int argc, char** argv)
 {
-	TCLAP::CmdLine cmd(
+	shadyloc::apps::CommandLine cli(
 		"Builds a dual-channel keyframe map (" + std::string(CKeyframeMap::kFileExtension) +
 			") from a survey rawlog: the first channel's VO (mono by default) chooses the keyframes, and at each "
 			"one the stereo measurements of every channel are stored. A channel is the filter that makes its "
 			"images (a section of the config, or the built-in mono / invariant); its frames are the rawlog's "
 			"<camera><suffix> observations when it holds them (the filter record says how they were made), "
-			"otherwise the colour images filtered on the fly. Map options: the config's [map] section.",
-		' ', "0.1");
+			"otherwise the colour images filtered on the fly. Map options: the config's [map] section.");
+	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> in("i", "input", "survey rawlog", true, "", "run.rawlog", cmd);
 	TCLAP::ValueArg<std::string> out(
 		"o", "output", std::string("map file (") + CKeyframeMap::kFileExtension + ")", true, "", "map.kfmap", cmd);
@@ -77,7 +78,7 @@ int run(int argc, char** argv)
 	TCLAP::ValueArg<std::string> label(
 		"", "label", "sensor label of the colour stereo camera (default: the first one found)", false, "", "label", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no option dump or progress", cmd);
-	cmd.parse(argc, argv);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
 
 	const std::string inPath = in.getValue(), outPath = out.getValue();
 	if (!endsWith(outPath, CKeyframeMap::kFileExtension))

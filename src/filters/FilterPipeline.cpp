@@ -167,7 +167,7 @@ FilterRunStats RawlogFilterProcessor::run(
 	};
 	// Input observations are written unchanged: their external images must
 	// exist beside the output too.
-	auto carry = [&](const CObservation& o) {
+	auto carry = [&](CObservation& o) {
 		if (!inputLabels.count(o.sensorLabel))
 		{
 			if (derivedLabels.count(o.sensorLabel)) throw clash(o.sensorLabel);
@@ -175,13 +175,13 @@ FilterRunStats RawlogFilterProcessor::run(
 		}
 		try
 		{
-			if (auto* s = dynamic_cast<const CObservationStereoImages*>(&o))
+			if (auto* s = dynamic_cast<CObservationStereoImages*>(&o))
 			{
 				writer.carryExternalImage(s->imageLeft, inImages);
 				if (s->hasImageRight) writer.carryExternalImage(s->imageRight, inImages);
 				if (s->hasImageDisparity) writer.carryExternalImage(s->imageDisparity, inImages);
 			}
-			else if (auto* im = dynamic_cast<const CObservationImage*>(&o))
+			else if (auto* im = dynamic_cast<CObservationImage*>(&o))
 				writer.carryExternalImage(im->image, inImages);
 		}
 		catch (const io::RawlogError& e)
@@ -255,9 +255,12 @@ FilterRunStats RawlogFilterProcessor::run(
 			}
 			for (const auto& o : *sf)
 			{
+				// Derive first: carrying may rename the input's external
+				// images to the output's folder, which the filters read from.
+				const auto derived = derive(o);
 				carry(*o);
 				outSf->insert(o);
-				for (const auto& d : derive(o)) outSf->insert(d);
+				for (const auto& d : derived) outSf->insert(d);
 			}
 			writer.write(*outSf);
 		}
@@ -269,9 +272,10 @@ FilterRunStats RawlogFilterProcessor::run(
 				writer.write(*record);
 				recordWritten = true;
 			}
+			const auto derived = derive(obs);
 			carry(*obs);
 			writer.write(*obs);
-			for (const auto& d : derive(obs)) writer.write(*d);
+			for (const auto& d : derived) writer.write(*d);
 		}
 		else
 			writer.write(*obj);	 // actions and anything else: untouched

@@ -272,11 +272,22 @@ void RawlogWriter::externalise(mrpt::img::CImage& img, const std::string& name)
 	img.setExternalStorage(name);
 }
 
-void RawlogWriter::carryExternalImage(const mrpt::img::CImage& img, const std::string& sourceImagesDir)
+void RawlogWriter::carryExternalImage(mrpt::img::CImage& img, const std::string& sourceImagesDir)
 {
 	if (!img.isExternallyStored()) return;
-	const std::string name = img.getExternalStorageFile();
-	if (name.empty() || fs::path(name).is_absolute()) return;
+	std::string name = img.getExternalStorageFile();
+	if (name.empty()) return;
+	if (fs::path(name).is_absolute())
+	{
+		// The reader resolved it against the input's images folder: carry it
+		// under its name relative to that folder; a path elsewhere stays as is.
+		std::error_code ec;
+		const fs::path base = fs::absolute(sourceImagesDir, ec).lexically_normal();
+		const fs::path rel = fs::path(name).lexically_normal().lexically_relative(base);
+		if (rel.empty() || *rel.begin() == "..") return;
+		name = rel.string();
+		img.setExternalStorage(name);
+	}
 	const fs::path src = fs::path(sourceImagesDir) / name;
 	const fs::path dst = fs::path(stagedImagesDir()) / name;
 	std::error_code ec;

@@ -428,11 +428,20 @@ filters::FilterPipeline populatedPipeline()
 std::string filterRecordText(mrpt::obs::CObservationComment::Ptr* recordOut = nullptr)
 {
 	const std::string dir = test::tempDir("formats_record");
-	test::writeSyntheticRawlog(dir + "/in.rawlog", 1, false);
+	{
+		// One synthetic frame per camera the populated filters name (a filter
+		// whose sensor_labels match no observation is an error).
+		io::RawlogWriter w(dir + "/in.rawlog");
+		for (const char* label : {"CAM_A", "STEREO", "LEFTCAM"})
+		{
+			auto obs = test::syntheticStereoFrame(0);
+			obs->sensorLabel = label;
+			w.write(*obs);
+		}
+		w.commit();
+	}
 	filters::RawlogFilterProcessor proc;
 	proc.setMinLoggingLevel(mrpt::system::LVL_ERROR);
-	// The populated filters apply to named sensors the synthetic frame is not
-	// from: the record is all this test wants.
 	proc.run(dir + "/in.rawlog", dir + "/out.rawlog", populatedPipeline());
 	io::RawlogReader r(dir + "/out.rawlog");
 	auto first = r.next();

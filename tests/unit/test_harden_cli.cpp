@@ -91,9 +91,9 @@ TEST(CommandLine, EveryCommandRefusesUnknownFlagsAndBadNumbers)
 		 {"traj-error --gt " + t + " --est " + t + " --max-dt nan", "max-dt"},
 		 {"traj-error --gt " + t + " --est " + t + " --max-dt -1", "max-dt"},
 		 {"traj-error --gt " + t + " --est " + t + " --frobnicate", "frobnicate"},
-		 {"render-traj -t " + t + " -o " + o + " --width -1", "width"},
-		 {"render-traj -t " + t + " -o " + o + " --width 4294967297", "width"},
-		 {"render-traj -t " + t + " -o " + o + " --height 12x", "height"},
+		 {"render -t " + t + " -o " + o + " --width -1", "width"},
+		 {"render -t " + t + " -o " + o + " --width 4294967297", "width"},
+		 {"render -t " + t + " -o " + o + " --height 12x", "height"},
 		 {"export kitti -i " + r + " -o " + o + " --gt-tolerance nan", "gt-tolerance"},
 		 {"export kitti -i " + r + " -o " + o + " --frobnicate", "frobnicate"},
 		 {"import folder --left " + dir + " --right " + dir + " --calib x.ini --rate 10 -o " + o + " --max-frames -1",
@@ -105,7 +105,7 @@ TEST(CommandLine, EveryCommandRefusesUnknownFlagsAndBadNumbers)
 
 TEST(CommandLine, HelpAndVersionExitZero)
 {
-	for (const char* c : {"image", "vo", "filter", "sim", "traj-error", "render-traj", "export kitti",
+	for (const char* c : {"image", "vo", "filter", "sim", "traj-error", "render", "render-traj", "survey", "map-info", "localise", "calibrate-alpha", "export kitti",
 								"import kitti", "import folder", "import middlebury"})
 	{
 		std::string out;

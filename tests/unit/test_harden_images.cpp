@@ -76,8 +76,8 @@ TEST(ImageFiles, ImportRefusesTruncatedImages)
 	const std::string victim = dir + "/R/1" + ext;
 	const std::string b = contents(victim);
 	writeBytes(victim, b.substr(0, b.size() * 3 / 4));
-	std::ofstream(dir + "/calib.ini") << "[left]\nfx = 50\nfy = 50\ncx = 32\ncy = 24\n"
-										 "[stereo]\nbaseline_m = 0.1\nwidth = 64\nheight = 48\n";
+	std::ofstream(dir + "/calib.ini") << "[left]\nfx_px = 50\nfy_px = 50\ncx_px = 32\ncy_px = 24\n"
+										 "[stereo]\nbaseline_m = 0.1\nwidth_px = 64\nheight_px = 48\n";
 	std::string out;
 	EXPECT_NE(test::runCommand(test::appPath() + " import folder -q --left " + dir + "/L --right " + dir + "/R --calib " +
 								   dir + "/calib.ini --rate 10 -o " + dir + "/out.rawlog",

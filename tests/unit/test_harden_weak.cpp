@@ -135,8 +135,8 @@ TEST(Messages, NameTheFileOrOption)
 	const std::vector<Case> cases{
 		{"traj-error --gt " + dir + "/empty.tum --est " + dir + "/t.tum", dir + "/empty.tum"},
 		{"traj-error --gt " + dir + " --est " + dir + "/t.tum", "is a directory"},
-		{"render-traj -t " + dir + "/t.tum -o " + dir + "/o.png --width 0", "--width"},
-		{"render-traj -t " + dir + "/t.tum -o " + dir + "/o.xyz", "unknown image format '.xyz'"},
+		{"render -t " + dir + "/t.tum -o " + dir + "/o.png --width 0", "--width"},
+		{"render -t " + dir + "/t.tum -o " + dir + "/o.xyz", "unknown image format '.xyz'"},
 		{"export kitti -i " + dir + "/r.rawlog -o ''", "--output: empty value"},
 		{"vo -i " + dir + "/r.rawlog -o ''", "--output: empty value"},
 		{"image " + dir + "/a.png ''", "empty value"},
@@ -168,7 +168,7 @@ TEST(Messages, ImportFolderRefusesTimesThatDoNotIncrease)
 		ASSERT_TRUE(obs->imageLeft.saveToFile(dir + "/L/" + std::to_string(i) + ".png"));
 		ASSERT_TRUE(obs->imageRight.saveToFile(dir + "/R/" + std::to_string(i) + ".png"));
 	}
-	std::ofstream(dir + "/calib.ini") << "[left]\nfx = 50\nfy = 50\ncx = 16\ncy = 12\n[stereo]\nbaseline_m = 0.1\nwidth = 32\nheight = 24\n";
+	std::ofstream(dir + "/calib.ini") << "[left]\nfx_px = 50\nfy_px = 50\ncx_px = 16\ncy_px = 12\n[stereo]\nbaseline_m = 0.1\nwidth_px = 32\nheight_px = 24\n";
 	const std::string base = test::appPath() + " import folder -q --left " + dir + "/L --right " + dir + "/R --calib " +
 		dir + "/calib.ini -o " + dir + "/out.rawlog --times ";
 	for (const char* times : {"1.0\n3.0\n2.0\n", "1.0\n1.0\n2.0\n", "1.0\nnan\n2.0\n"})

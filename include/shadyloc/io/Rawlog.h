@@ -131,9 +131,10 @@ class RawlogWriter
 	/** For an image an input rawlog stores externally (relative to
 	 * sourceImagesDir) and that is written out unchanged: links (or copies)
 	 * its file into this rawlog's images folder under the same name, so that
-	 * the output does not point at files that are not beside it. Images
-	 * stored inline or with an absolute path need nothing. */
-	void carryExternalImage(const mrpt::img::CImage& img, const std::string& sourceImagesDir);
+	 * the output does not point at files that are not beside it; a name the
+	 * reader made absolute inside sourceImagesDir becomes relative again.
+	 * Images stored inline or elsewhere need nothing. */
+	void carryExternalImage(mrpt::img::CImage& img, const std::string& sourceImagesDir);
 
 	/** Flushes and closes; with the writer's own transaction, also renames
 	 * into place (replacing an old file). With the command's transaction,
