@@ -7,7 +7,9 @@
 #  3. stereo VO on both channels of every traversal, errors against ground truth;
 #  4. the dual-channel keyframe map of one traversal (shadyloc survey), its
 #     summary and its chain's error against ground truth (shadyloc map-info);
-#  5. offscreen pictures of the trajectories and of the map (shadyloc render).
+#  5. offscreen pictures of the trajectories and of the map (shadyloc render);
+#  6. localisation of another traversal against the map (shadyloc localise),
+#     the baseline (mono) alone and the combined system, against ground truth.
 # Everything goes to build/demo/.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -51,6 +53,14 @@ echo "== 5. trajectories and the map, rendered offscreen"
 "$app" render --title "noon: keyframe map (shadyloc survey), ground truth over it" \
   -m "$out/noon.kfmap:noon" -t "$data/noon.tum:ground truth" --align --landmarks \
   --width 1000 --height 600 -o "$out/noon_map.png"
+
+echo
+echo "== 6. localisation: the 'overcast' run against the 'noon' map, baseline (mono) alone, then combined (mono + invariant)"
+loc_cfg="$here/config/localise_sim.ini"
+"$app" localise -m "$out/noon.kfmap" -i "$data/overcast.rawlog" -c "$vo_cfg" -c "$loc_cfg" \
+  --gt "$data/overcast.tum" --localisers mono -o "$out/loc_noon_overcast_baseline" | tail -n 3
+"$app" localise -m "$out/noon.kfmap" -i "$data/overcast.rawlog" -c "$vo_cfg" -c "$loc_cfg" \
+  --gt "$data/overcast.tum" -o "$out/loc_noon_overcast_combined" | tail -n 3
 
 echo
 echo "Done. Results in $out/"
