@@ -26,7 +26,7 @@ sanitize_build() {
 	CC=clang CXX=clang++ cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 		-DSHADYLOC_SANITIZE=ON -DSHADYLOC_FUZZ=ON -DSHADYLOC_BUILD_BENCHMARKS=OFF >/dev/null
 	cmake --build "$build" -j "$jobs" --target shadyloc_tests shadyloc_app shadyloc_mrpt_plugin \
-		fuzz_rawlog fuzz_image fuzz_settings fuzz_tum fuzz_rawlog_nobound make_fuzz_seeds
+		fuzz_rawlog fuzz_image fuzz_settings fuzz_tum fuzz_map fuzz_rawlog_nobound make_fuzz_seeds
 	end "sanitizer build"
 }
 
@@ -70,7 +70,7 @@ fuzz() {
 	rm -rf "$build/fuzz/seeds" && "$build/tests/fuzz/make_fuzz_seeds" "$here" "$build/fuzz/seeds" >/dev/null
 	local rc=0
 	export ASAN_OPTIONS="detect_leaks=1" LSAN_OPTIONS="suppressions=$here/tests/fuzz/lsan.supp:print_suppressions=0"
-	for t in rawlog:rawlog image:image settings:settings tum:tum; do
+	for t in rawlog:rawlog image:image settings:settings tum:tum map:map; do
 		local name="fuzz_${t%%:*}" sub="${t##*:}"
 		if run_fuzzer "$name" "$sub" 256; then status=ok; else status=FAILED; rc=1; fi
 		local log="$build/fuzz/$name.log"

@@ -1,13 +1,16 @@
 /* Fuzz target: settings (.ini) text through MRPT's CConfigFileMemory into our
- * options loaders: VO, features and channel options, the filter pipeline, the
- * simulator's options. Any outcome but a crash or a sanitizer report is fine
+ * options loaders (the strict settings reader): VO, features and channel
+ * options, the filter pipeline, the map's and the simulator's options. Any outcome but a crash or a sanitizer report is fine
  * (errors are exceptions with a message). */
 #include "FuzzSupport.h"
 
 #include <shadyloc/core/Registration.h>
 #include <shadyloc/filters/FilterPipeline.h>
 #include <shadyloc/sim/SimOptions.h>
-#include <shadyloc/vo/Channel.h>
+#include <shadyloc/filters/Channel.h>
+#include <shadyloc/map/CKeyframeMap.h>
+#include <shadyloc/vo/ChannelOptions.h>
+#include <shadyloc/vo/VOConfig.h>
 
 #include <mrpt/config/CConfigFileMemory.h>
 
@@ -39,10 +42,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 		{
 		}
 	};
+	for (const char* name : {"mono", "invariant"})
+		attempt([&] {
+			const auto ch = shadyloc::filters::channelFromConfig(cfg, name, "fuzz.ini");
+			(void)shadyloc::vo::voOptionsFor(cfg, ch.label);
+			(void)shadyloc::vo::featureOptionsFor(cfg, ch.label);
+		});
 	attempt([&] {
-		const auto conv = shadyloc::vo::ChannelConverter::FromConfig(cfg);
-		(void)shadyloc::vo::voOptionsFor(cfg, conv.channel());
-		(void)shadyloc::vo::featureOptionsFor(cfg, conv.channel());
+		shadyloc::TKeyframeMapOptions o;
+		o.loadFromConfigFile(cfg, "map");
 	});
 	attempt([&] { (void)shadyloc::filters::FilterPipeline::FromConfig(cfg, "fuzz.ini").asIni(); });
 	attempt([&] {

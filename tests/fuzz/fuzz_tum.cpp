@@ -1,8 +1,8 @@
-/* Fuzz target: the TUM trajectory reader (datasets::readTum). Every input
+/* Fuzz target: the TUM trajectory reader (io::readTum). Every input
  * must give poses or a std::runtime_error naming the file. */
 #include "FuzzSupport.h"
 
-#include <shadyloc/datasets/Tum.h>
+#include <shadyloc/io/Tum.h>
 
 #include <cmath>
 
@@ -13,8 +13,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size)
 	shadyloc::fuzz::writeScratch(path, data, size);
 	try
 	{
-		for (const auto& p : shadyloc::datasets::readTum(path))
-			if (!std::isfinite(p.t) || !std::isfinite(p.pose.x()))
+		for (const auto& p : shadyloc::io::readTum(path))
+			if (!std::isfinite(p.t) || !std::isfinite(p.T.translation().x()))
 				shadyloc::fuzz::contractViolated("readTum", "returned a non-finite pose");
 	}
 	catch (const std::runtime_error& e)

@@ -4,9 +4,11 @@
  * OUT_DIR/rawlog: small synthetic stereo rawlogs (bare observations and
  *   sensory frames, gzip and plain, external images, filtered);
  * OUT_DIR/image: tiny PNG/JPEG/PPM/PGM/BMP/TIFF files in the formats read;
- * OUT_DIR/settings: the .ini files of config/; OUT_DIR/tum: TUM trajectories. */
+ * OUT_DIR/settings: the .ini files of config/; OUT_DIR/tum: TUM trajectories;
+ * OUT_DIR/map: keyframe maps (empty, and the golden populated one). */
 #include <shadyloc/core/Registration.h>
-#include <shadyloc/datasets/Tum.h>
+#include <shadyloc/io/Tum.h>
+#include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/filters/FilterPipeline.h>
 #include <shadyloc/io/Rawlog.h>
 
@@ -56,7 +58,7 @@ int main(int argc, char** argv)
 	}
 	registerAllClasses();
 	const fs::path src(argv[1]), out(argv[2]);
-	for (const char* d : {"rawlog", "image", "settings", "tum"}) fs::create_directories(out / d);
+	for (const char* d : {"rawlog", "image", "settings", "tum", "map"}) fs::create_directories(out / d);
 
 	// Rawlogs (tiny images: the fuzzer's inputs stay small).
 	{
@@ -129,9 +131,14 @@ int main(int argc, char** argv)
 			fs::copy_file(e.path(), out / "settings" / e.path().filename(), fs::copy_options::overwrite_existing);
 
 	// TUM trajectories.
-	datasets::TTrajectory t;
-	for (int i = 0; i < 4; i++) t.push_back({1000.0 + i, mrpt::poses::CPose3D(i, 0.5 * i, 0, 0.1 * i, 0, 0)});
-	datasets::writeTum((out / "tum/a.tum").string(), t, "seed");
+	io::Trajectory t;
+	for (int i = 0; i < 4; i++)
+		t.push_back({1000.0 + i, io::toIsometry(mrpt::poses::CPose3D(i, 0.5 * i, 0, 0.1 * i, 0, 0))});
+	io::writeTum((out / "tum/a.tum").string(), t, "seed");
+	// Keyframe maps: an empty one, and the populated map of the golden files.
+	CKeyframeMap::Create()->saveToFile((out / "map/empty.kfmap").string());
+	if (fs::exists(src / "tests/golden/CKeyframeMap.bin"))
+		fs::copy_file(src / "tests/golden/CKeyframeMap.bin", out / "map/golden.kfmap", fs::copy_options::overwrite_existing);
 	std::cout << "fuzz seeds written to " << out.string() << "\n";
 	return 0;
 }
