@@ -84,16 +84,7 @@ int run(int argc, char** argv)
 	if (!endsWith(outPath, CKeyframeMap::kFileExtension))
 		throw std::runtime_error("output '" + outPath + "': map files end in " + CKeyframeMap::kFileExtension);
 	if (!std::filesystem::exists(inPath)) throw std::runtime_error("input rawlog '" + inPath + "' does not exist");
-	std::unique_ptr<mrpt::config::CConfigFileBase> cfg;
-	if (cfgArg.isSet())
-	{
-		if (!std::filesystem::exists(cfgArg.getValue()))
-			throw std::runtime_error("config file '" + cfgArg.getValue() + "' does not exist");
-		cfg = std::make_unique<mrpt::config::CConfigFile>(cfgArg.getValue());
-		vo::checkVOConfigSections(*cfg);
-	}
-	else
-		cfg = std::make_unique<mrpt::config::CConfigFileMemory>("");
+	const auto cfg = vo::loadVOConfig(cfgArg.isSet() ? cfgArg.getValue() : "");
 	const std::string cfgName = cfgArg.isSet() ? cfgArg.getValue() : std::string("(no config)");
 	std::optional<io::Trajectory> gt;
 	if (gtArg.isSet()) gt = io::readTum(gtArg.getValue());

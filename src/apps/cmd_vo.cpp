@@ -59,16 +59,7 @@ int run(int argc, char** argv)
 	const std::string statsTmp = stats.isSet() ? outputs.addFile(stats.getValue(), "--stats") : "";
 	const std::string kfTmp = kfOut.isSet() ? outputs.addFile(kfOut.getValue(), "--keyframes") : "";
 
-	std::unique_ptr<mrpt::config::CConfigFileBase> cfg;
-	if (cfgArg.isSet())
-	{
-		if (!std::filesystem::exists(cfgArg.getValue()))
-			throw std::runtime_error("config file '" + cfgArg.getValue() + "' does not exist");
-		cfg = std::make_unique<mrpt::config::CConfigFile>(cfgArg.getValue());
-		vo::checkVOConfigSections(*cfg);
-	}
-	else
-		cfg = std::make_unique<mrpt::config::CConfigFileMemory>("");
+	const auto cfg = vo::loadVOConfig(cfgArg.isSet() ? cfgArg.getValue() : "");
 	if (!std::filesystem::exists(in.getValue()))
 		throw std::runtime_error("input rawlog '" + in.getValue() + "' does not exist");
 

@@ -3,7 +3,10 @@
 #include <shadyloc/vo/StereoVO.h>
 #include <shadyloc/vo/VOConfig.h>
 
-#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/config/CConfigFile.h>
+#include <mrpt/config/CConfigFileMemory.h>
+
+#include <filesystem>
 
 #include <algorithm>
 #include <ostream>
@@ -144,6 +147,15 @@ std::vector<std::string> voConfigSectionsOf(const mrpt::config::CConfigFileBase&
 void checkVOConfigSections(const mrpt::config::CConfigFileBase& cfg)
 {
 	core::checkSections(cfg, voConfigSectionsOf(cfg), "VO config");
+}
+
+std::unique_ptr<mrpt::config::CConfigFileBase> loadVOConfig(const std::string& path)
+{
+	if (path.empty()) return std::make_unique<mrpt::config::CConfigFileMemory>("");
+	if (!std::filesystem::exists(path)) throw std::runtime_error("config file '" + path + "' does not exist");
+	auto cfg = std::make_unique<mrpt::config::CConfigFile>(path);
+	checkVOConfigSections(*cfg);
+	return cfg;
 }
 
 }  // namespace shadyloc::vo

@@ -3,6 +3,7 @@
 
 #include <mrpt/config/CConfigFileBase.h>
 
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -25,5 +26,10 @@ std::vector<std::string> voConfigSectionsOf(const mrpt::config::CConfigFileBase&
  * in voConfigSectionsOf(cfg) (a misspelt [feature] would otherwise be ignored
  * whole), or a key given twice in one section of a file. */
 void checkVOConfigSections(const mrpt::config::CConfigFileBase& cfg);
+
+/** The VO config file at `path`, its sections checked (checkVOConfigSections);
+ * an empty config (every default) when `path` is empty. Throws
+ * std::runtime_error naming a file that does not exist. */
+std::unique_ptr<mrpt::config::CConfigFileBase> loadVOConfig(const std::string& path);
 
 }  // namespace shadyloc::vo
