@@ -41,12 +41,15 @@ sanitize_tests() {
 	export LSAN_OPTIONS="suppressions=$here/tests/fuzz/lsan.supp:print_suppressions=0"
 	export SHADYLOC_TMP="$build/tests/tmp"
 	local rc=0
-	(cd "$build" && ctest -N -L fast | grep -q "Total Tests: [1-9]") && have_label=1 || have_label=0
-	if [ "$have_label" = 1 ]; then
-		(cd "$build" && ctest -L fast -E InstalledPackage --output-on-failure -j "$jobs" --timeout 900) || rc=$?
-	else
-		# No "fast" label (yet): every suite except the long VO runs.
+	if [ -n "${SANITIZE_FILTER:-}" ]; then
+		# A chosen set of suites (e.g. SANITIZE_FILTER='-VOSimulated*' for nearly all).
 		"$build/tests/shadyloc_tests" --gtest_filter="$SANITIZE_FILTER" --gtest_brief=1 || rc=$?
+	else
+		# The fast loop (label "unit": in-process, no data, seconds each). One
+		# test fails in the clang build without a sanitizer report (its RANSAC
+		# scenario, docs/hardening.md): left out here, run by the gcc stage.
+		(cd "$build" && ctest -L unit -E 'GeometryPose.PriorPrefersTheConsensusNearThePrediction' \
+			--output-on-failure -j "$jobs" --timeout 900) || rc=$?
 	fi
 	if compgen -G "$logs/*" >/dev/null; then
 		echo "sanitizer reports:"; head -n 60 "$logs"/*; rc=1
@@ -111,7 +114,6 @@ length_bound() {
 
 # Without a "fast" label: all but the long VO runs, and the MRPT tools loading
 # our plugin (an instrumented module cannot load into uninstrumented tools).
-SANITIZE_FILTER="${SANITIZE_FILTER:--VOSimulated*:VODeterminism*:VOSynthetic*:FilterStockTools.*:GeometryPose.PriorPrefersTheConsensusNearThePrediction}"
 for s in "${stages[@]}"; do
 	case "$s" in
 		sanitize-build) sanitize_build ;;
