@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <map>
+#include <sstream>
 
 namespace
 {
@@ -363,3 +364,44 @@ TEST(LocalisationEvaluation, CoverageAndBlindEpisodes)
 }
 
 }  // namespace
+
+// The localisers' options dump in a form that loads back to the same values
+// (the settings contract every options struct keeps, test_settings.cpp).
+TEST(LocalisationOptions, DumpLoadsBackIdentically)
+{
+	localisation::TLocaliserOptions l;
+	l.kf_back_m = 0.1 + 0.2;  // needs 17 digits
+	l.kf_ahead_m = 7.25;
+	l.kf_lookahead_m = 1.0 / 3.0;
+	std::ostringstream dl;
+	l.dump(dl);
+	mrpt::config::CConfigFileMemory cl("[localiser]\n" + dl.str());
+	localisation::TLocaliserOptions lb;
+	lb.load(cl, "localiser");
+	EXPECT_EQ(lb.kf_back_m, l.kf_back_m);
+	EXPECT_EQ(lb.kf_ahead_m, l.kf_ahead_m);
+	EXPECT_EQ(lb.kf_lookahead_m, l.kf_lookahead_m);
+	std::ostringstream dl2;
+	lb.dump(dl2);
+	EXPECT_EQ(dl2.str(), dl.str());
+
+	localisation::TSystemOptions s;
+	s.threads = 1;
+	s.vo_cov_scale = 2.5;
+	s.relocalise_after_frames = 17;
+	s.seed_with_unconfirmed = false;
+	s.global_sigma_m = 1.0 / 7.0;
+	std::ostringstream ds;
+	s.dump(ds);
+	mrpt::config::CConfigFileMemory cs("[localise]\n" + ds.str());
+	localisation::TSystemOptions sb;
+	sb.load(cs, "localise");
+	EXPECT_EQ(sb.threads, 1);
+	EXPECT_EQ(sb.vo_cov_scale, 2.5);
+	EXPECT_EQ(sb.relocalise_after_frames, 17);
+	EXPECT_FALSE(sb.seed_with_unconfirmed);
+	EXPECT_EQ(sb.global_sigma_m, s.global_sigma_m);
+	std::ostringstream ds2;
+	sb.dump(ds2);
+	EXPECT_EQ(ds2.str(), ds.str());
+}
