@@ -62,6 +62,24 @@ std::vector<mrpt::obs::CObservationStereoImages::Ptr> readStereoFrames(const std
 std::string appPath() { return SHADYLOC_APP; }
 std::string pluginPath() { return SHADYLOC_PLUGIN; }
 
+mrpt::obs::CObservationStereoImages stereoObservation(
+	const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& c, double timestamp,
+	const std::string& label)
+{
+	mrpt::obs::CObservationStereoImages obs;
+	obs.sensorLabel = label;
+	obs.timestamp = mrpt::Clock::fromDouble(timestamp);
+	obs.imageLeft = mrpt::img::CImage(left, mrpt::img::DEEP_COPY);
+	obs.imageRight = mrpt::img::CImage(right, mrpt::img::DEEP_COPY);
+	obs.hasImageRight = true;
+	obs.leftCamera.ncols = obs.rightCamera.ncols = left.cols;
+	obs.leftCamera.nrows = obs.rightCamera.nrows = left.rows;
+	obs.leftCamera.setIntrinsicParamsFromValues(c.fx, c.fy, c.cx, c.cy);
+	obs.rightCamera = obs.leftCamera;
+	obs.rightCameraPose = mrpt::poses::CPose3DQuat(mrpt::poses::CPose3D(c.baseline, 0, 0, 0, 0, 0));
+	return obs;
+}
+
 mrpt::obs::CObservationStereoImages::Ptr syntheticStereoFrame(int frame, int w, int h)
 {
 	std::mt19937 rng(1234);	 // same texture every frame: a static scene

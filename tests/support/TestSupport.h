@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <shadyloc/geometry/StereoCamera.h>
+
 #include <mrpt/obs/CObservationStereoImages.h>
 
 #include <opencv2/core/mat.hpp>
@@ -37,6 +39,12 @@ std::string pluginPath();  //!< the built MRPT plugin module
 /** Every stereo observation of a rawlog (both styles), external images
  * loaded, read through the project's checked reader. */
 std::vector<mrpt::obs::CObservationStereoImages::Ptr> readStereoFrames(const std::string& rawlog);
+
+/** A rectified stereo observation of a grey or colour pair with pinhole
+ * calibration c (right camera c.baseline along x), labelled `label`. */
+mrpt::obs::CObservationStereoImages stereoObservation(
+	const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& c, double timestamp,
+	const std::string& label = "CAMERA");
 
 /** A synthetic colour stereo frame: textured, coloured patches, a shadow band
  * (sky-lit: dimmer and bluer) that moves with `frame`. */

@@ -53,18 +53,7 @@ void writeCorridor(const std::string& rawlog, int n)
 	{
 		cv::Mat l, r;
 		corridor.render(sim::SyntheticCorridor::examplePose(k), l, r, k);
-		mrpt::obs::CObservationStereoImages obs;
-		obs.sensorLabel = "CAMERA";
-		obs.timestamp = mrpt::Clock::fromDouble(1000.0 + 0.1 * k);
-		obs.imageLeft = mrpt::img::CImage(l, mrpt::img::DEEP_COPY);
-		obs.imageRight = mrpt::img::CImage(r, mrpt::img::DEEP_COPY);
-		obs.hasImageRight = true;
-		obs.leftCamera.ncols = obs.rightCamera.ncols = l.cols;
-		obs.leftCamera.nrows = obs.rightCamera.nrows = l.rows;
-		obs.leftCamera.setIntrinsicParamsFromValues(c.fx, c.fy, c.cx, c.cy);
-		obs.rightCamera = obs.leftCamera;
-		obs.rightCameraPose = mrpt::poses::CPose3DQuat(mrpt::poses::CPose3D(c.baseline, 0, 0, 0, 0, 0));
-		w.write(obs);
+		w.write(test::stereoObservation(l, r, c, 1000.0 + 0.1 * k));
 	}
 	w.commit();
 }

@@ -241,19 +241,8 @@ void writeCorridorRawlog(const std::string& rawlog, const std::string& gtTum, in
 		const Eigen::Isometry3d T = sim::SyntheticCorridor::examplePose(k, 0.25);
 		cv::Mat l, r;
 		corridor.render(T, l, r, k);
-		mrpt::obs::CObservationStereoImages obs;
-		obs.sensorLabel = "CAMERA";
 		const double t = 1000.0 + 0.1 * k;
-		obs.timestamp = mrpt::Clock::fromDouble(t);
-		obs.imageLeft = mrpt::img::CImage(l, mrpt::img::DEEP_COPY);
-		obs.imageRight = mrpt::img::CImage(r, mrpt::img::DEEP_COPY);
-		obs.hasImageRight = true;
-		obs.leftCamera.ncols = obs.rightCamera.ncols = l.cols;
-		obs.leftCamera.nrows = obs.rightCamera.nrows = l.rows;
-		obs.leftCamera.setIntrinsicParamsFromValues(c.fx, c.fy, c.cx, c.cy);
-		obs.rightCamera = obs.leftCamera;
-		obs.rightCameraPose = mrpt::poses::CPose3DQuat(mrpt::poses::CPose3D(c.baseline, 0, 0, 0, 0, 0));
-		w.write(obs);
+		w.write(test::stereoObservation(l, r, c, t));
 		gt.push_back({t, T});
 	}
 	w.commit();
