@@ -273,9 +273,17 @@ TImageFileInfo checkImageBytes(const uint8_t* data, size_t size, const std::stri
 	const Bytes b{data, size, name};
 	static const uint8_t png[8] = {0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A};
 	if (size == 0) b.fail("empty file, not an image");
+	// cv::imdecode picks its decoder by signature, not by our reading of the
+	// bytes: a DICOM marker at offset 128 sends the data to GDCM (which asserts
+	// on corrupt input), so such data is refused before any structure check.
+	if (size >= 132 && std::equal(data + 128, data + 132, "DICM"))
+		b.fail("carries a DICOM signature; DICOM images are not read");
 	if (size >= 8 && std::equal(png, png + 8, data)) return checkPng(b, maxPixels);
 	if (size >= 3 && data[0] == 0xFF && data[1] == 0xD8 && data[2] == 0xFF) return checkJpeg(b, maxPixels);
-	if (size >= 2 && data[0] == 'P' && (data[1] == '5' || data[1] == '6')) return checkPnm(b, maxPixels);
+	// OpenCV's PxM decoder wants whitespace after the magic; anything else
+	// would be dispatched to another decoder than the one checked here.
+	if (size >= 3 && data[0] == 'P' && (data[1] == '5' || data[1] == '6') && std::isspace(data[2]))
+		return checkPnm(b, maxPixels);
 	if (size >= 2 && data[0] == 'B' && data[1] == 'M') return checkBmp(b, maxPixels);
 	if (size >= 4 && ((data[0] == 'I' && data[1] == 'I' && data[2] == 42 && data[3] == 0) ||
 					  (data[0] == 'M' && data[1] == 'M' && data[2] == 0 && data[3] == 42)))

@@ -3,6 +3,7 @@
  * decoding; unknown formats get a clear message. */
 #include "../support/TestSupport.h"
 
+#include <shadyloc/io/ImageFile.h>
 #include <shadyloc/io/Rawlog.h>
 
 #include <opencv2/core.hpp>
@@ -114,4 +115,36 @@ TEST(ImageFiles, TruncatedExternalImageInARawlogIsAnError)
 	EXPECT_NE(out.find("L1" + ext), std::string::npos) << out;
 	EXPECT_FALSE(fs::exists(dir + "/f.rawlog"));
 	}
+}
+
+TEST(ImageFiles, BytesOpenCVWouldSendToAnotherDecoderAreRefused)
+{
+	// Found by fuzz_image: "P6" without whitespace is no PPM to OpenCV, and a
+	// DICOM marker at offset 128 then routes the bytes to GDCM, which aborts.
+	std::string bytes = "P61\n6 1\n 3";
+	bytes.resize(128, '\0');
+	bytes += "DICM";
+	bytes.resize(160, '\x05');
+	const auto* p = reinterpret_cast<const uint8_t*>(bytes.data());
+	EXPECT_THROW(io::decodeImageBytes(p, bytes.size(), "crash.bin", cv::IMREAD_UNCHANGED, 1u << 22), io::ImageFileError);
+
+	// A well-formed PPM that happens to carry the marker is refused too: the
+	// dispatch, not our header check, would decide which decoder reads it.
+	std::string ppm = "P6\n8 8\n255\n";
+	ppm.resize(ppm.size() + 8 * 8 * 3, '\x40');
+	std::copy_n("DICM", 4, ppm.begin() + 128);
+	const auto* q = reinterpret_cast<const uint8_t*>(ppm.data());
+	try
+	{
+		io::decodeImageBytes(q, ppm.size(), "marked.ppm", cv::IMREAD_UNCHANGED, 1u << 22);
+		ADD_FAILURE() << "a PPM carrying a DICOM marker was decoded";
+	}
+	catch (const io::ImageFileError& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("marked.ppm"), std::string::npos) << e.what();
+	}
+
+	// Without the marker the same PPM decodes.
+	std::copy_n("\x40\x40\x40\x40", 4, ppm.begin() + 128);
+	EXPECT_EQ(io::decodeImageBytes(q, ppm.size(), "plain.ppm", cv::IMREAD_UNCHANGED, 1u << 22).cols, 8);
 }
