@@ -533,6 +533,19 @@ map::TRelativePose CKeyframeMap::relativePose(uint32_t a, uint32_t b) const
 	return r;
 }
 
+size_t CKeyframeMap::groundTruthCount() const
+{
+	return static_cast<size_t>(
+		std::count_if(m_keyframes.begin(), m_keyframes.end(), [](const map::TMapKeyframe& k) { return k.T_gt_kf.has_value(); }));
+}
+
+size_t CKeyframeMap::stripGroundTruth()
+{
+	const size_t n = groundTruthCount();
+	for (auto& k : m_keyframes) k.T_gt_kf.reset();
+	return n;
+}
+
 double CKeyframeMap::pathLength() const
 {
 	double L = 0;

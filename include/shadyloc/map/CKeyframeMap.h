@@ -110,6 +110,12 @@ class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
 	map::TRelativePose relativePose(uint32_t a, uint32_t b) const override;
 
 	const std::vector<map::TMapKeyframe>& keyframes() const { return m_keyframes; }
+	/** Keyframes that carry a ground-truth pose (TMapKeyframe::T_gt_kf). */
+	size_t groundTruthCount() const;
+	/** Removes every keyframe's ground-truth pose; returns how many there
+	 * were. Localisation never reads it, so a map without it gives the same
+	 * results (evaluation needs it: `shadyloc map-info --strip-gt`). */
+	size_t stripGroundTruth();
 	/** Path length along the chains (segment gaps not counted) [m]. */
 	double pathLength() const;
 	/** Distance along the chain from the first keyframe of its segment [m]. */

@@ -1,0 +1,588 @@
+/* ShadyLoc — the localiser's core for a single image (2D-3D) against a
+ * stereo keyframe (include/shadyloc/localisation/MonoLocaliser.h). */
+#include <shadyloc/core/Settings.h>
+#include <shadyloc/localisation/LocalisationSystem.h>
+#include <shadyloc/localisation/MonoLocaliser.h>
+
+#include <mrpt/img/TCamera.h>
+#include <mrpt/obs/CObservationImage.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <stdexcept>
+
+namespace shadyloc::localisation
+{
+using geometry::Matrix6d;
+using geometry::Vector6d;
+
+namespace
+{
+constexpr double kDeg = M_PI / 180.0;
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v)
+{
+	Eigen::Matrix3d S;
+	S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+	return S;
+}
+
+/** ZNCC of a stored keyframe patch against the image at integer (x, y) (the
+ * patch must fit); -1 for a flat patch. */
+float patchZncc(const std::array<uint8_t, features::kPatchSize * features::kPatchSize>& p, const cv::Mat& img, int x, int y)
+{
+	constexpr int N = features::kPatchSize, h = N / 2;
+	int sa = 0, sb = 0;
+	int64_t saa = 0, sbb = 0, sab = 0;
+	for (int dy = 0; dy < N; dy++)
+	{
+		const uint8_t* row = img.ptr<uint8_t>(y - h + dy) + x - h;
+		const uint8_t* pr = p.data() + dy * N;
+		for (int dx = 0; dx < N; dx++)
+		{
+			const int a = pr[dx], b = row[dx];
+			sa += a;
+			sb += b;
+			saa += a * a;
+			sbb += b * b;
+			sab += a * b;
+		}
+	}
+	const double n = N * N;
+	const double va = saa - double(sa) * sa / n, vb = sbb - double(sb) * sb / n;
+	if (va < 1e-6 || vb < 1e-6) return -1.f;
+	return static_cast<float>((sab - double(sa) * sb / n) / std::sqrt(va * vb));
+}
+
+/** Residual of one correspondence at T (= T_curr_ref): r, J = dr/dxi (left
+ * perturbation), Sigma = its covariance. False if the point is behind. */
+bool imageResidual(
+	const TPinholeCalib& calib, const Eigen::Isometry3d& T, const TImageCorrespondence& c, double sigma_px,
+	Eigen::Vector2d& r, Eigen::Matrix<double, 2, 6>& J, Eigen::Matrix2d& Sigma)
+{
+	const Eigen::Vector3d p = T * c.P_ref;
+	if (!(p.z() > 1e-3)) return false;
+	Eigen::Matrix<double, 2, 3> Jp;
+	r = calib.project(p, &Jp) - c.z;
+	// d(exp(xi) T P)/dxi at 0 = [I, -[p]x] (xi = (rho, phi)).
+	J.leftCols<3>() = Jp;
+	J.rightCols<3>() = -Jp * skew(p);
+	const Eigen::Matrix<double, 2, 3> JP = Jp * T.linear();
+	Sigma = sigma_px * sigma_px * Eigen::Matrix2d::Identity() + JP * c.cov_ref * JP.transpose();
+	return true;
+}
+}  // namespace
+
+// ---- the camera ------------------------------------------------------------------------------------
+TPinholeCalib TPinholeCalib::LeftOf(const geometry::TStereoCalib& c) { return {c.fx, c.fy, c.cx, c.cy}; }
+TPinholeCalib TPinholeCalib::RightOf(const geometry::TStereoCalib& c) { return {c.fx, c.fy, c.cxR, c.cy}; }
+
+TPinholeCalib TPinholeCalib::FromCamera(const mrpt::img::TCamera& cam)
+{
+	for (const double d : cam.dist)
+		if (d != 0)
+			throw std::invalid_argument(
+				"camera '" + cam.cameraName + "' has lens distortion: the 2D-3D localiser needs undistorted images");
+	if (!(cam.fx() > 0 && cam.fy() > 0))
+		throw std::invalid_argument("camera '" + cam.cameraName + "': focal lengths must be positive");
+	return {cam.fx(), cam.fy(), cam.cx(), cam.cy()};
+}
+
+Eigen::Vector2d TPinholeCalib::project(const Eigen::Vector3d& P, Eigen::Matrix<double, 2, 3>* J) const
+{
+	const double iz = 1.0 / P.z();
+	if (J) *J << fx * iz, 0, -fx * P.x() * iz * iz, 0, fy * iz, -fy * P.y() * iz * iz;
+	return {fx * P.x() * iz + cx, fy * P.y() * iz + cy};
+}
+
+std::string TPinholeCalib::asString() const
+{
+	std::ostringstream s;
+	s << "fx=" << fx << " fy=" << fy << " cx=" << cx << " cy=" << cy;
+	return s.str();
+}
+
+// ---- features --------------------------------------------------------------------------------------
+void extractImageFeatures(
+	const cv::Mat& grey8, const features::TStereoFeatureOptions& fo, int perCell, TImageFeatures& out)
+{
+	if (grey8.empty() || grey8.type() != CV_8UC1)
+		throw std::invalid_argument("extractImageFeatures: needs a non-empty CV_8UC1 image");
+	out.feats.clear();
+	// As StereoFeatureExtractor::process does for the left image: the same
+	// smoothing, detector and border, BRIEF on the same smoothed image.
+	cv::Mat img = grey8;
+	if (fo.presmooth_sigma > 0) cv::GaussianBlur(grey8, img, cv::Size(), fo.presmooth_sigma);
+	out.image = img;
+	const features::BriefExtractor brief(fo.brief_patch_size, fo.brief_seed);
+	const int border = std::max({brief.radius() + 1, fo.patch_radius + 4, features::kPatchSize / 2 + 3});
+	std::vector<cv::KeyPoint> kp;
+	features::detectFastGrid(img, fo.fast_threshold, fo.grid_cols, fo.grid_rows, perCell, border, kp);
+	cv::Mat smoothed;
+	features::BriefExtractor::smooth(img, smoothed);
+	out.feats.reserve(kp.size());
+	for (const auto& k : kp)
+	{
+		TImageFeature f;
+		f.u = std::floor(k.pt.x);
+		f.v = std::floor(k.pt.y);
+		f.response = k.response;
+		if (!brief.compute(smoothed, static_cast<int>(f.u), static_cast<int>(f.v), f.desc)) continue;
+		out.feats.push_back(f);
+	}
+}
+
+// ---- options ---------------------------------------------------------------------------------------
+void TMonoLocaliserOptions::load(const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+	core::SettingsSection r(c, s);
+	r.read("corners_per_cell", corners_per_cell);
+	r.read("max_hamming", max_hamming);
+	r.read("match_ratio", match_ratio);
+	r.read("mutual", mutual);
+	r.read("gate_chi2", gate_chi2);
+	r.read("gate_min_px", gate_min_px);
+	r.read("gate_max_px", gate_max_px);
+	r.read("max_overflow_fraction", max_overflow_fraction);
+	r.read("refine_min_zncc", refine_min_zncc);
+	r.read("refine_radius_px", refine_radius_px);
+	r.read("refine_iterations", refine_iterations);
+	r.read("ransac_threshold_px", ransac_threshold_px);
+	r.read("ransac_iterations", ransac_iterations);
+	r.read("ransac_confidence", ransac_confidence);
+	r.read("sigma_px", sigma_px);
+	r.read("huber_k", huber_k);
+	r.read("max_iterations", max_iterations);
+	r.read("cov_scale", cov_scale);
+	r.read("min_matches", min_matches);
+	r.read("min_inliers", min_inliers);
+	r.read("max_sigma_m", max_sigma_m);
+	r.read("max_sigma_deg", max_sigma_deg);
+	r.finish();
+	try
+	{
+		validate();
+	}
+	catch (const std::exception& e)
+	{
+		throw core::SettingsError(r.where() + " " + e.what());
+	}
+}
+
+void TMonoLocaliserOptions::dump(std::ostream& out) const
+{
+	core::SettingsWriter w(out);
+	w.value("corners_per_cell", corners_per_cell, "FAST corners kept per grid bucket");
+	w.value("max_hamming", max_hamming, "[bits of 256]");
+	w.value("match_ratio", match_ratio, "best < ratio * second best");
+	w.value("mutual", mutual, "no prior: mutual best matches only");
+	w.value("gate_chi2", gate_chi2, "with a prior: chi^2, 2 dof");
+	w.value("gate_min_px", gate_min_px, "[px]");
+	w.value("gate_max_px", gate_max_px, "ceiling: not searched beyond [px]");
+	w.value("max_overflow_fraction", max_overflow_fraction);
+	w.value("refine_min_zncc", refine_min_zncc);
+	w.value("refine_radius_px", refine_radius_px, "[px]");
+	w.value("refine_iterations", refine_iterations);
+	w.value("ransac_threshold_px", ransac_threshold_px, "PnP RANSAC inlier bound [px]");
+	w.value("ransac_iterations", ransac_iterations);
+	w.value("ransac_confidence", ransac_confidence);
+	w.value("sigma_px", sigma_px, "[px]");
+	w.value("huber_k", huber_k, "[sigmas]");
+	w.value("max_iterations", max_iterations, "Gauss-Newton iterations");
+	w.value("cov_scale", cov_scale);
+	w.value("min_matches", min_matches);
+	w.value("min_inliers", min_inliers);
+	w.value("max_sigma_m", max_sigma_m, "[m]");
+	w.value("max_sigma_deg", max_sigma_deg, "[deg]");
+}
+
+void TMonoLocaliserOptions::validate() const
+{
+	const auto need = [](bool ok, const char* key, const char* what) {
+		if (!ok) throw std::invalid_argument(std::string(key) + ": " + what);
+	};
+	need(corners_per_cell >= 1 && corners_per_cell <= 10000, "corners_per_cell", "must be in [1, 10000]");
+	need(max_hamming >= 0 && max_hamming <= 256, "max_hamming", "must be in [0, 256]");
+	need(match_ratio > 0 && match_ratio <= 1, "match_ratio", "must be in (0, 1]");
+	need(gate_chi2 > 0, "gate_chi2", "must be > 0");
+	need(gate_min_px > 0 && gate_min_px <= gate_max_px, "gate_min_px", "must be > 0 and <= gate_max_px");
+	need(gate_max_px <= 10000, "gate_max_px", "must be <= 10000");
+	need(max_overflow_fraction >= 0 && max_overflow_fraction <= 1, "max_overflow_fraction", "must be in [0, 1]");
+	need(refine_min_zncc >= -1 && refine_min_zncc <= 1, "refine_min_zncc", "must be in [-1, 1]");
+	need(refine_radius_px >= 0 && refine_radius_px <= 20, "refine_radius_px", "must be in [0, 20]");
+	need(refine_iterations >= 0 && refine_iterations <= 50, "refine_iterations", "must be in [0, 50]");
+	need(ransac_threshold_px > 0, "ransac_threshold_px", "must be > 0");
+	need(ransac_iterations >= 1 && ransac_iterations <= 1000000, "ransac_iterations", "must be in [1, 1e6]");
+	need(ransac_confidence > 0 && ransac_confidence < 1, "ransac_confidence", "must be in (0, 1)");
+	need(sigma_px > 0, "sigma_px", "must be > 0");
+	need(huber_k > 0, "huber_k", "must be > 0");
+	need(max_iterations >= 1 && max_iterations <= 1000, "max_iterations", "must be in [1, 1000]");
+	need(cov_scale > 0, "cov_scale", "must be > 0");
+	need(min_matches >= 4, "min_matches", "must be >= 4 (PnP needs four points)");
+	need(min_inliers >= 4, "min_inliers", "must be >= 4");
+	need(max_sigma_m > 0, "max_sigma_m", "must be > 0");
+	need(max_sigma_deg > 0, "max_sigma_deg", "must be > 0");
+}
+
+TMonoLocaliserOptions monoLocaliserOptionsFor(
+	const mrpt::config::CConfigFileBase& cfg, const std::string& channel, const std::string& section)
+{
+	TMonoLocaliserOptions o;
+	if (cfg.sectionExists(section)) o.load(cfg, section);
+	const std::string over = section + "." + channel;
+	if (cfg.sectionExists(over)) o.load(cfg, over);
+	return o;
+}
+
+// ---- the solve -------------------------------------------------------------------------------------
+geometry::TPoseSolution solveImagePose(
+	const TPinholeCalib& calib, const std::vector<TImageCorrespondence>& c, const std::vector<uint8_t>& use,
+	const Eigen::Isometry3d& T_init, double sigma_px, double huber_k, int max_iterations)
+{
+	geometry::TPoseSolution s;
+	Eigen::Isometry3d T = T_init;
+	// One pass: normal equations with the Huber weights at T, the cost.
+	const auto accumulate = [&](const Eigen::Isometry3d& X, Matrix6d& H, Vector6d& g, double& cost, double& sq, int& n) {
+		H.setZero();
+		g.setZero();
+		cost = sq = 0;
+		n = 0;
+		for (size_t i = 0; i < c.size(); i++)
+		{
+			if (!use.empty() && !use[i]) continue;
+			Eigen::Vector2d r;
+			Eigen::Matrix<double, 2, 6> J;
+			Eigen::Matrix2d S;
+			if (!imageResidual(calib, X, c[i], sigma_px, r, J, S)) continue;
+			const Eigen::Matrix2d W = S.inverse();
+			const double e = std::sqrt(std::max(0.0, r.dot(W * r)));
+			const double w = e <= huber_k ? 1.0 : huber_k / e;
+			H += w * J.transpose() * W * J;
+			g += w * J.transpose() * W * r;
+			cost += e <= huber_k ? 0.5 * e * e : huber_k * (e - 0.5 * huber_k);
+			sq += r.squaredNorm();
+			n++;
+		}
+	};
+	Matrix6d H;
+	Vector6d g;
+	double cost = 0, sq = 0;
+	int n = 0;
+	accumulate(T, H, g, cost, sq, n);
+	if (n < 3) return s;
+	for (int it = 0; it < max_iterations; it++)
+	{
+		const Eigen::LDLT<Matrix6d> ldlt(H);
+		if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return s;
+		const Vector6d dx = -ldlt.solve(g);
+		if (!dx.allFinite()) return s;
+		// Accept a step only when the robust cost does not grow (halving otherwise).
+		double step = 1.0;
+		bool taken = false;
+		for (int k = 0; k < 6 && !taken; k++, step *= 0.5)
+		{
+			const Eigen::Isometry3d Tn = geometry::retractLeft(step * dx, T);
+			Matrix6d Hn;
+			Vector6d gn;
+			double cn = 0, sqn = 0;
+			int nn = 0;
+			accumulate(Tn, Hn, gn, cn, sqn, nn);
+			if (nn >= 3 && cn <= cost)
+			{
+				T = Tn;
+				H = Hn;
+				g = gn;
+				cost = cn;
+				sq = sqn;
+				n = nn;
+				taken = true;
+			}
+		}
+		s.iterations = it + 1;
+		if (!taken || (step * 2) * dx.norm() < 1e-10) break;
+	}
+	const Eigen::LDLT<Matrix6d> ldlt(H);
+	if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return s;
+	const Matrix6d covCurrRef = ldlt.solve(Matrix6d::Identity());
+	if (!covCurrRef.allFinite()) return s;
+	s.ok = true;
+	s.T_curr_ref = T;
+	s.cov_T_ref_curr = geometry::invertCovariance(T, 0.5 * (covCurrRef + covCurrRef.transpose()));
+	s.rms_px = std::sqrt(sq / n);
+	return s;
+}
+
+// ---- the localiser ---------------------------------------------------------------------------------
+CMonoLocaliser::CMonoLocaliser(
+	const CKeyframeMap& map, const filters::TChannel& channel, const features::TStereoFeatureOptions& fo,
+	const TMonoLocaliserOptions& o)
+	: m_map(map), m_channel(channel), m_fo(fo), m_opts(o)
+{
+	if (!channel.filter) throw std::invalid_argument("CMonoLocaliser: channel '" + channel.label + "' has no filter");
+	m_opts.validate();
+	fo.validate();
+	map.channelIndex(channel.label);  // throws naming the map's channels
+	map.checkCompatible(CLocalisationSystem::liveParams(channel, fo));
+}
+
+TImageFeatures CMonoLocaliser::features(const cv::Mat& image) const
+{
+	cv::Mat grey;
+	m_channel.convert(image, grey);
+	TImageFeatures f;
+	extractImageFeatures(grey, m_fo, m_opts.corners_per_cell, f);
+	return f;
+}
+
+TMonoLocaliserResult CMonoLocaliser::localise(
+	const cv::Mat& image, const TPinholeCalib& calib, uint32_t kf, const std::optional<TKeyframePose>& prediction) const
+{
+	const auto t0 = std::chrono::steady_clock::now();
+	auto r = localise(features(image), calib, kf, prediction);
+	r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+	return r;
+}
+
+TMonoLocaliserResult CMonoLocaliser::localise(
+	const mrpt::obs::CObservationImage& obs, uint32_t kf, const std::optional<TKeyframePose>& prediction) const
+{
+	if (obs.image.isEmpty())
+		throw std::invalid_argument("observation '" + obs.sensorLabel + "': image not loaded");
+	return localise(obs.image.asCvMatRef(), TPinholeCalib::FromCamera(obs.cameraParams), kf, prediction);
+}
+
+TMonoLocaliserResult CMonoLocaliser::localise(
+	const TImageFeatures& f, const TPinholeCalib& calib, uint32_t kf, const std::optional<TKeyframePose>& prediction) const
+{
+	const auto t0 = std::chrono::steady_clock::now();
+	const auto& o = m_opts;
+	TMonoLocaliserResult r;
+	r.channel = m_channel.label;
+	r.kf_id = kf;
+	r.features = static_cast<int>(f.feats.size());
+	if (kf >= m_map.keyframeCount())
+		throw std::out_of_range(
+			"CMonoLocaliser: keyframe " + std::to_string(kf) + " is not in the map (" +
+			std::to_string(m_map.keyframeCount()) + " keyframes)");
+	if (prediction && prediction->valid && prediction->kf != kf)
+		throw std::invalid_argument(
+			"CMonoLocaliser: the prediction is relative to keyframe " + std::to_string(prediction->kf) + ", not " +
+			std::to_string(kf));
+	const auto& lms = m_map.measurements(kf, m_channel.label);
+	const auto done = [&](LocaliserStatus s) {
+		r.status = s;
+		r.ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+		return r;
+	};
+	const cv::Mat& img = f.image;
+	if (lms.empty() || f.feats.empty() || img.empty()) return done(LocaliserStatus::FewMatches);
+
+	// ---- matching: landmark j -> feature matchOf[j]
+	const size_t nL = lms.size(), nF = f.feats.size();
+	std::vector<int> matchOf(nL, -1), distOf(nL, 257);
+	const bool gated = prediction && prediction->valid;
+	if (!gated)
+	{
+		// Every feature a candidate: ratio test on the landmark's side, then mutual.
+		std::vector<int> bestLm(nF, -1), bestLmDist(nF, 257);
+		for (size_t j = 0; j < nL; j++)
+		{
+			int b1 = 257, b2 = 257, bi = -1;
+			for (size_t i = 0; i < nF; i++)
+			{
+				const int d = features::hamming(lms[j].desc, f.feats[i].desc);
+				if (d < bestLmDist[i]) bestLmDist[i] = d, bestLm[i] = static_cast<int>(j);
+				if (d < b1) b2 = b1, b1 = d, bi = static_cast<int>(i);
+				else if (d < b2) b2 = d;
+			}
+			if (bi >= 0 && b1 <= o.max_hamming && b1 < o.match_ratio * b2) matchOf[j] = bi, distOf[j] = b1;
+		}
+		if (o.mutual)
+			for (size_t j = 0; j < nL; j++)
+				if (matchOf[j] >= 0 && bestLm[static_cast<size_t>(matchOf[j])] != static_cast<int>(j)) matchOf[j] = -1;
+	}
+	else
+	{
+		// The gate of each landmark's predicted pixel (first order).
+		const Eigen::Isometry3d T_live_kf = prediction->T_kf_live.inverse();
+		const Matrix6d covT = geometry::invertCovariance(prediction->T_kf_live, prediction->cov);
+		std::vector<double> axes;
+		const double minL = o.gate_min_px * o.gate_min_px / o.gate_chi2;
+		for (size_t j = 0; j < nL; j++)
+		{
+			const Eigen::Vector3d p = T_live_kf * lms[j].P;
+			if (!(p.z() > 0.1)) continue;
+			Eigen::Matrix<double, 2, 3> Jp;
+			const Eigen::Vector2d z = calib.project(p, &Jp);
+			if (z.x() < 0 || z.y() < 0 || z.x() >= img.cols || z.y() >= img.rows) continue;
+			Eigen::Matrix<double, 2, 6> Jx;
+			Jx.leftCols<3>() = Jp;
+			Jx.rightCols<3>() = -Jp * skew(p);
+			const Eigen::Matrix<double, 2, 3> JP = Jp * T_live_kf.linear();
+			const Eigen::Matrix2d S = JP * lms[j].cov * JP.transpose() + Jx * covT * Jx.transpose() +
+									  o.sigma_px * o.sigma_px * Eigen::Matrix2d::Identity();
+			Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(0.5 * (S + S.transpose()));
+			r.gate.predicted++;
+			const double longest = std::sqrt(o.gate_chi2 * std::max(0.0, es.eigenvalues().maxCoeff()));
+			axes.push_back(longest);
+			if (longest > o.gate_max_px)
+			{
+				r.gate.overflow++;  // never clipped: not searched
+				continue;
+			}
+			const Eigen::Vector2d lam = es.eigenvalues().cwiseMax(minL);
+			const Eigen::Matrix2d Ginv = es.eigenvectors() * lam.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+			int b1 = 257, b2 = 257, bi = -1;
+			for (size_t i = 0; i < nF; i++)
+			{
+				const Eigen::Vector2d dz(f.feats[i].u - z.x(), f.feats[i].v - z.y());
+				if (std::abs(dz.x()) > o.gate_max_px || std::abs(dz.y()) > o.gate_max_px) continue;
+				if (dz.dot(Ginv * dz) > o.gate_chi2) continue;
+				const int d = features::hamming(lms[j].desc, f.feats[i].desc);
+				if (d < b1) b2 = b1, b1 = d, bi = static_cast<int>(i);
+				else if (d < b2) b2 = d;
+			}
+			if (bi >= 0 && b1 <= o.max_hamming && b1 < o.match_ratio * b2) matchOf[j] = bi, distOf[j] = b1;
+		}
+		if (!axes.empty())
+		{
+			std::nth_element(axes.begin(), axes.begin() + axes.size() / 2, axes.end());
+			r.gate.median_axis_px = axes[axes.size() / 2];
+		}
+		if (r.gate.predicted > 0 && r.gate.overflow > o.max_overflow_fraction * r.gate.predicted)
+			return done(LocaliserStatus::Lost);
+		// One landmark per feature: the closer descriptor keeps it.
+		std::vector<int> owner(nF, -1);
+		for (size_t j = 0; j < nL; j++)
+		{
+			if (matchOf[j] < 0) continue;
+			int& w = owner[static_cast<size_t>(matchOf[j])];
+			if (w < 0) w = static_cast<int>(j);
+			else if (distOf[j] < distOf[static_cast<size_t>(w)])
+			{
+				matchOf[static_cast<size_t>(w)] = -1;
+				w = static_cast<int>(j);
+			}
+			else
+				matchOf[j] = -1;
+		}
+	}
+
+	// ---- sub-pixel: the keyframe's patch located in the image
+	std::vector<TImageCorrespondence> corr;
+	const int ph = features::kPatchSize / 2;
+	const auto inside = [&](int x, int y) {
+		return x - ph - 1 >= 0 && y - ph - 1 >= 0 && x + ph + 1 < img.cols && y + ph + 1 < img.rows;
+	};
+	for (size_t j = 0; j < nL; j++)
+	{
+		if (matchOf[j] < 0) continue;
+		r.descriptor_matches++;
+		const auto& ft = f.feats[static_cast<size_t>(matchOf[j])];
+		int x = static_cast<int>(ft.u), y = static_cast<int>(ft.v);
+		float c[3][3];
+		bool peak = false;
+		for (int step = 0; step <= o.refine_radius_px && inside(x, y); step++)
+		{
+			for (int dy = -1; dy <= 1; dy++)
+				for (int dx = -1; dx <= 1; dx++) c[dy + 1][dx + 1] = patchZncc(lms[j].patch, img, x + dx, y + dy);
+			int bx = 0, by = 0;
+			for (int dy = -1; dy <= 1; dy++)
+				for (int dx = -1; dx <= 1; dx++)
+					if (c[dy + 1][dx + 1] > c[by + 1][bx + 1]) bx = dx, by = dy;
+			if (bx == 0 && by == 0)
+			{
+				peak = true;
+				break;
+			}
+			x += bx;
+			y += by;
+		}
+		if (!peak || c[1][1] < o.refine_min_zncc) continue;
+		float xs = x + features::parabolaPeak(c[1][0], c[1][1], c[1][2]);
+		float ys = y + features::parabolaPeak(c[0][1], c[1][1], c[2][1]);
+		float xr, yr;
+		if (features::refinePatch2D(lms[j].patch.data(), features::kPatchSize, img, xs, ys, o.refine_iterations, xr, yr))
+			xs = xr, ys = yr;
+		corr.push_back({lms[j].P, lms[j].cov, Eigen::Vector2d(xs, ys)});
+	}
+	r.matches = static_cast<int>(corr.size());
+	if (r.matches < o.min_matches) return done(LocaliserStatus::FewMatches);
+
+	// ---- PnP RANSAC (OpenCV), then the robust refinement
+	std::vector<cv::Point3d> obj;
+	std::vector<cv::Point2d> pix;
+	for (const auto& k : corr)
+	{
+		obj.emplace_back(k.P_ref.x(), k.P_ref.y(), k.P_ref.z());
+		pix.emplace_back(k.z.x(), k.z.y());
+	}
+	const cv::Matx33d K(calib.fx, 0, calib.cx, 0, calib.fy, calib.cy, 0, 0, 1);
+	cv::Mat rvec, tvec;
+	std::vector<int> inl;
+	bool ok = false;
+	try
+	{
+		ok = cv::solvePnPRansac(
+			obj, pix, K, cv::noArray(), rvec, tvec, false, o.ransac_iterations, static_cast<float>(o.ransac_threshold_px),
+			o.ransac_confidence, inl, cv::SOLVEPNP_AP3P);
+	}
+	catch (const cv::Exception&)
+	{
+		ok = false;	 // degenerate sets: no pose
+	}
+	r.ransac_inliers = static_cast<int>(inl.size());
+	if (!ok || r.ransac_inliers < o.min_inliers) return done(LocaliserStatus::FewInliers);
+	cv::Mat Rcv;
+	cv::Rodrigues(rvec, Rcv);
+	Eigen::Matrix3d R;
+	cv::cv2eigen(Rcv, R);
+	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+	T.linear() = R;
+	T.translation() = Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
+
+	std::vector<uint8_t> use(corr.size(), 0);
+	for (const int i : inl) use[static_cast<size_t>(i)] = 1;
+	geometry::TPoseSolution sol;
+	for (int pass = 0; pass < 2; pass++)
+	{
+		sol = solveImagePose(calib, corr, use, T, o.sigma_px, o.huber_k, o.max_iterations);
+		if (!sol.ok) return done(LocaliserStatus::SolverFailed);
+		T = sol.T_curr_ref;
+		// Inliers re-selected at the refined pose.
+		int n = 0;
+		for (size_t i = 0; i < corr.size(); i++)
+		{
+			const Eigen::Vector3d p = T * corr[i].P_ref;
+			use[i] = p.z() > 1e-3 && (calib.project(p) - corr[i].z).norm() < o.ransac_threshold_px;
+			n += use[i];
+		}
+		r.inliers = n;
+		if (n < o.min_inliers) return done(LocaliserStatus::FewInliers);
+	}
+	sol = solveImagePose(calib, corr, use, T, o.sigma_px, o.huber_k, o.max_iterations);
+	if (!sol.ok) return done(LocaliserStatus::SolverFailed);
+	r.solved = true;
+	r.T_kf_live = sol.T_curr_ref.inverse();
+	r.cov = o.cov_scale * sol.cov_T_ref_curr;
+	r.rms_px = sol.rms_px;
+	{
+		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> et(r.cov.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
+		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> er(r.cov.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
+		r.sigma_m = std::sqrt(std::max(0.0, et.eigenvalues().maxCoeff()));
+		r.sigma_deg = std::sqrt(std::max(0.0, er.eigenvalues().maxCoeff())) / kDeg;
+	}
+	if (r.sigma_m > o.max_sigma_m || r.sigma_deg > o.max_sigma_deg) return done(LocaliserStatus::Uncertain);
+	return done(LocaliserStatus::Ok);
+}
+
+}  // namespace shadyloc::localisation

@@ -1,0 +1,274 @@
+/* ShadyLoc tests: `shadyloc localise` as a program on a small simulated
+ * dataset (config/sim.ini's noon and overcast traversals, 30 frames each: the
+ * sim_sequences fixture under ctest, rendered here otherwise):
+ *  - ground truth never leaks: the outputs are byte-identical with the ground
+ *    truth stripped from the map (`map-info --strip-gt`), across three runs
+ *    and across --threads 1 and 2;
+ *  - bad input: a map with other descriptor parameters, a live run without
+ *    the colour images its channels need, an empty map (errors, non-zero
+ *    exit, nothing partial, an earlier OUTDIR untouched); a live run through
+ *    another world (another scene seed): zero fixes. */
+#include "../support/Sequences.h"
+#include "../support/TestSupport.h"
+
+#include <shadyloc/io/Rawlog.h>
+#include <shadyloc/map/CKeyframeMap.h>
+
+#include <mrpt/obs/CObservationStereoImages.h>
+
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+namespace
+{
+using namespace shadyloc;
+namespace fs = std::filesystem;
+
+std::string contents(const std::string& path)
+{
+	std::ifstream f(path, std::ios::binary);
+	std::ostringstream s;
+	s << f.rdbuf();
+	return s.str();
+}
+
+void writeText(const std::string& path, const std::string& text)
+{
+	std::ofstream f(path, std::ios::binary);
+	f << text;
+}
+
+std::string src(const std::string& rel) { return std::string(SHADYLOC_SOURCE_DIR) + "/" + rel; }
+
+/** The dataset: noon and overcast rawlogs with ground truth, the noon map
+ * surveyed from them (ground truth stored beside its keyframes). Made once
+ * per process. */
+struct TDataset
+{
+	std::string dir, noon, noonGt, overcast, overcastGt, map;
+};
+
+const TDataset& dataset()
+{
+	static const TDataset d = [] {
+		TDataset t;
+		t.dir = test::tempDir("localise_app");
+		std::string sim = test::fixtureDir().empty() ? "" : test::fixtureDir() + "/sim";
+		if (sim.empty() || !fs::exists(sim + "/overcast.rawlog"))
+		{
+			sim = t.dir + "/sim";
+			std::string out;
+			const int rc = test::runCommand(
+				test::appPath() + " sim -q -c " + src("config/sim.ini") + " -o " + sim +
+					" --traversals noon,overcast --frames " + std::to_string(test::kSimFixtureFrames),
+				&out);
+			if (rc != 0) throw std::runtime_error("sim failed: " + out);
+		}
+		t.noon = sim + "/noon.rawlog";
+		t.noonGt = sim + "/noon.tum";
+		t.overcast = sim + "/overcast.rawlog";
+		t.overcastGt = sim + "/overcast.tum";
+		t.map = t.dir + "/noon.kfmap";
+		std::string out;
+		const int rc = test::runCommand(
+			test::appPath() + " survey -q -i " + t.noon + " -o " + t.map + " -c " + src("config/vo_sim.ini") + " --gt " +
+				t.noonGt,
+			&out);
+		if (rc != 0) throw std::runtime_error("survey failed: " + out);
+		return t;
+	}();
+	return d;
+}
+
+std::string localiseCmd(const std::string& map, const std::string& live, const std::string& outDir, const std::string& extra = "")
+{
+	return test::appPath() + " localise -q -m " + map + " -i " + live + " -o " + outDir + " -c " +
+		   src("config/vo_sim.ini") + " -c " + src("config/localise_sim.ini") + extra;
+}
+
+/** summary.json without the provenance's map entries (the map file's path
+ * and hash, which name the input and so differ between two map files). */
+std::string withoutMapProvenance(const std::string& summary)
+{
+	return std::regex_replace(summary, std::regex(R"("map": "[^"]*", "map_fnv1a64": "[0-9a-f]+")"), "\"map\": -");
+}
+
+int jsonInt(const std::string& json, const std::string& key)
+{
+	std::smatch m;
+	if (!std::regex_search(json, m, std::regex("\"" + key + "\": ([0-9]+)"))) return -1;
+	return std::stoi(m[1]);
+}
+
+/** Nothing staged beside `dir` was left behind (".<name>.partial-<pid>"). */
+void expectNoStagedLeftovers(const std::string& dir)
+{
+	for (const auto& e : fs::directory_iterator(fs::path(dir).parent_path()))
+		EXPECT_EQ(e.path().filename().string().find(".partial"), std::string::npos) << e.path();
+}
+
+TEST(LocalisationApp, OutputsIdenticalWithoutGroundTruthAcrossRunsAndThreadCounts)
+{
+	const auto& d = dataset();
+	// The map without its ground truth: a copy differing in that alone.
+	const std::string stripped = d.dir + "/noon_nogt.kfmap";
+	std::string out;
+	ASSERT_EQ(test::runCommand(test::appPath() + " map-info " + d.map + " --strip-gt " + stripped, &out), 0) << out;
+	{
+		const auto a = CKeyframeMap::LoadFromFile(d.map), b = CKeyframeMap::LoadFromFile(stripped);
+		ASSERT_GT(a->keyframeCount(), 5u);
+		EXPECT_EQ(a->groundTruthCount(), a->keyframeCount());  // the survey stored it
+		EXPECT_EQ(b->groundTruthCount(), 0u);
+		ASSERT_EQ(a->keyframeCount(), b->keyframeCount());
+		for (uint32_t i = 0; i < a->keyframeCount(); i++)
+		{
+			EXPECT_TRUE(a->keyframe(i).T_map_kf.matrix() == b->keyframe(i).T_map_kf.matrix()) << i;
+			ASSERT_EQ(a->keyframe(i).channels.size(), b->keyframe(i).channels.size());
+			for (size_t c = 0; c < a->keyframe(i).channels.size(); c++)
+				EXPECT_EQ(a->keyframe(i).channels[c].size(), b->keyframe(i).channels[c].size());
+		}
+	}
+	EXPECT_NE(contents(d.map), contents(stripped));
+	// --strip-gt refuses to write over its input.
+	EXPECT_NE(test::runCommand(test::appPath() + " map-info " + d.map + " --strip-gt " + d.map, &out), 0) << out;
+	EXPECT_EQ(CKeyframeMap::LoadFromFile(d.map)->groundTruthCount(), CKeyframeMap::LoadFromFile(d.map)->keyframeCount());
+
+	// Three runs with two threads, one with one thread, one on the stripped map.
+	struct TRun
+	{
+		std::string name, map, extra;
+	};
+	const std::vector<TRun> runs = {
+		{"a", d.map, " --threads 2"}, {"b", d.map, " --threads 2"}, {"c", d.map, " --threads 2"},
+		{"t1", d.map, " --threads 1"}, {"nogt", stripped, " --threads 2"}};
+	for (const auto& r : runs)
+		ASSERT_EQ(test::runCommand(localiseCmd(r.map, d.overcast, d.dir + "/out_" + r.name, r.extra), &out), 0)
+			<< r.name << ": " << out;
+	const std::string ref = d.dir + "/out_a/";
+	const std::string refSummary = contents(ref + "summary.json");
+	// The comparison covers localised frames.
+	EXPECT_GT(jsonInt(refSummary, "fixes"), 10) << refSummary;
+	for (const auto& r : runs)
+	{
+		if (r.name == "a") continue;
+		const std::string o = d.dir + "/out_" + r.name + "/";
+		for (const char* f : {"frames.csv", "trajectory.tum"})
+			EXPECT_TRUE(contents(o + f) == contents(ref + f)) << r.name << ": " << f << " differs";
+		if (r.name == "nogt")
+		{
+			EXPECT_NE(contents(o + "summary.json"), refSummary);  // the map's hash names the other file ...
+			EXPECT_EQ(withoutMapProvenance(contents(o + "summary.json")), withoutMapProvenance(refSummary));  // ... alone
+		}
+		else
+			EXPECT_TRUE(contents(o + "summary.json") == refSummary) << r.name << ": summary.json differs";
+	}
+	EXPECT_NE(withoutMapProvenance(refSummary), refSummary);  // the filter above did remove something
+}
+
+TEST(LocalisationApp, BadInputFailsCleanlyOrGivesNoFix)
+{
+	const auto& d = dataset();
+	std::string out;
+	// An earlier OUTDIR: a failed run leaves it as it was.
+	const std::string outDir = d.dir + "/bad_out";
+	fs::create_directories(outDir);
+	writeText(outDir + "/frames.csv", "earlier\n");
+	const auto expectUntouched = [&](const std::string& what) {
+		EXPECT_EQ(contents(outDir + "/frames.csv"), "earlier\n") << what;
+		EXPECT_FALSE(fs::exists(outDir + "/summary.json")) << what;
+		expectNoStagedLeftovers(outDir);
+	};
+
+	// 1. A map made with other descriptor parameters than the live run's:
+	// the invariant channel's BRIEF seed differs. Refused, naming both sets.
+	{
+		std::string ini = contents(src("config/vo_sim.ini"));
+		const auto at = ini.find("[features.invariant]\n");
+		ASSERT_NE(at, std::string::npos);
+		ini.insert(at + std::string("[features.invariant]\n").size(), "brief_seed = 7\n");
+		const std::string cfg = d.dir + "/vo_sim_seed7.ini";
+		writeText(cfg, ini);
+		const int rc = test::runCommand(
+			test::appPath() + " localise -q -m " + d.map + " -i " + d.overcast + " -o " + outDir + " -c " + cfg + " -c " +
+				src("config/localise_sim.ini"),
+			&out);
+		EXPECT_NE(rc, 0) << out;
+		EXPECT_NE(out.find("invariant"), std::string::npos) << out;
+		EXPECT_NE(out.find("seed"), std::string::npos) << out;
+		EXPECT_NE(out.find(d.map), std::string::npos) << out;
+		expectUntouched("other descriptor parameters");
+	}
+
+	// 2. A live run without the colour images its channels are made from:
+	// a grey camera (the invariant channel needs colour).
+	{
+		const std::string grey = d.dir + "/grey.rawlog";
+		{
+			io::RawlogWriter w(grey);
+			for (const auto& o : test::readStereoFrames(d.overcast))
+			{
+				auto g = mrpt::obs::CObservationStereoImages::Create(*o);
+				g->imageLeft = o->imageLeft.grayscale();
+				g->imageRight = o->imageRight.grayscale();
+				w.write(*g);
+			}
+			w.commit();
+		}
+		const int rc = test::runCommand(localiseCmd(d.map, grey, outDir), &out);
+		EXPECT_NE(rc, 0) << out;
+		EXPECT_NE(out.find("colour"), std::string::npos) << out;
+		EXPECT_NE(out.find("grey.rawlog"), std::string::npos) << out;
+		expectUntouched("grey live run");
+	}
+
+	// 3. An empty map (set up, no keyframes).
+	{
+		const auto full = CKeyframeMap::LoadFromFile(d.map);
+		auto empty = CKeyframeMap::Create();
+		empty->setup(full->calibration(), full->imageWidth(), full->imageHeight(), full->channels());
+		const std::string emptyPath = d.dir + "/empty.kfmap";
+		empty->saveToFile(emptyPath);
+		const int rc = test::runCommand(localiseCmd(emptyPath, d.overcast, outDir), &out);
+		EXPECT_NE(rc, 0) << out;
+		EXPECT_NE(out.find("no keyframes"), std::string::npos) << out;
+		EXPECT_NE(out.find("empty.kfmap"), std::string::npos) << out;
+		expectUntouched("empty map");
+	}
+
+	// 4. A live run through another world (the scene seed differs): no place
+	// in common, so no fix; not an error.
+	{
+		std::string ini = contents(src("config/sim.ini"));
+		const std::regex seed(R"((\n)seed = 7\b)");
+		ASSERT_TRUE(std::regex_search(ini, seed)) << "config/sim.ini's scene seed moved";
+		ini = std::regex_replace(ini, seed, "$1seed = 8", std::regex_constants::format_first_only);
+		const std::string cfg = d.dir + "/sim_seed8.ini";
+		writeText(cfg, ini);
+		const std::string other = d.dir + "/other";
+		ASSERT_EQ(
+			test::runCommand(
+				test::appPath() + " sim -q -c " + cfg + " -o " + other + " --traversals overcast --frames 20", &out),
+			0)
+			<< out;
+		const std::string o = d.dir + "/other_out";
+		ASSERT_EQ(test::runCommand(localiseCmd(d.map, other + "/overcast.rawlog", o), &out), 0) << out;
+		const std::string s = contents(o + "/summary.json");
+		EXPECT_EQ(jsonInt(s, "frames"), 20) << s;
+		EXPECT_EQ(jsonInt(s, "fixes"), 0) << s;
+		EXPECT_GT(jsonInt(s, "global_searches"), 0) << s;
+		std::istringstream csv(contents(o + "/frames.csv"));
+		std::string line;
+		std::getline(csv, line);
+		int rows = 0;
+		while (std::getline(csv, line))
+		{
+			rows++;
+			EXPECT_NE(line.find(",none,"), std::string::npos) << line;
+		}
+		EXPECT_EQ(rows, 20);
+	}
+}
+
+}  // namespace
