@@ -94,7 +94,7 @@ void renderTrajectories(
 	// The legend's lines (0.035 of the height each, below the title's) take
 	// a band at the top; the content is framed in the rest.
 	size_t lines = o.title.empty() ? 0 : 1;
-	for (const auto& l : layers) lines += l.points.size() >= 2;
+	for (const auto& l : layers) lines += l.points.size() < 2 ? 0 : (l.legend.empty() ? 1 : l.legend.size());
 	for (const auto& l : objects) lines += l.legend.size();
 	const double band = o.legendBand && lines ? 0.035 * double(lines) + 0.04 : 0.0;
 	const double usableH = o.height * (1.0 - band) - 2 * o.marginFraction * o.height;
@@ -176,13 +176,34 @@ void renderTrajectories(
 			tris->insertTriangle(t1);
 			tris->insertTriangle(t2);
 		}
+		if (l.markerPx > 0)
+		{
+			const double h = 0.5 * l.markerPx * mPerPx;
+			const float zm = z + 0.005f;
+			for (const auto& pt : l.points)
+			{
+				const auto q = proj(pt);
+				const mrpt::math::TPoint3Df a(q.x - h, q.y - h, zm), b(q.x + h, q.y - h, zm), c(q.x + h, q.y + h, zm),
+					d(q.x - h, q.y + h, zm);
+				mrpt::opengl::TTriangle t1(a, b, c), t2(a, c, d);
+				for (auto* t : {&t1, &t2})
+					for (auto& v : t->vertices) v.setColor(l.markerColour);
+				tris->insertTriangle(t1);
+				tris->insertTriangle(t2);
+			}
+		}
 		tris->enableLight(false);
 		scene.insert(tris);
-		mrpt::opengl::TFontParams f;
-		f.color = mrpt::img::TColorf(l.colour);
-		f.vfont_scale = 16;
-		vp->addTextMessage(0.01, 0.97 - 0.035 * double(li + 1), "-- " + l.name, 10 + li, f);
-		li++;
+		const auto entries = l.legend.empty() ? std::vector<std::pair<std::string, mrpt::img::TColor>>{{l.name, l.colour}}
+											  : l.legend;
+		for (const auto& [text, colour] : entries)
+		{
+			mrpt::opengl::TFontParams f;
+			f.color = mrpt::img::TColorf(colour);
+			f.vfont_scale = 16;
+			vp->addTextMessage(0.01, 0.97 - 0.035 * double(li + 1), "-- " + text, 10 + li, f);
+			li++;
+		}
 	}
 	for (const auto& l : objects)
 		for (const auto& [text, colour] : l.legend)
