@@ -68,10 +68,12 @@ render::TrajectoryLayer localisedLayer(const std::string& dir, const std::string
 	}
 	if (l.points.size() < 2) throw std::runtime_error("'" + tumPath + "': fewer than two poses to draw");
 	const size_t n = counts[0] + counts[1] + counts[2];
-	auto share = [&](size_t k) { return std::to_string(counts[k]) + " frames, " + std::to_string(int(std::lround(100.0 * counts[k] / n))) + " %"; };
-	l.legend = {{name + ", fix of the monochrome localiser (" + share(0) + ")", kMonoColour},
-				{name + ", fix of the invariant localiser (" + share(1) + ")", kInvariantColour},
-				{name + ", no fix: dead reckoning on VO (" + share(2) + ")", kNoneColour}};
+	auto share = [&](size_t k) {
+		return std::to_string(counts[k]) + " frames (" + std::to_string(int(std::lround(100.0 * counts[k] / n))) + " %)";
+	};
+	l.legend = {{name + ": mono fix, " + share(0), kMonoColour},
+				{name + ": invariant fix, " + share(1), kInvariantColour},
+				{name + ": no fix (VO), " + share(2), kNoneColour}};
 	return l;
 }
 
@@ -201,7 +203,7 @@ int run(int argc, char** argv)
 				auto gt = io::readTum(liveGt.getValue());
 				io::sortByTime(gt);
 				render::TrajectoryLayer g;
-				g.name = "live run's ground truth (via the map's keyframe ground truth)";
+				g.name = "ground truth of the live run";
 				g.colour = {0, 0, 0};
 				g.widthPx = 1.5;
 				for (const auto& p : gt) g.points.push_back(toPoint(T_map_world * p.T.translation()));

@@ -169,12 +169,42 @@ std::string outsideShading(const TLocalisedRun& r, double y0, double y1, int& ob
 	return g.str();
 }
 
-/** A tic label: gnuplot reads it as a format, so '%' is doubled. */
-std::string ticLabel(const std::string& text)
+/** Text as a gnuplot double-quoted string: a '\n' breaks the line,
+ * backslashes and quotes are escaped. */
+std::string gnuplotText(const std::string& text)
 {
-	std::string t;
-	for (const char c : text) t += c == '%' ? std::string("%%") : std::string(1, c);
-	return gnuplotQuote(t);
+	std::string t = "\"";
+	for (const char c : text)
+	{
+		if (c == '\n') t += "\\n";
+		else if (c == '"' || c == '\\') t += std::string("\\") + c;
+		else if (c == '\r') throw std::invalid_argument("a label with a carriage return: '" + text + "'");
+		else t += c;
+	}
+	return t + "\"";
+}
+
+/** Row labels left of the plot, left-justified from the image's left edge
+ * (gnuplot right-justifies tic labels by an estimate of their width, which
+ * lets long proportional-font labels run under the plot), and a left margin
+ * that holds them (about 7 px a character at 'sans,10'). */
+std::string rowLabels(const std::vector<std::string>& labels, const std::vector<double>& ys, unsigned width)
+{
+	size_t n = 0;
+	for (const auto& l : labels)
+		for (size_t a = 0, b; a <= l.size(); a = b + 1)
+		{
+			b = std::min(l.find('\n', a), l.size());
+			n = std::max(n, b - a);
+		}
+	std::ostringstream g;
+	g << "set ytics (";
+	for (size_t i = 0; i < ys.size(); i++) g << (i ? ", " : "") << "'' " << ys[i];
+	g << ")\nset lmargin at screen " << std::min(0.6, (7.0 * double(n) + 24.0) / width) << "\n";
+	for (size_t i = 0; i < labels.size(); i++)
+		g << "set label " << 100 + i << " " << gnuplotText(labels[i]) << " at screen " << 10.0 / width << ", first "
+		  << ys[i] << " left\n";
+	return g.str();
 }
 
 std::string datablock(const std::string& name, const std::string& rows)
@@ -359,20 +389,18 @@ void figure7(
 		}
 	}
 	const double x0 = C.front().distance_m, x1 = std::max(C.back().distance_m, x0 + 1.0);
+	const std::vector<std::string> labels = {
+		"combined: " + pct(nComb, inMap), "invariant localiser: " + pct(nInv, inMap), "baseline: " + pct(nBase, inMap)};
 	std::ostringstream g;
 	g << std::setprecision(10);
 	g << datablock("base", base.str()) << datablock("inv", inv.str()) << datablock("combmono", combMono.str())
 	  << datablock("combinv", combInv.str()) << datablock("false", falses.str());
-	g << "set title " << gnuplotQuote("Figure 7: live run " + liveName + " against the map of " + mapName + " (grey: outside the map)") << "\n"
+	g << "set title " << gnuplotQuote("Figure 7: live run " + liveName + " against the map of " + mapName + " (fixes over in-map frames)") << "\n"
 	  << "set xlabel " << gnuplotQuote(distanceLabel(gt)) << " offset 0,0.4\n"
 	  << "set xrange [" << x0 << ":" << x1 << "]\nset yrange [0.4:3.6]\n"
-	  << "set ytics ("
-	  << ticLabel("combined: " + pct(nComb, inMap)) << " 1, "
-	  << ticLabel("invariant localiser: " + pct(nInv, inMap)) << " 2, "
-	  << ticLabel("baseline: " + pct(nBase, inMap)) << " 3)\n"
-	  << "set ylabel 'fixes over in-map frames'\n"
+	  << rowLabels(labels, {1, 2, 3}, 1000)
 	  << "set grid xtics\nset border 3\nset xtics nomirror\nset ytics nomirror scale 0\n"
-	  << "set key below horizontal maxcols 4 width 1\n";
+	  << "set key outside right center vertical Left reverse samplen 1\n";
 	int obj = 1;
 	g << outsideShading(p.combined, 0.4, 3.6, obj);
 	const std::string falseTitle = gt ? "false fix (" + std::to_string(falseB) + " baseline, " +
@@ -401,13 +429,16 @@ void figure7(
 void figure8(const std::string& liveName, const std::vector<TFigurePair>& pairs, const std::string& pngPath)
 {
 	if (pairs.empty()) throw std::invalid_argument("figure 8 of " + liveName + ": no maps");
+	constexpr unsigned kWidth8 = 1100;
 	const int n = static_cast<int>(pairs.size());
-	std::ostringstream segs, outside, tics;
+	std::ostringstream segs, outside;
 	segs << std::setprecision(10);
 	outside << std::setprecision(10);
 	double x0 = 1e300, x1 = -1e300;
 	bool gt = true;
 	const char* colour[] = {kBoth, kMono, kInvariant, kNeither};
+	std::vector<std::string> labels;
+	std::vector<double> ys;
 	std::array<double, 4> metres{};
 	for (int r = 0; r < n; r++)
 	{
@@ -434,9 +465,8 @@ void figure8(const std::string& liveName, const std::vector<TFigurePair>& pairs,
 		size_t inMap = 0, nb = 0, nc = 0;
 		for (size_t i = 0; i < C.size(); i++)
 			inMap += C[i].in_map, nb += C[i].in_map && B[i].fix(), nc += C[i].in_map && C[i].fix();
-		tics << (r ? ", " : "")
-			 << ticLabel(pr.mapName + " (baseline " + pct(nb, inMap) + ", combined " + pct(nc, inMap) + ")") << " "
-			 << y;
+		labels.push_back("map " + pr.mapName + "\nbaseline " + pct(nb, inMap) + ", combined " + pct(nc, inMap));
+		ys.push_back(y);
 	}
 	x1 = std::max(x1, x0 + 1.0);
 	const double total = metres[0] + metres[1] + metres[2] + metres[3];
@@ -446,7 +476,7 @@ void figure8(const std::string& liveName, const std::vector<TFigurePair>& pairs,
 	g << "set title " << gnuplotQuote("Figure 8: live run " + liveName + " against each map (coverage over in-map frames)") << "\n"
 	  << "set xlabel " << gnuplotQuote(distanceLabel(gt)) << " offset 0,0.4\n"
 	  << "set xrange [" << std::setprecision(10) << x0 << ":" << x1 << "]\nset yrange [0.4:" << n + 0.6 << "]\n"
-	  << "set ytics (" << tics.str() << ")\nset ytics nomirror scale 0\nset xtics nomirror\nset border 3\n"
+	  << rowLabels(labels, ys, kWidth8) << "set ytics nomirror scale 0\nset xtics nomirror\nset border 3\n"
 	  << "set grid xtics\nset key outside right center vertical Left reverse samplen 2\n"
 	  << "set palette defined (0 '" << colour[0] << "', 1 '" << colour[1] << "', 2 '" << colour[2] << "', 3 '"
 	  << colour[3] << "')\nset cbrange [0:3]\nunset colorbox\n";
@@ -460,7 +490,7 @@ void figure8(const std::string& liveName, const std::vector<TFigurePair>& pairs,
 	g << "\n";
 	try
 	{
-		runGnuplot(g.str(), pngPath, 1100, static_cast<unsigned>(std::max(200, 130 + 45 * n)));
+		runGnuplot(g.str(), pngPath, kWidth8, static_cast<unsigned>(std::max(200, 130 + 45 * n)));
 	}
 	catch (const std::exception& e)
 	{

@@ -109,7 +109,7 @@ TEST(RenderSnapshot, AppAlignsEstimatesToTheFirstTrajectory)
 			<< out;
 		const cv::Mat img = cv::imread(dir + "/a.png");
 		int n = 0;
-		for (int y = 40; y < img.rows; y++)	// below the legend
+		for (int y = 80; y < img.rows; y++)	// below the legend (two 21 px lines from 24 px)
 			for (int x = 0; x < img.cols; x++)
 			{
 				const auto p = img.at<cv::Vec3b>(y, x);
@@ -251,8 +251,8 @@ TEST(RenderSnapshot, AppColoursALocalisedRunByItsLocaliser)
 		<< out;
 	const cv::Mat img = cv::imread(dir + "/l.png");
 	ASSERT_EQ(img.cols, 600);
-	// Below the legend band (title none, 5 legend lines: 0.215 of the height).
-	const int y0 = int(0.25 * img.rows);
+	// Below the legend band (no title, 5 legend lines of 21 px from 24 px down).
+	const int y0 = 150;
 	size_t blue = 0, orange = 0, red = 0, black = 0, blackOnChain = 0;
 	auto near = [&](int x, int y, const cv::Vec3b& c) {
 		for (int dy = -4; dy <= 4; dy++)
