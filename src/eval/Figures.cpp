@@ -125,6 +125,11 @@ TPairRuns readPair(const std::string& baselineCsv, const std::string& combinedCs
 {
 	TPairRuns p{readFramesCsv(baselineCsv), readFramesCsv(combinedCsv)};
 	const auto &b = p.baseline.frames, &c = p.combined.frames;
+	if (p.baseline.gt_distance != p.combined.gt_distance)
+		throw std::runtime_error(
+			"'" + (p.baseline.gt_distance ? baselineCsv : combinedCsv) + "' was localised with --gt and '" +
+			(p.baseline.gt_distance ? combinedCsv : baselineCsv) +
+			"' without: their distances (ground truth, VO) do not compare");
 	if (b.size() != c.size())
 		throw std::runtime_error(
 			"'" + combinedCsv + "' has " + std::to_string(c.size()) + " frames but '" + baselineCsv + "' has " +

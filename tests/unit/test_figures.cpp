@@ -319,6 +319,11 @@ TEST(Figures, Figure7MarksFixesAndTheFramesOutsideTheMap)
 	EXPECT_NE(thrown([&] { figure7("a", "b", dir + "/comb.csv", dir + "/comb.csv", dir + "/bad.png"); })
 				  .find("not a baseline run"),
 			  std::string::npos);
+	// One run with ground truth, the other without: their distances differ.
+	writeFrames(dir + "/gt.csv", {{0, true, 1, -1, "mono"}}, true);
+	EXPECT_NE(thrown([&] { figure7("a", "b", dir + "/gt.csv", dir + "/comb.csv", dir + "/bad.png"); })
+				  .find("was localised with --gt and"),
+			  std::string::npos);
 	EXPECT_FALSE(std::filesystem::exists(dir + "/bad.png"));
 }
 
