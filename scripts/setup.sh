@@ -14,7 +14,7 @@ packages=(
   libopencv-dev libeigen3-dev
   libzstd-dev                    # keyframe map compression
   libgtest-dev libbenchmark-dev
-  gnuplot-nox                    # calibrate-alpha draws its curve with it
+  gnuplot-nox                    # calibrate-alpha and figures draw their plots with it
   libegl-mesa0 libgl1-mesa-dri   # headless offscreen rendering (EGL/Mesa)
   zlib1g-dev                     # checked gzip reading of rawlogs
   clang libclang-rt-14-dev       # sanitizer build and libFuzzer targets (scripts/ci-hardening.sh)

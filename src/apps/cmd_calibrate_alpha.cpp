@@ -3,6 +3,7 @@
 #include "Command.h"
 #include "CommandLine.h"
 
+#include <shadyloc/eval/Figures.h>
 #include <shadyloc/filters/Filters.h>
 #include <shadyloc/image/InvariantCalibration.h>
 #include <shadyloc/io/Rawlog.h>
@@ -160,16 +161,14 @@ void writeText(const std::string& path, const std::string& text)
 	if (!f) throw std::runtime_error("'" + path + "': cannot write");
 }
 
-/** The curves (one panel per method) as a PNG through gnuplot. */
+/** The curves (one panel per method) as a PNG through gnuplot (eval::runGnuplot). */
 void plotCurves(
 	const std::vector<TAlphaCurve>& curves, const std::string& csvPath, const std::string& pngPath,
-	const std::string& scriptPath, double defaultAlpha, const std::string& title)
+	double defaultAlpha, const std::string& title)
 {
 	std::ostringstream g;
-	g << "set terminal pngcairo size 900," << 300 * curves.size() << " font 'sans,10'\n"
-	  << "set output '" << pngPath << "'\n"
-	  << "set datafile separator ','\n"
-	  << "set multiplot layout " << curves.size() << ",1 title \"" << title << "\"\n"
+	g << "set datafile separator ','\n"
+	  << "set multiplot layout " << curves.size() << ",1 title " << shadyloc::eval::gnuplotQuote(title) << "\n"
 	  << "set xlabel 'alpha (beta = 1 - alpha)'\nset grid\nset key top right\n";
 	for (size_t i = 0; i < curves.size(); i++)
 	{
@@ -185,26 +184,19 @@ void plotCurves(
 		g << "set arrow 1 from " << c.best << ", graph 0 to " << c.best << ", graph 1 nohead lc rgb '#0050c0' lw 2\n"
 		  << "set arrow 2 from " << defaultAlpha << ", graph 0 to " << defaultAlpha
 		  << ", graph 1 nohead lc rgb '#c03000' dt 2 lw 1.5\n"
-		  << "plot '" << csvPath << "' using 1:" << (i + 2) << " every ::1 with lines lw 2 lc rgb '#202020' title '"
+		  << "plot " << shadyloc::eval::gnuplotQuote(csvPath) << " using 1:" << (i + 2)
+		  << " every ::1 with lines lw 2 lc rgb '#202020' title '"
 		  << c.method << "', NaN with lines lc rgb '#0050c0' lw 2 title 'estimate', "
 		  << "NaN with lines lc rgb '#c03000' dt 2 title 'default alpha " << fmt(defaultAlpha, 3) << "'\n";
 	}
 	g << "unset multiplot\n";
-	writeText(scriptPath, g.str());
-	const std::string cmd = "gnuplot '" + scriptPath + "' 2>&1";
-	std::string output;
-	FILE* p = popen(cmd.c_str(), "r");
-	if (!p) throw std::runtime_error("cannot start gnuplot");
-	char buf[512];
-	while (fgets(buf, sizeof buf, p)) output += buf;
-	const int rc = pclose(p);
-	if (rc != 0)
+	try
 	{
-		if (output.find("not found") != std::string::npos || WEXITSTATUS(rc) == 127)
-			throw std::runtime_error(
-				"gnuplot is needed to draw the curve (Debian package gnuplot-nox, installed by "
-				"scripts/setup.sh); or pass --no-plot");
-		throw std::runtime_error("gnuplot failed drawing '" + pngPath + "':\n" + output);
+		shadyloc::eval::runGnuplot(g.str(), pngPath, 900, static_cast<unsigned>(300 * curves.size()));
+	}
+	catch (const std::exception& e)
+	{
+		throw std::runtime_error(std::string(e.what()) + "; or pass --no-plot");
 	}
 }
 
@@ -406,16 +398,8 @@ int run(int argc, char** argv)
 	const std::string csvTmp = outputs.stage(csvPath);
 	writeText(csvTmp, csv.str());
 	if (!noPlot.getValue())
-	{
-		const std::string scriptTmp = fs::path(out.getValue()).string() + ".tmp.gp";
-		struct Remove
-		{
-			std::string path;
-			~Remove() { std::error_code ec; fs::remove(path, ec); }
-		} removeScript{scriptTmp};
-		plotCurves(curves, csvTmp, outputs.stage(pngPath), scriptTmp, 0.48,
+		plotCurves(curves, csvTmp, outputs.stage(pngPath), 0.48,
 			"alpha calibration (linearisation " + toString(in.linearisation) + ")");
-	}
 	outputs.commit();
 	std::cout << "\nwrote " << iniPath << ", " << csvPath << (noPlot.getValue() ? "" : ", " + pngPath)
 			  << "\n\n" << ini.str();

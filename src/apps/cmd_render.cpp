@@ -4,6 +4,7 @@
 #include "Command.h"
 #include "CommandLine.h"
 
+#include <shadyloc/eval/Figures.h>
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/io/ImageFile.h>
 #include <shadyloc/io/OutputTransaction.h>
@@ -13,6 +14,7 @@
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 
+#include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
@@ -31,6 +33,50 @@ std::pair<std::string, std::string> fileAndName(const std::string& spec)
 	return {spec, std::filesystem::path(spec).stem().string()};
 }
 
+/** Colours of who held a frame (the same as docs/figures.md's figures). */
+constexpr mrpt::img::TColor kMonoColour{31, 98, 196}, kInvariantColour{230, 130, 14}, kNoneColour{214, 39, 40};
+
+/** The live trajectory of a `shadyloc localise` output folder, each segment
+ * coloured by who held the frame it ends at (frames.csv's `used`). */
+render::TrajectoryLayer localisedLayer(const std::string& dir, const std::string& name)
+{
+	namespace fs = std::filesystem;
+	const std::string csvPath = (fs::path(dir) / "frames.csv").string(), tumPath = (fs::path(dir) / "trajectory.tum").string();
+	if (!fs::is_directory(dir)) throw std::runtime_error("--localised '" + dir + "': not a directory (a shadyloc localise OUTDIR?)");
+	const auto run = eval::readFramesCsv(csvPath);
+	auto traj = io::readTum(tumPath);
+	io::sortByTime(traj);
+	render::TrajectoryLayer l;
+	l.name = name;
+	l.colour = kNoneColour;
+	l.widthPx = 6.0;
+	size_t counts[3] = {0, 0, 0};
+	size_t f = 0;  // frames and poses are both in time order
+	for (const auto& p : traj)
+	{
+		while (f < run.frames.size() && run.frames[f].stamp < p.t - 1e-5) f++;
+		if (f == run.frames.size() || std::fabs(run.frames[f].stamp - p.t) > 1e-5)
+			throw std::runtime_error(
+				"'" + tumPath + "': the pose at " + std::to_string(p.t) + " s has no frame in '" + csvPath +
+				"' (not the same localise run?)");
+		const auto& u = run.frames[f].used;
+		const int k = u == "mono" ? 0 : (u == "invariant" ? 1 : 2);
+		counts[k]++;
+		if (!l.points.empty()) l.segmentColours.push_back(k == 0 ? kMonoColour : (k == 1 ? kInvariantColour : kNoneColour));
+		const auto x = p.T.translation();
+		l.points.emplace_back(x.x(), x.y(), x.z());
+	}
+	if (l.points.size() < 2) throw std::runtime_error("'" + tumPath + "': fewer than two poses to draw");
+	const size_t n = counts[0] + counts[1] + counts[2];
+	auto share = [&](size_t k) {
+		return std::to_string(counts[k]) + " frames (" + std::to_string(int(std::lround(100.0 * counts[k] / n))) + " %)";
+	};
+	l.legend = {{name + ": mono fix, " + share(0), kMonoColour},
+				{name + ": invariant fix, " + share(1), kInvariantColour},
+				{name + ": no fix (VO), " + share(2), kNoneColour}};
+	return l;
+}
+
 int run(int argc, char** argv)
 {
 	shadyloc::apps::CommandLine cli(
@@ -38,7 +84,10 @@ int run(int argc, char** argv)
 			") top-down into a PNG, offscreen (EGL). Each -t / -m is FILE or FILE:NAME; a map is drawn "
 			"as CKeyframeMap::getVisualizationInto draws it (its path as a band, blue where measured and "
 			"orange where predicted after a VO break, chevrons at keyframes), the trajectories over it in "
-			"a fixed palette.");
+			"a fixed palette. With --localised OUTDIR (a `shadyloc localise` output folder) the live trajectory is "
+			"drawn in the map frame, coloured by which localiser held each frame, over the keyframes of the "
+			"first -m map (grey), with the live run's ground truth (--gt) brought into the map frame through "
+			"the keyframes' ground truth.");
 	auto& cmd = cli.cmd();
 	TCLAP::MultiArg<std::string> trajs("t", "traj", "TUM trajectory (FILE or FILE:NAME)", false, "tum", cmd);
 	TCLAP::MultiArg<std::string> maps(
@@ -54,6 +103,13 @@ int run(int argc, char** argv)
 		"align every other trajectory and every map (by its keyframes' timestamps) to the first trajectory "
 		"(SE(3), no scale), e.g. a VO estimate or a map to its ground truth",
 		cmd);
+	TCLAP::ValueArg<std::string> localised(
+		"", "localised",
+		"a shadyloc localise output folder (DIR or DIR:NAME): its trajectory.tum coloured by frames.csv's `used`",
+		false, "", "dir", cmd);
+	TCLAP::ValueArg<std::string> liveGt(
+		"", "gt", "with --localised: the live run's ground truth (TUM), drawn in the map frame of the first -m",
+		false, "", "tum", cmd);
 	TCLAP::SwitchArg landmarks("", "landmarks", "draw the maps' landmarks, coloured by channel", cmd);
 	shadyloc::apps::NumberArg<unsigned> width(
 		cli, "", "width", "image width [px]", 1000, "px", 16u, 16384u);
@@ -61,12 +117,19 @@ int run(int argc, char** argv)
 		cli, "", "height", "image height [px]", 800, "px", 16u, 16384u);
 	cli.allowEmpty(title);
 	if (const auto rc = cli.parse(argc, argv)) return *rc;
-	if (trajs.getValue().empty() && maps.getValue().empty())
-		throw std::invalid_argument("nothing to render: give trajectories (-t FILE[:NAME]) and/or maps (-m FILE[:NAME])");
+	if (trajs.getValue().empty() && maps.getValue().empty() && !localised.isSet())
+		throw std::invalid_argument(
+			"nothing to render: give trajectories (-t FILE[:NAME]), maps (-m FILE[:NAME]) and/or --localised DIR");
+	if (localised.isSet() && align.getValue())
+		throw std::invalid_argument("--localised draws in the map frame: --align (to the first -t) does not apply");
+	if (liveGt.isSet() && (!localised.isSet() || maps.getValue().empty()))
+		throw std::invalid_argument("--gt needs --localised and a map (-m) whose keyframes carry ground truth");
 	// The picture is the one output; no input may be overwritten by it.
 	io::OutputTransaction outputs;
 	for (const auto& spec : trajs.getValue()) outputs.addInput(fileAndName(spec).first, "trajectory");
 	for (const auto& spec : maps.getValue()) outputs.addInput(fileAndName(spec).first, "map");
+	if (localised.isSet()) outputs.addInput(fileAndName(localised.getValue()).first, "localise output");
+	if (liveGt.isSet()) outputs.addInput(liveGt.getValue(), "ground truth");
 	const std::string outTmp = outputs.addFile(out.getValue(), "output image");
 	io::checkImageWritable(out.getValue());
 
@@ -102,11 +165,54 @@ int run(int argc, char** argv)
 	}
 
 	std::vector<render::TObjectLayer> objects;
+	std::vector<render::TrajectoryLayer> underneath;  // --localised: the maps' keyframes, under every path
 	for (const auto& spec : maps.getValue())
 	{
 		const auto [file, name] = fileAndName(spec);
 		const CKeyframeMap::Ptr m = CKeyframeMap::LoadFromFile(file);
 		if (m->isEmpty()) throw std::runtime_error("keyframe map '" + file + "': no keyframes to draw");
+		if (localised.isSet())
+		{
+			// The map's own drawing is blue and orange, the colours of the
+			// localisers here: its keyframes in grey instead.
+			render::TrajectoryLayer k;
+			k.colour = {150, 150, 150};
+			k.widthPx = 16;
+			k.markerPx = 6;
+			k.markerColour = {90, 90, 90};
+			for (const auto& kf : m->keyframes()) k.points.push_back(toPoint(kf.T_map_kf.translation()));
+			std::ostringstream legend;
+			legend << "map " << name << ": " << m->keyframeCount() << " keyframes (squares), " << std::fixed
+				   << std::setprecision(0) << m->pathLength() << " m";
+			k.name = legend.str();
+			if (k.points.size() == 1) k.points.push_back(k.points.front());
+			if (liveGt.isSet() && underneath.empty())
+			{
+				// T_map_world from the keyframes' own poses and their ground truth.
+				io::Trajectory chain, truth;
+				for (const auto& kf : m->keyframes())
+					if (kf.T_gt_kf && !kf.predicted)
+					{
+						chain.push_back({kf.timestamp, kf.T_map_kf});
+						truth.push_back({kf.timestamp, *kf.T_gt_kf});
+					}
+				if (chain.size() < 3)
+					throw std::runtime_error(
+						"--gt: keyframe map '" + file + "' has fewer than 3 keyframes with ground truth (survey it with --gt)");
+				const Eigen::Isometry3d T_map_world = eval::computeErrors(chain, truth).T_gt_est;
+				auto gt = io::readTum(liveGt.getValue());
+				io::sortByTime(gt);
+				render::TrajectoryLayer g;
+				g.name = "ground truth of the live run";
+				g.colour = {0, 0, 0};
+				g.widthPx = 1.5;
+				for (const auto& p : gt) g.points.push_back(toPoint(T_map_world * p.T.translation()));
+				if (g.points.size() < 2) throw std::runtime_error("'" + liveGt.getValue() + "': fewer than two poses to draw");
+				layers.push_back(g);  // over the live path
+			}
+			underneath.push_back(k);
+			continue;
+		}
 		m->options.draw_landmarks = landmarks.getValue();
 		// --align fits the measured keyframes of the map's first segment.
 		io::Trajectory chain;
@@ -150,6 +256,13 @@ int run(int argc, char** argv)
 		};
 		objects.push_back(l);
 	}
+	if (localised.isSet())
+	{
+		const auto [dir, name] = fileAndName(localised.getValue());
+		const auto live = localisedLayer(dir, name == std::filesystem::path(dir).stem().string() ? "live" : name);
+		layers.insert(layers.begin(), live);
+	}
+	layers.insert(layers.begin(), underneath.begin(), underneath.end());
 	if (layers.empty() && align.getValue())
 		throw std::invalid_argument("--align aligns to the first trajectory: give one with -t");
 

@@ -1,4 +1,5 @@
 /* ShadyLoc — evaluation of a localisation run (docs/localisation.md). */
+#include <shadyloc/eval/BlindEpisodes.h>
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/localisation/Evaluation.h>
 
@@ -217,25 +218,11 @@ TEvaluation evaluate(
 	ev.false_fix_share = ratio(ev.false_fixes, ev.true_fixes + ev.false_fixes);
 
 	// ---- blind episodes
-	int lastFix = -1;
-	for (size_t i = 0; i <= n; i++)
 	{
-		const bool fix = i < n && ups[i].localised();
-		if (i < n && !fix) continue;
-		// i is a fix (or the end); frames lastFix+1 .. i-1 are blind.
-		if (static_cast<int>(i) > lastFix + 1)
-		{
-			TBlindEpisode e;
-			e.first = static_cast<size_t>(lastFix + 1);
-			e.last = i - 1;
-			const double from = lastFix >= 0 ? ev.frames[lastFix].distance_m : ev.frames[0].distance_m;
-			const double to = i < n ? ev.frames[i].distance_m : ev.frames[n - 1].distance_m;
-			e.length_m = to - from;
-			e.kind = lastFix < 0 ? TBlindEpisode::BeforeFirstFix : (i == n ? TBlindEpisode::AtEnd : TBlindEpisode::Between);
-			if (lastFix < 0 && i == n) e.kind = TBlindEpisode::BeforeFirstFix;	// never localised
-			ev.episodes.push_back(e);
-		}
-		if (i < n) lastFix = static_cast<int>(i);
+		std::vector<bool> fix(n);
+		std::vector<double> dist(n);
+		for (size_t i = 0; i < n; i++) fix[i] = ups[i].localised(), dist[i] = ev.frames[i].distance_m;
+		ev.episodes = eval::blindEpisodes(fix, dist);
 	}
 	std::vector<double> between;
 	for (const auto& e : ev.episodes)

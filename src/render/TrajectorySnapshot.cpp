@@ -3,7 +3,6 @@
 #include <shadyloc/render/TrajectorySnapshot.h>
 
 #include <mrpt/img/CImage.h>
-#include <mrpt/opengl/CGridPlaneXY.h>
 #include <mrpt/opengl/COpenGLScene.h>
 #include <mrpt/opengl/CSetOfTriangles.h>
 #include <mrpt/poses/CPose3D.h>
@@ -91,12 +90,14 @@ void renderTrajectories(
 			const auto q = proj(p);
 			x0 = std::min(x0, q.x), x1 = std::max(x1, q.x), y0 = std::min(y0, q.y), y1 = std::max(y1, q.y);
 		}
-	// The legend's lines (0.035 of the height each, below the title's) take
+	// The legend's lines (21 px each, below the title's) take
 	// a band at the top; the content is framed in the rest.
 	size_t lines = o.title.empty() ? 0 : 1;
-	for (const auto& l : layers) lines += l.points.size() >= 2;
+	for (const auto& l : layers) lines += l.points.size() < 2 ? 0 : (l.legend.empty() ? 1 : l.legend.size());
 	for (const auto& l : objects) lines += l.legend.size();
-	const double band = o.legendBand && lines ? 0.035 * double(lines) + 0.04 : 0.0;
+	// Text sizes are in pixels: the lines' spacing too (as fractions of the height).
+	const double lineH = 21.0 / o.height, top = 1.0 - 24.0 / o.height;
+	const double band = o.legendBand && lines ? lineH * double(lines) + 30.0 / o.height : 0.0;
 	const double usableH = o.height * (1.0 - band) - 2 * o.marginFraction * o.height;
 	// Metres per pixel so that the extent fits with the margin.
 	const double mPerPx = std::max(
@@ -111,6 +112,7 @@ void renderTrajectories(
 	// The object layers, turned into the picture's frame; the grid goes
 	// under them and the paths over them.
 	double zLow = -1.0, zTop = 0.0;
+	std::vector<mrpt::opengl::CSetOfObjects::Ptr> frames;
 	for (const auto& l : objects)
 	{
 		if (!l.make) continue;
@@ -119,7 +121,7 @@ void renderTrajectories(
 		auto frame = mrpt::opengl::CSetOfObjects::Create();
 		frame->setPose(asPose(proj));
 		frame->insert(obj);
-		scene.insert(frame);
+		frames.push_back(frame);
 		const auto bb = frame->getBoundingBox();
 		if (bb.min.z <= bb.max.z && std::isfinite(bb.min.z) && std::isfinite(bb.max.z))
 		{
@@ -134,11 +136,23 @@ void renderTrajectories(
 		const double p10 = std::pow(10.0, std::floor(std::log10(raw)));
 		const double step = raw / p10 < 2 ? p10 : (raw / p10 < 5 ? 2 * p10 : 5 * p10);
 		const double hw = 0.5 * mPerPx * o.width, hh = 0.5 * mPerPx * o.height;
-		auto grid = mrpt::opengl::CGridPlaneXY::Create(
-			float(std::floor((cx - hw) / step) * step), float(std::ceil((cx + hw) / step) * step),
-			float(std::floor((cy - hh) / step) * step), float(std::ceil((cy + hh) / step) * step), float(zLow),
-			float(step));
-		grid->setColor(0.82, 0.82, 0.82);
+		// Lines as 1 px wide quads, inserted first: the offscreen renderer
+		// draws line primitives over triangles whatever their depth.
+		auto grid = mrpt::opengl::CSetOfTriangles::Create();
+		const double gx0 = std::floor((cx - hw) / step) * step, gx1 = std::ceil((cx + hw) / step) * step,
+					 gy0 = std::floor((cy - hh) / step) * step, gy1 = std::ceil((cy + hh) / step) * step;
+		const double lw = 0.5 * mPerPx;
+		auto quad = [&](double ax, double ay, double bx, double by) {
+			const mrpt::math::TPoint3Df p1(ax, ay, zLow), p2(bx, ay, zLow), p3(bx, by, zLow), p4(ax, by, zLow);
+			mrpt::opengl::TTriangle t1(p1, p2, p3), t2(p1, p3, p4);
+			for (auto* t : {&t1, &t2})
+				for (auto& v : t->vertices) v.setColor(mrpt::img::TColor(210, 210, 210));
+			grid->insertTriangle(t1);
+			grid->insertTriangle(t2);
+		};
+		for (double x = gx0; x <= gx1 + 1e-9 * step; x += step) quad(x - lw, gy0, x + lw, gy1);
+		for (double y = gy0; y <= gy1 + 1e-9 * step; y += step) quad(gx0, y - lw, gx1, y + lw);
+		grid->enableLight(false);
 		scene.insert(grid);
 		vp->addTextMessage(
 			0.01, 0.01, mrpt::format("grid %g m", step), 1,
@@ -149,6 +163,8 @@ void renderTrajectories(
 				return f;
 			}());
 	}
+
+	for (const auto& f : frames) scene.insert(f);
 
 	size_t li = 0;
 	for (const auto& l : layers)
@@ -176,13 +192,34 @@ void renderTrajectories(
 			tris->insertTriangle(t1);
 			tris->insertTriangle(t2);
 		}
+		if (l.markerPx > 0)
+		{
+			const double h = 0.5 * l.markerPx * mPerPx;
+			const float zm = z + 0.005f;
+			for (const auto& pt : l.points)
+			{
+				const auto q = proj(pt);
+				const mrpt::math::TPoint3Df a(q.x - h, q.y - h, zm), b(q.x + h, q.y - h, zm), c(q.x + h, q.y + h, zm),
+					d(q.x - h, q.y + h, zm);
+				mrpt::opengl::TTriangle t1(a, b, c), t2(a, c, d);
+				for (auto* t : {&t1, &t2})
+					for (auto& v : t->vertices) v.setColor(l.markerColour);
+				tris->insertTriangle(t1);
+				tris->insertTriangle(t2);
+			}
+		}
 		tris->enableLight(false);
 		scene.insert(tris);
-		mrpt::opengl::TFontParams f;
-		f.color = mrpt::img::TColorf(l.colour);
-		f.vfont_scale = 16;
-		vp->addTextMessage(0.01, 0.97 - 0.035 * double(li + 1), "-- " + l.name, 10 + li, f);
-		li++;
+		const auto entries = l.legend.empty() ? std::vector<std::pair<std::string, mrpt::img::TColor>>{{l.name, l.colour}}
+											  : l.legend;
+		for (const auto& [text, colour] : entries)
+		{
+			mrpt::opengl::TFontParams f;
+			f.color = mrpt::img::TColorf(colour);
+			f.vfont_scale = 16;
+			vp->addTextMessage(0.01, top - lineH * double(li + 1), "-- " + text, 10 + li, f);
+			li++;
+		}
 	}
 	for (const auto& l : objects)
 		for (const auto& [text, colour] : l.legend)
@@ -190,7 +227,7 @@ void renderTrajectories(
 			mrpt::opengl::TFontParams f;
 			f.color = mrpt::img::TColorf(colour);
 			f.vfont_scale = 16;
-			vp->addTextMessage(0.01, 0.97 - 0.035 * double(li + 1), "-- " + text, 10 + li, f);
+			vp->addTextMessage(0.01, top - lineH * double(li + 1), "-- " + text, 10 + li, f);
 			li++;
 		}
 	if (!o.title.empty())
@@ -198,7 +235,7 @@ void renderTrajectories(
 		mrpt::opengl::TFontParams f;
 		f.color = {0.f, 0.f, 0.f};
 		f.vfont_scale = 18;
-		vp->addTextMessage(0.01, 0.97, o.title, 2, f);
+		vp->addTextMessage(0.01, top, o.title, 2, f);
 	}
 
 	TSceneCamera cam;

@@ -11,6 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <fstream>
+#include <iomanip>
 
 using namespace shadyloc::render;
 
@@ -108,7 +109,7 @@ TEST(RenderSnapshot, AppAlignsEstimatesToTheFirstTrajectory)
 			<< out;
 		const cv::Mat img = cv::imread(dir + "/a.png");
 		int n = 0;
-		for (int y = 40; y < img.rows; y++)	// below the legend
+		for (int y = 80; y < img.rows; y++)	// below the legend (two 21 px lines from 24 px)
 			for (int x = 0; x < img.cols; x++)
 			{
 				const auto p = img.at<cv::Vec3b>(y, x);
@@ -195,4 +196,102 @@ TEST(RenderSnapshot, AppDrawsKeyframeMaps)
 	ASSERT_EQ(shadyloc::test::runCommand(shadyloc::test::appPath() + " render-traj -m " + dir + "/m.kfmap -o " + dir + "/old.png", &out), 0)
 		<< out;
 	EXPECT_NE(out.find("renamed to `shadyloc render`"), std::string::npos) << out;
+}
+
+// `render --localised OUTDIR`: the live trajectory of a localise output
+// folder coloured by frames.csv's `used` (blue mono, orange invariant, red
+// none) over the map's keyframes in grey, and the live ground truth brought
+// into the map frame through the keyframes' ground truth (black, on the
+// keyframe chain here, since the live run drove it exactly).
+TEST(RenderSnapshot, AppColoursALocalisedRunByItsLocaliser)
+{
+	const auto dir = shadyloc::test::tempDir("render_localised");
+	// The world frame of the ground truth: the map frame moved and turned
+	// (the keyframes' ground truth and the live run's are both in it).
+	Eigen::Isometry3d T_world_map = Eigen::Isometry3d::Identity();
+	T_world_map.linear() = Eigen::AngleAxisd(0.7, Eigen::Vector3d::UnitY()).toRotationMatrix();
+	T_world_map.translation() = Eigen::Vector3d(40, 1, -25);
+	const auto src = shadyloc::test::makeSyntheticMap(30, 10, 0);
+	auto map = shadyloc::CKeyframeMap::Create();
+	map->options = src->options;
+	map->setup(src->calibration(), src->imageWidth(), src->imageHeight(), src->channels());
+	for (const auto& r : src->runs()) map->addRun(r);
+	for (auto k : src->keyframes())
+	{
+		k.T_gt_kf = T_world_map * *k.T_gt_kf;
+		map->appendKeyframe(k);
+	}
+	map->saveToFile(dir + "/m.kfmap");
+	std::filesystem::create_directories(dir + "/loc");
+	{
+		std::ofstream csv(dir + "/loc/frames.csv"), tum(dir + "/loc/trajectory.tum"), gt(dir + "/gt.tum");
+		csv << "frame,stamp,distance_m,in_map,mono_ok,invariant_ok,used\n";
+		tum << std::fixed << std::setprecision(9);
+		gt << std::fixed << std::setprecision(9);
+		csv << std::fixed;
+		const auto& kfs = map->keyframes();
+		for (size_t i = 0; i < kfs.size(); i++)
+		{
+			// 10 frames mono, 10 invariant, 10 none; the estimate 4 m to the right of the truth.
+			const char* used = i < 10 ? "mono" : (i < 20 ? "invariant" : "none");
+			const double t = 500.0 + 0.1 * i;
+			csv << i << ',' << std::setprecision(6) << t << ',' << 2.0 * i << ",1," << int(i < 10) << ','
+				<< int(i >= 10 && i < 20) << ',' << used << '\n';
+			const Eigen::Vector3d est = kfs[i].T_map_kf * Eigen::Vector3d(4, 0, 0);
+			tum << t << ' ' << est.x() << ' ' << est.y() << ' ' << est.z() << " 0 0 0 1\n";
+			const Eigen::Vector3d g = kfs[i].T_gt_kf->translation();
+			gt << t << ' ' << g.x() << ' ' << g.y() << ' ' << g.z() << " 0 0 0 1\n";
+		}
+	}
+	std::string out;
+	ASSERT_EQ(shadyloc::test::runCommand(shadyloc::test::appPath() + " render -m " + dir + "/m.kfmap:synthetic --localised " +
+										  dir + "/loc --gt " + dir + "/gt.tum -o " + dir + "/l.png --width 600 --height 500",
+										  &out),
+			  0)
+		<< out;
+	const cv::Mat img = cv::imread(dir + "/l.png");
+	ASSERT_EQ(img.cols, 600);
+	// Below the legend band (no title, 5 legend lines of 21 px from 24 px down).
+	const int y0 = 150;
+	size_t blue = 0, orange = 0, red = 0, black = 0, blackOnChain = 0;
+	auto near = [&](int x, int y, const cv::Vec3b& c) {
+		for (int dy = -4; dy <= 4; dy++)
+			for (int dx = -4; dx <= 4; dx++)
+			{
+				const int u = x + dx, v = y + dy;
+				if (u >= 0 && v >= 0 && u < img.cols && v < img.rows && img.at<cv::Vec3b>(v, u) == c) return true;
+			}
+		return false;
+	};
+	for (int y = y0; y < img.rows; y++)
+		for (int x = 0; x < img.cols; x++)
+		{
+			const auto p = img.at<cv::Vec3b>(y, x);
+			blue += p == cv::Vec3b(196, 98, 31);
+			orange += p == cv::Vec3b(14, 130, 230);
+			red += p == cv::Vec3b(40, 39, 214);
+			if (p[0] < 40 && p[1] < 40 && p[2] < 40)
+			{
+				black++;
+				blackOnChain += near(x, y, cv::Vec3b(150, 150, 150));
+			}
+		}
+	// Segments end at frames 1-9 (mono), 10-19 (invariant), 20-29 (none): 9:10:10.
+	ASSERT_GT(blue, 300u);
+	EXPECT_NEAR(double(orange) / blue, 10.0 / 9.0, 0.15);
+	EXPECT_NEAR(double(red) / blue, 10.0 / 9.0, 0.15);
+	EXPECT_GT(black, 100u);
+	EXPECT_GT(blackOnChain, 0.95 * black) << "the ground truth is not on the keyframe chain";
+
+	// A trajectory.tum whose poses have no frame in frames.csv: refused, nothing written.
+	std::filesystem::create_directories(dir + "/other");
+	std::filesystem::copy_file(dir + "/loc/frames.csv", dir + "/other/frames.csv");
+	std::ofstream(dir + "/other/trajectory.tum") << "900.0 0 0 0 0 0 0 1\n901.0 1 0 0 0 0 0 1\n";
+	EXPECT_NE(shadyloc::test::runCommand(shadyloc::test::appPath() + " render --localised " + dir + "/other -o " + dir + "/x.png", &out), 0);
+	EXPECT_NE(out.find("has no frame in"), std::string::npos) << out;
+	EXPECT_NE(shadyloc::test::runCommand(shadyloc::test::appPath() + " render --localised " + dir + "/nowhere -o " + dir + "/x.png", &out), 0);
+	EXPECT_NE(out.find("nowhere"), std::string::npos) << out;
+	EXPECT_NE(shadyloc::test::runCommand(shadyloc::test::appPath() + " render --localised " + dir + "/loc --gt " + dir + "/gt.tum -o " + dir + "/x.png", &out), 0);
+	EXPECT_NE(out.find("--gt needs --localised and a map"), std::string::npos) << out;
+	EXPECT_FALSE(std::filesystem::exists(dir + "/x.png"));
 }

@@ -19,6 +19,7 @@
  */
 #pragma once
 
+#include <shadyloc/eval/BlindEpisodes.h>
 #include <shadyloc/io/Trajectory.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 
@@ -60,17 +61,8 @@ struct TFrameEval
 	std::vector<FixTruth> channel;	//!< per localiser (policy order): of its own accepted fix
 };
 
-struct TBlindEpisode
-{
-	size_t first = 0, last = 0;	 //!< frames without a fix
-	double length_m = 0;  //!< from the fix before to the fix after (or the run's end) [m]
-	enum Kind
-	{
-		Between,
-		BeforeFirstFix,
-		AtEnd
-	} kind = Between;
-};
+/** The one definition of a blind episode (eval/BlindEpisodes.h). */
+using TBlindEpisode = eval::TBlindEpisode;
 
 struct TChannelSummary
 {

@@ -27,6 +27,12 @@ struct TrajectoryLayer
 	/** Ribbon width in pixels of the output image (the software renderer
 	 * ignores line widths, so paths are drawn as triangle ribbons). */
 	double widthPx = 4.0;
+	/** A square of this size [px] at every point (0: none), e.g. keyframes. */
+	double markerPx = 0.0;
+	mrpt::img::TColor markerColour{90, 90, 90};	 //!< of the squares
+	/** Legend lines replacing the one "name" line, e.g. what each segment
+	 * colour means. */
+	std::vector<std::pair<std::string, mrpt::img::TColor>> legend;
 };
 
 /** 3D content under the paths, in the same frame as the trajectories' points:
