@@ -178,6 +178,7 @@ double runMapJob(const std::string& outDir, const TEvalInputs& in, const TEvalJo
 	{
 		survey::CSurveyRun sr(run.rawlogPath, in.config(), so);
 		sr.setMinLoggingLevel(o.verbosity);
+		for (const auto& w : sr.warnings()) sr.logStr(mrpt::system::LVL_WARN, w);
 		map = sr.run();
 		st = sr.stats();
 	}
@@ -418,6 +419,7 @@ std::vector<TEvalJob> readPlan(const std::string& outDir, const TEvalInputs& in)
 		if (line.rfind("# config_fnv1a64\t", 0) == 0) cfgHash = line.substr(17);
 		if (!line.empty() && line[0] != '#' && line.rfind("job\t", 0) != 0) rows.push_back(line);
 	}
+	if (n == 0) throw std::runtime_error(path + ": empty; make the plan again (--plan)");
 	if (runsHash != in.runsHash())
 		throw std::runtime_error(
 			path + ": made from another run list than '" + in.runsPath + "' (contents differ): make the plan again (--plan)");
