@@ -10,24 +10,6 @@
 
 namespace shadyloc::eval
 {
-std::vector<std::pair<size_t, size_t>> associate(const Trajectory& gt, const Trajectory& est, double maxDt)
-{
-	std::vector<std::pair<size_t, size_t>> out;
-	if (gt.empty()) return out;
-	size_t g = 0;
-	long lastG = -1;
-	for (size_t e = 0; e < est.size(); e++)
-	{
-		while (g + 1 < gt.size() && std::abs(gt[g + 1].t - est[e].t) <= std::abs(gt[g].t - est[e].t)) g++;
-		if (std::abs(gt[g].t - est[e].t) <= maxDt && static_cast<long>(g) != lastG)
-		{
-			out.emplace_back(g, e);
-			lastG = static_cast<long>(g);
-		}
-	}
-	return out;
-}
-
 namespace
 {
 double angleDeg(const Eigen::Matrix3d& R) { return Eigen::AngleAxisd(R).angle() * 180.0 / M_PI; }

@@ -1,6 +1,5 @@
 /* ShadyLoc — evaluation of a localisation run (docs/localisation.md). */
-#include <shadyloc/eval/BlindEpisodes.h>
-#include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/localisation/BlindEpisodes.h>
 #include <shadyloc/localisation/Evaluation.h>
 
 #include <algorithm>
@@ -76,6 +75,31 @@ FixTruth judge(
 }
 }  // namespace
 
+TBlindProbability blindProbability(const std::vector<double>& lengths, const TEvalOptions& o)
+{
+	TBlindProbability r;
+	r.episodes = lengths.size();
+	r.reaching = static_cast<size_t>(
+		std::count_if(lengths.begin(), lengths.end(), [&](double l) { return l >= o.blind_long_m; }));
+	if (lengths.empty()) return r;
+	r.p = static_cast<double>(r.reaching) / static_cast<double>(lengths.size());
+	// Percentile bootstrap over episodes (seeded: the summary is repeatable).
+	std::mt19937 rng(o.bootstrap_seed);
+	std::uniform_int_distribution<size_t> pick(0, lengths.size() - 1);
+	std::vector<double> ps;
+	ps.reserve(o.bootstrap_samples);
+	for (int b = 0; b < o.bootstrap_samples; b++)
+	{
+		size_t k = 0;
+		for (size_t j = 0; j < lengths.size(); j++) k += lengths[pick(rng)] >= o.blind_long_m;
+		ps.push_back(static_cast<double>(k) / lengths.size());
+	}
+	std::sort(ps.begin(), ps.end());
+	r.lo = ps[static_cast<size_t>(0.025 * (ps.size() - 1))];
+	r.hi = ps[static_cast<size_t>(0.975 * (ps.size() - 1))];
+	return r;
+}
+
 TEvaluation evaluate(
 	const std::vector<TLocalisationUpdate>& ups, const CKeyframeMap& map, const io::Trajectory* gt,
 	const TEvalOptions& o)
@@ -95,7 +119,7 @@ TEvaluation evaluate(
 		for (const auto& u : ups) est.push_back({u.timestamp, Eigen::Isometry3d::Identity()});
 		io::Trajectory g = *gt;
 		io::sortByTime(g);
-		for (const auto& p : eval::associate(g, est, o.assoc_dt_s)) gtOf[p.second] = static_cast<int>(p.first);
+		for (const auto& p : io::associate(g, est, o.assoc_dt_s)) gtOf[p.second] = static_cast<int>(p.first);
 		// associate() refers to the sorted copy.
 		ev.associated = static_cast<size_t>(std::count_if(gtOf.begin(), gtOf.end(), [](int i) { return i >= 0; }));
 		if (n > 0 && ev.associated < o.min_associated * n)
@@ -222,7 +246,7 @@ TEvaluation evaluate(
 		std::vector<bool> fix(n);
 		std::vector<double> dist(n);
 		for (size_t i = 0; i < n; i++) fix[i] = ups[i].localised(), dist[i] = ev.frames[i].distance_m;
-		ev.episodes = eval::blindEpisodes(fix, dist);
+		ev.episodes = blindEpisodes(fix, dist);
 	}
 	std::vector<double> between;
 	for (const auto& e : ev.episodes)
@@ -242,26 +266,11 @@ TEvaluation evaluate(
 	ev.total_m = n ? ev.frames[n - 1].distance_m - ev.frames[0].distance_m : 0;
 	ev.blind_m_per_km = ev.total_m > 0 ? 1000 * ev.blind_m / ev.total_m : 0;
 	ev.episodes_between = between.size();
-	ev.episodes_long = static_cast<size_t>(
-		std::count_if(between.begin(), between.end(), [&](double l) { return l >= o.blind_long_m; }));
-	ev.p_long = ratio(ev.episodes_long, between.size());
-	if (!between.empty())
-	{
-		// Percentile bootstrap over episodes (seeded: the summary is repeatable).
-		std::mt19937 rng(o.bootstrap_seed);
-		std::uniform_int_distribution<size_t> pick(0, between.size() - 1);
-		std::vector<double> ps;
-		ps.reserve(o.bootstrap_samples);
-		for (int b = 0; b < o.bootstrap_samples; b++)
-		{
-			size_t k = 0;
-			for (size_t j = 0; j < between.size(); j++) k += between[pick(rng)] >= o.blind_long_m;
-			ps.push_back(static_cast<double>(k) / between.size());
-		}
-		std::sort(ps.begin(), ps.end());
-		ev.p_long_lo = ps[static_cast<size_t>(0.025 * (ps.size() - 1))];
-		ev.p_long_hi = ps[static_cast<size_t>(0.975 * (ps.size() - 1))];
-	}
+	const TBlindProbability bp = blindProbability(between, o);
+	ev.episodes_long = bp.reaching;
+	ev.p_long = bp.p;
+	ev.p_long_lo = bp.lo;
+	ev.p_long_hi = bp.hi;
 	return ev;
 }
 

@@ -237,11 +237,12 @@ const CLocalisationSystem::TChannelSetup& CLocalisationSystem::channelSetup(cons
 	throw std::out_of_range("CLocalisationSystem: no channel '" + label + "'");
 }
 
-std::unique_ptr<CLocalisationSystem> CLocalisationSystem::FromConfig(
-	const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::vector<std::string>& localisers,
-	int threads, const std::string& what)
+CLocalisationSystem::TSetup CLocalisationSystem::SetupFromConfig(
+	const mrpt::config::CConfigFileBase& cfg, const std::vector<std::string>& localisers, int threads,
+	const std::string& what)
 {
-	TSystemOptions so;
+	TSetup r;
+	TSystemOptions& so = r.system;
 	if (cfg.sectionExists("localise")) so.load(cfg, "localise");
 	if (!localisers.empty()) so.localisers = localisers;
 	if (threads > 0) so.threads = threads;
@@ -249,7 +250,7 @@ std::unique_ptr<CLocalisationSystem> CLocalisationSystem::FromConfig(
 	std::vector<std::string> labels = {so.vo_channel};
 	for (const auto& l : so.localisers)
 		if (l != so.vo_channel) labels.push_back(l);
-	std::vector<TChannelSetup> chans;
+	std::vector<TChannelSetup>& chans = r.channels;
 	for (const auto& l : labels)
 	{
 		TChannelSetup c;
@@ -266,8 +267,16 @@ std::unique_ptr<CLocalisationSystem> CLocalisationSystem::FromConfig(
 			if (l == labels[i]) l = chans[i].channel.label;
 		if (so.vo_channel == labels[i]) so.vo_channel = chans[i].channel.label;
 	}
-	const vo::TStereoVOOptions vopt = vo::voOptionsFor(cfg, so.vo_channel);
-	return std::make_unique<CLocalisationSystem>(std::move(map), chans, vopt, so);
+	r.vo = vo::voOptionsFor(cfg, so.vo_channel);
+	return r;
+}
+
+std::unique_ptr<CLocalisationSystem> CLocalisationSystem::FromConfig(
+	const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::vector<std::string>& localisers,
+	int threads, const std::string& what)
+{
+	TSetup s = SetupFromConfig(cfg, localisers, threads, what);
+	return std::make_unique<CLocalisationSystem>(std::move(map), s.channels, s.vo, s.system);
 }
 
 void CLocalisationSystem::reset()

@@ -105,7 +105,7 @@ TEST(CommandLine, EveryCommandRefusesUnknownFlagsAndBadNumbers)
 
 TEST(CommandLine, HelpAndVersionExitZero)
 {
-	for (const char* c : {"image", "vo", "filter", "sim", "traj-error", "render", "render-traj", "survey", "map-info", "localise", "calibrate-alpha", "figures", "export kitti",
+	for (const char* c : {"image", "vo", "filter", "sim", "traj-error", "render", "render-traj", "survey", "map-info", "localise", "eval", "calibrate-alpha", "figures", "export kitti",
 								"import kitti", "import folder", "import middlebury"})
 	{
 		std::string out;

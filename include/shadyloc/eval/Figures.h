@@ -13,7 +13,7 @@
  *    invariant localiser of the combined run);
  *  - Figure 9: P(an episode without a fix reaches a distance d) against d,
  *    baseline versus combined, over blind episodes between two fixes
- *    (eval/BlindEpisodes.h), with the episode counts.
+ *    (localisation/BlindEpisodes.h), with the episode counts.
  *
  * Every function writes its PNG atomically (nothing is left at the path on
  * an error) and throws std::runtime_error naming the file (and line) at
@@ -21,13 +21,16 @@
  */
 #pragma once
 
-#include <shadyloc/eval/BlindEpisodes.h>
+#include <shadyloc/localisation/BlindEpisodes.h>
 
 #include <string>
 #include <vector>
 
 namespace shadyloc::eval
 {
+using localisation::blindEpisodes;
+using localisation::TBlindEpisode;
+
 /** One row of a frames.csv: the columns the figures read. */
 struct TLocalisedFrame
 {

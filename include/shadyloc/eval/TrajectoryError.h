@@ -20,10 +20,8 @@ namespace shadyloc::eval
 using io::TStampedPose;
 using io::Trajectory;
 
-/** Pairs (gt index, est index) with |t_gt - t_est| <= maxDt, each estimate to
- * its nearest ground-truth stamp, in time order, one-to-one. Both must be in
- * time order (io::sortByTime). */
-std::vector<std::pair<size_t, size_t>> associate(const Trajectory& gt, const Trajectory& est, double maxDt);
+/** Timestamp association (io::associate, where it lives). */
+using io::associate;
 
 struct TSegmentError
 {

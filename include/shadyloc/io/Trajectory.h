@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include <utility>
 #include <vector>
 
 namespace shadyloc::io
@@ -22,6 +23,13 @@ using Trajectory = std::vector<TStampedPose>;
 
 /** Sorts by timestamp, keeping the order of equal stamps (stable). */
 void sortByTime(Trajectory& traj);
+
+/** Pairs (gt index, est index) with |t_gt - t_est| <= maxDt [s], each
+ * estimate to its nearest ground-truth stamp, in time order, one-to-one.
+ * Both must be in time order (sortByTime). Here, not in `eval`, because the
+ * localisation's evaluation and the survey join their frames to ground
+ * truth with it too. */
+std::vector<std::pair<size_t, size_t>> associate(const Trajectory& gt, const Trajectory& est, double maxDt);
 
 /** MRPT pose <-> isometry, element for element (no re-orthonormalisation). */
 Eigen::Isometry3d toIsometry(const mrpt::poses::CPose3D& p);

@@ -19,7 +19,7 @@
  */
 #pragma once
 
-#include <shadyloc/eval/BlindEpisodes.h>
+#include <shadyloc/localisation/BlindEpisodes.h>
 #include <shadyloc/io/Trajectory.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 
@@ -61,8 +61,6 @@ struct TFrameEval
 	std::vector<FixTruth> channel;	//!< per localiser (policy order): of its own accepted fix
 };
 
-/** The one definition of a blind episode (eval/BlindEpisodes.h). */
-using TBlindEpisode = eval::TBlindEpisode;
 
 struct TChannelSummary
 {
@@ -91,6 +89,18 @@ struct TEvaluation
 	int first_fix_frame = -1;
 	size_t global_searches = 0;
 };
+
+/** P(a blind episode reaches o.blind_long_m) over episode lengths [m], with
+ * a 95 % percentile-bootstrap interval (o.bootstrap_samples resamples of the
+ * episodes, seeded by o.bootstrap_seed: repeatable). evaluate() uses it for
+ * one run's episodes between fixes; the leave-one-out evaluation for the
+ * episodes pooled over pairs. */
+struct TBlindProbability
+{
+	size_t episodes = 0, reaching = 0;	//!< episodes; of which >= blind_long_m
+	double p = 0, lo = 0, hi = 0;  //!< reaching / episodes, interval [0..1]
+};
+TBlindProbability blindProbability(const std::vector<double>& lengths, const TEvalOptions& o = {});
 
 /** Evaluates updates of one run against the map; `gt` (may be null) is the
  * live run's ground truth in the world frame of the map's keyframe ground

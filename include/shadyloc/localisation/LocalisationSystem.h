@@ -129,6 +129,18 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 		const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::vector<std::string>& localisers,
 		int threads, const std::string& what);
 
+	/** What FromConfig reads, without a map: every options struct loaded and
+	 * checked (a bad key or value throws as FromConfig would). */
+	struct TSetup
+	{
+		std::vector<TChannelSetup> channels;  //!< the VO channel first
+		vo::TStereoVOOptions vo;
+		TSystemOptions system;
+	};
+	static TSetup SetupFromConfig(
+		const mrpt::config::CConfigFileBase& cfg, const std::vector<std::string>& localisers, int threads,
+		const std::string& what);
+
 	/** Starts near a keyframe: the first search for the place looks only at
 	 * the keyframes within start_radius_m along the chain of it (a place is
 	 * still verified geometrically, never assumed). */

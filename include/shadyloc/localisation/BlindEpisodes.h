@@ -7,7 +7,7 @@
 #include <cstddef>
 #include <vector>
 
-namespace shadyloc::eval
+namespace shadyloc::localisation
 {
 /** A maximal run of frames without a fix. */
 struct TBlindEpisode
@@ -30,4 +30,4 @@ struct TBlindEpisode
  * Throws std::invalid_argument if the two vectors differ in size. */
 std::vector<TBlindEpisode> blindEpisodes(const std::vector<bool>& fix, const std::vector<double>& distance_m);
 
-}  // namespace shadyloc::eval
+}  // namespace shadyloc::localisation

@@ -1,10 +1,10 @@
 /* ShadyLoc — blind episodes (docs/localisation.md, Definitions). */
-#include <shadyloc/eval/BlindEpisodes.h>
+#include <shadyloc/localisation/BlindEpisodes.h>
 
 #include <stdexcept>
 #include <string>
 
-namespace shadyloc::eval
+namespace shadyloc::localisation
 {
 std::vector<TBlindEpisode> blindEpisodes(const std::vector<bool>& fix, const std::vector<double>& dist)
 {
@@ -36,4 +36,4 @@ std::vector<TBlindEpisode> blindEpisodes(const std::vector<bool>& fix, const std
 	return episodes;
 }
 
-}  // namespace shadyloc::eval
+}  // namespace shadyloc::localisation

@@ -1,0 +1,399 @@
+/* ShadyLoc — one localisation run and its output files (docs/localisation.md). */
+#include <shadyloc/core/Settings.h>
+#include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/io/Csv.h>
+#include <shadyloc/io/StereoFrameSource.h>
+#include <shadyloc/io/Tum.h>
+#include <shadyloc/localisation/LocaliseRun.h>
+#include <shadyloc/vo/VOConfig.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+
+namespace shadyloc::localisation
+{
+namespace
+{
+std::string hex64(uint64_t h)
+{
+	char s[17];
+	std::snprintf(s, sizeof s, "%016llx", static_cast<unsigned long long>(h));
+	return s;
+}
+
+double percentile(std::vector<double> v, double p)
+{
+	if (v.empty()) return 0;
+	std::sort(v.begin(), v.end());
+	return v[static_cast<size_t>(std::round(p * (v.size() - 1)))];
+}
+
+void poseFields(std::ostream& o, const Eigen::Isometry3d& T)
+{
+	const Eigen::Quaterniond q(T.linear());
+	const auto& t = T.translation();
+	o << std::setprecision(6) << t.x() << ',' << t.y() << ',' << t.z() << ',' << std::setprecision(9) << q.x() << ','
+	  << q.y() << ',' << q.z() << ',' << q.w();
+}
+}  // namespace
+
+std::string fnv1a64File(const std::string& path)
+{
+	std::ifstream f(path, std::ios::binary);
+	if (!f) throw std::runtime_error("cannot read '" + path + "'");
+	uint64_t h = 1469598103934665603ull;
+	std::vector<char> buf(1 << 16);
+	while (f)
+	{
+		f.read(buf.data(), static_cast<std::streamsize>(buf.size()));
+		const auto got = f.gcount();
+		for (std::streamsize i = 0; i < got; i++)
+		{
+			h ^= static_cast<uint8_t>(buf[static_cast<size_t>(i)]);
+			h *= 1099511628211ull;
+		}
+	}
+	return hex64(h);
+}
+
+std::string fnv1a64(const std::string& text)
+{
+	uint64_t h = 1469598103934665603ull;
+	for (const char c : text)
+	{
+		h ^= static_cast<uint8_t>(c);
+		h *= 1099511628211ull;
+	}
+	return hex64(h);
+}
+
+std::string jsonString(const std::string& s)
+{
+	std::string o = "\"";
+	for (const char c : s)
+	{
+		if (c == '"' || c == '\\')
+			o += std::string("\\") + c;
+		else if (c == '\n')
+			o += "\\n";
+		else if (static_cast<unsigned char>(c) < 0x20)
+		{
+			char b[8];
+			std::snprintf(b, sizeof b, "\\u%04x", c);
+			o += b;
+		}
+		else
+			o += c;
+	}
+	return o + "\"";
+}
+
+std::string jsonNumber(double v, int prec)
+{
+	if (!std::isfinite(v)) return "null";
+	std::ostringstream s;
+	s << std::fixed << std::setprecision(prec) << v;
+	return s.str();
+}
+
+void writeTextFile(const std::string& path, const std::string& text)
+{
+	io::writeAtomically(path, [&](const std::string& p) {
+		std::ofstream f(p, std::ios::binary);
+		f << text;
+		f.close();
+		if (!f) throw std::runtime_error("cannot write '" + p + "'");
+	});
+}
+
+// ---------------------------------------------------------------------------
+void checkLocaliseSections(const mrpt::config::CConfigFileBase& cfg, const std::string& what)
+{
+	std::vector<std::string> known = vo::voConfigSections();
+	for (const char* s : {"mono", "invariant", "map", "filters", "localise", "localiser", "localiser.mono", "localiser.invariant"})
+		known.push_back(s);
+	std::vector<std::string> sections;
+	cfg.getAllSections(sections);
+	for (const auto& s : sections)
+		if (s.rfind("localiser.", 0) == 0 || s.rfind("vo.", 0) == 0 || s.rfind("features.", 0) == 0 ||
+			cfg.keyExists(s, "class"))	// per-channel overrides; a channel's filter section
+			known.push_back(s);
+	core::checkSections(cfg, known, "localise config " + what);
+}
+
+void checkLocaliseConfig(
+	const mrpt::config::CConfigFileBase& cfg, const std::vector<std::string>& localisers, const std::string& what)
+{
+	checkLocaliseSections(cfg, what);
+	(void)CLocalisationSystem::SetupFromConfig(cfg, localisers, 0, what);
+}
+
+CLocaliseRun::CLocaliseRun(
+	const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::string& mapPath,
+	const std::string& livePath, const TLocaliseRunOptions& o)
+	: m_livePath(livePath)
+{
+	if (map->isEmpty()) throw std::runtime_error("map '" + mapPath + "' has no keyframes: nothing to localise against");
+	const size_t nKf = map->keyframeCount();
+	try
+	{
+		checkLocaliseSections(cfg, o.configWhat);
+		m_sys = CLocalisationSystem::FromConfig(cfg, std::move(map), o.localisers, o.threads, o.configWhat);
+	}
+	catch (const std::out_of_range& e)
+	{
+		throw std::runtime_error("map '" + mapPath + "': " + e.what());
+	}
+	catch (const std::runtime_error& e)
+	{
+		throw std::runtime_error("map '" + mapPath + "' and config " + o.configWhat + ": " + e.what());
+	}
+	if (o.startKf >= 0)
+	{
+		if (static_cast<size_t>(o.startKf) >= nKf)
+			throw std::runtime_error(
+				"--start-kf " + std::to_string(o.startKf) + ": the map has keyframes 0.." + std::to_string(nKf - 1));
+		m_sys->setStartKeyframe(static_cast<uint32_t>(o.startKf));
+	}
+
+	// ---- the live run's colour stereo pair (each channel is made from it)
+	std::vector<std::string> suffixes;
+	for (const auto& l : m_sys->channelLabels()) suffixes.push_back(m_sys->channelSetup(l).channel.suffix());
+	for (const char* s : {"_mono", "_inv", "_lin"}) suffixes.push_back(s);
+	m_label = o.sensorLabel;
+	if (m_label.empty())
+	{
+		m_label = io::findStereoLabel(livePath, io::labelWithoutSuffixes(suffixes));
+		if (m_label.empty())
+		{
+			const std::string any = io::findStereoLabel(livePath, [](const std::string&) { return true; });
+			std::string chans;
+			for (const auto& l : m_sys->channelLabels()) chans += (chans.empty() ? "" : ", ") + l;
+			throw std::runtime_error(
+				"live rawlog '" + livePath + "': no colour stereo observations" +
+				(any.empty() ? std::string(" at all") : " (only derived channel images such as '" + any + "')") +
+				"; the localisers need the colour images to make their channels (" + chans + ")");
+		}
+	}
+}
+
+CLocaliseRun::~CLocaliseRun() = default;
+
+const std::vector<TLocalisationUpdate>& CLocaliseRun::run(const std::function<void(const TLocalisationUpdate&)>& onFrame)
+{
+	io::TStereoFrameSourceOptions so;
+	so.sensorLabel = m_label;
+	io::StereoFrameSource source(m_livePath, so);
+	m_ups.clear();
+	io::TStereoFrame fr;
+	while (source.next(fr))
+	{
+		if (fr.left.type() != CV_8UC3)
+			throw std::runtime_error(source.reader().where(
+				"frame " + std::to_string(fr.index) + ": '" + m_label +
+				"' is not a colour pair; the invariant channel needs colour images"));
+		try
+		{
+			m_ups.push_back(m_sys->processFrame(fr.left, fr.right, fr.calib, fr.timestamp));
+		}
+		catch (const std::exception& e)
+		{
+			throw std::runtime_error(source.reader().where(e.what()));
+		}
+		if (onFrame) onFrame(m_ups.back());
+	}
+	if (m_ups.empty()) throw std::runtime_error(source.noFramesMessage());
+	return m_ups;
+}
+
+// ---------------------------------------------------------------------------
+void writeFramesCsv(
+	const std::string& path, const std::vector<TLocalisationUpdate>& ups, const TEvaluation& ev, const CKeyframeMap& map)
+{
+	const bool gt = ev.ground_truth;
+	const std::vector<std::string> named = {"mono", "invariant"};
+	std::vector<std::string> extra;	 // localisers with other names
+	for (const auto& r : ups.front().localisers)
+		if (std::find(named.begin(), named.end(), r.channel) == named.end()) extra.push_back(r.channel);
+	std::vector<std::string> perChannel = named;
+	perChannel.insert(perChannel.end(), extra.begin(), extra.end());
+	std::string header =
+		"frame,stamp,distance_m,in_map,mono_ok,invariant_ok,used,kf_run,kf_frame,kf_id,kf_stamp,mono_inliers,"
+		"invariant_inliers,rel_x,rel_y,rel_z,rel_qx,rel_qy,rel_qz,rel_qw";
+	for (const auto& e : extra) header += "," + e + "_ok," + e + "_inliers";
+	for (const auto& c : perChannel)
+		for (const char* f : {"status", "matches", "gate_px", "sigma_m", "kf_id", "rel_x", "rel_y", "rel_z", "rel_qx", "rel_qy", "rel_qz", "rel_qw"})
+			header += "," + c + "_" + f;
+	header += ",global_search,global_inliers,global_runner_up,frames_since_fix";
+	if (gt) header += ",gt_distance_m,used_true,used_err_m,used_err_deg";
+	io::CsvWriter csv(path, header);
+	auto& o = csv.out();
+	o << std::fixed;
+	for (size_t i = 0; i < ups.size(); i++)
+	{
+		const auto& u = ups[i];
+		const auto& f = ev.frames[i];
+		o << u.frame << ',' << std::setprecision(6) << u.timestamp << ',' << std::setprecision(3) << u.distance_m << ','
+		  << int(f.in_map);
+		auto okOf = [&](const std::string& c) {
+			const auto* r = u.result(c);
+			return r ? std::to_string(int(r->accepted())) : std::string();
+		};
+		auto inlOf = [&](const std::string& c) {
+			const auto* r = u.result(c);
+			return r ? std::to_string(r->inliers) : std::string();
+		};
+		o << ',' << okOf("mono") << ',' << okOf("invariant") << ',' << (u.localised() ? u.used : "none");
+		if (u.localised())
+			o << ',' << map.runs().at(u.kf_run) << ',' << u.kf_frame << ',' << u.kf_id << ',' << std::setprecision(6)
+			  << u.kf_stamp;
+		else
+			o << ",,,,";
+		o << ',' << inlOf("mono") << ',' << inlOf("invariant") << ',';
+		if (u.localised())
+			poseFields(o, u.T_kf_live);
+		else
+			o << ",,,,,,";
+		for (const auto& e : extra) o << ',' << okOf(e) << ',' << inlOf(e);
+		for (const auto& c : perChannel)
+		{
+			const auto* r = u.result(c);
+			o << ',' << (r ? toString(r->status) : std::string()) << ',' << (r ? std::to_string(r->matches) : std::string())
+			  << ',';
+			if (r) o << std::setprecision(1) << r->gate.median_axis_px;
+			o << ',';
+			if (r && r->solved) o << std::setprecision(4) << r->sigma_m;
+			if (r && r->accepted())
+			{
+				o << ',' << r->kf_id << ',';
+				poseFields(o, r->T_kf_live);
+			}
+			else
+				o << ",,,,,,,,";
+		}
+		o << ',' << int(u.global_search) << ',';
+		if (u.global_search)
+			o << u.place.inliers << ',' << u.place.runner_up_inliers;
+		else
+			o << ',';
+		o << ',' << u.frames_since_fix;
+		if (gt)
+		{
+			o << ',' << std::setprecision(3) << f.distance_m << ','
+			  << (f.used == FixTruth::None ? std::string() : std::to_string(int(f.used))) << ',';
+			if (f.used_err_m >= 0)
+				o << std::setprecision(4) << f.used_err_m << ',' << f.used_err_deg;
+			else
+				o << ',';
+		}
+		o << '\n';
+	}
+	csv.commit();
+}
+
+void writeTrajectory(const std::string& path, const std::vector<TLocalisationUpdate>& ups)
+{
+	io::Trajectory traj;
+	for (const auto& u : ups)
+		if (u.placeKnown) traj.push_back({u.timestamp, u.T_map_live});
+	io::writeTum(path, traj, "live left camera in the map frame (shadyloc localise)");
+}
+
+std::string summaryJson(
+	const std::vector<TLocalisationUpdate>& ups, const TEvaluation& ev, const TSystemOptions& sys,
+	const TLocaliseProvenance& prov)
+{
+	const bool gt = ev.ground_truth;
+	const auto num = [](double v, int prec = 6) { return jsonNumber(v, prec); };
+	std::ostringstream js;
+	js << "{\n  \"format\": \"shadyloc localise summary\",\n  \"version\": " << kSummaryVersion << ",\n";
+	js << "  \"frames\": " << ups.size() << ",\n  \"in_map_frames\": " << ev.in_map_frames
+	   << ",\n  \"in_map_from\": " << jsonString(gt ? "ground truth" : "own estimate") << ",\n  \"fixes\": " << ev.fixes
+	   << ",\n  \"fixes_in_map\": " << ev.fixes_in_map << ",\n  \"coverage_in_map\": " << num(ev.coverage_in_map)
+	   << ",\n  \"coverage_all\": " << num(ev.coverage_all) << ",\n";
+	js << "  \"localisers\": [";
+	for (size_t c = 0; c < ev.channels.size(); c++)
+	{
+		const auto& s = ev.channels[c];
+		js << (c ? ", " : "") << "{\"channel\": " << jsonString(s.channel) << ", \"accepted\": " << s.accepted
+		   << ", \"used\": " << s.used;
+		if (gt)
+			js << ", \"true_fixes\": " << s.true_fixes << ", \"false_fixes\": " << s.false_fixes
+			   << ", \"unverifiable\": " << s.unverifiable << ", \"false_share\": "
+			   << num(s.true_fixes + s.false_fixes ? double(s.false_fixes) / double(s.true_fixes + s.false_fixes) : 0.0);
+		js << "}";
+	}
+	js << "],\n";
+	if (gt)
+		js << "  \"ground_truth\": {\"associated\": " << ev.associated << ", \"true_fixes\": " << ev.true_fixes
+		   << ", \"true_fixes_in_map\": " << ev.true_fixes_in_map << ", \"false_fixes\": " << ev.false_fixes
+		   << ", \"unverifiable\": " << ev.unverifiable << ", \"true_coverage_in_map\": " << num(ev.true_coverage_in_map)
+		   << ", \"true_coverage_all\": " << num(ev.true_coverage_all) << ", \"false_fix_share\": "
+		   << num(ev.false_fix_share) << "},\n";
+	else
+		js << "  \"ground_truth\": null,\n";
+	js << "  \"blind\": {\"distance_from\": " << jsonString(gt ? "ground truth" : "VO") << ", \"total_m\": "
+	   << num(ev.total_m, 3) << ", \"blind_m\": " << num(ev.blind_m, 3) << ", \"blind_m_per_km\": "
+	   << num(ev.blind_m_per_km, 3) << ", \"episodes_between_fixes\": " << ev.episodes_between
+	   << ", \"episodes_reaching_m\": " << num(TEvalOptions().blind_long_m, 1) << ", \"episodes_long\": "
+	   << ev.episodes_long << ", \"p_long\": " << num(ev.p_long) << ", \"p_long_ci95\": [" << num(ev.p_long_lo) << ", "
+	   << num(ev.p_long_hi) << "], \"first_fix_frame\": " << ev.first_fix_frame << ", \"before_first_fix_m\": "
+	   << num(ev.before_first_fix_m, 3) << ", \"episodes\": [";
+	for (size_t i = 0; i < ev.episodes.size(); i++)
+	{
+		const auto& e = ev.episodes[i];
+		js << (i ? ", " : "") << "{\"first\": " << e.first << ", \"last\": " << e.last << ", \"length_m\": "
+		   << num(e.length_m, 3) << ", \"kind\": "
+		   << jsonString(
+				  e.kind == TBlindEpisode::Between ? "between" : (e.kind == TBlindEpisode::AtEnd ? "at_end" : "before_first_fix"))
+		   << "}";
+	}
+	js << "]},\n  \"global_searches\": " << ev.global_searches << ",\n";
+	std::string locList;
+	for (const auto& l : sys.localisers) locList += (locList.empty() ? "" : ",") + l;
+	const auto hashOf = [](const std::string& given, const std::string& path) {
+		return given.empty() ? fnv1a64File(path) : given;
+	};
+	js << "  \"provenance\": {\"program\": " << jsonString(prov.program) << ", \"build_commit\": "
+	   << jsonString(prov.buildCommit) << ", \"localisers\": " << jsonString(locList)
+	   << ", \"start_kf\": " << prov.startKf << ", \"config\": " << jsonString(prov.configWhat)
+	   << ", \"config_fnv1a64\": " << jsonString(fnv1a64(prov.configText)) << ", \"map\": " << jsonString(prov.mapPath)
+	   << ", \"map_fnv1a64\": " << jsonString(hashOf(prov.mapHash, prov.mapPath))
+	   << ", \"live\": " << jsonString(prov.livePath)
+	   << ", \"live_fnv1a64\": " << jsonString(hashOf(prov.liveHash, prov.livePath));
+	if (!prov.gtPath.empty())
+		js << ", \"gt\": " << jsonString(prov.gtPath) << ", \"gt_fnv1a64\": " << jsonString(hashOf(prov.gtHash, prov.gtPath));
+	js << "}\n}\n";
+	return js.str();
+}
+
+std::string timingJson(const std::vector<TLocalisationUpdate>& ups, int threads)
+{
+	const auto num = [](double v, int prec) { return jsonNumber(v, prec); };
+	std::vector<double> tot;
+	std::vector<std::vector<double>> perLoc(ups.empty() ? 0 : ups.front().localisers.size());
+	std::vector<double> voMs;
+	for (const auto& u : ups)
+	{
+		tot.push_back(u.ms_total);
+		voMs.push_back(u.vo.ms.total);
+		for (size_t c = 0; c < u.localisers.size() && c < perLoc.size(); c++) perLoc[c].push_back(u.localisers[c].ms);
+	}
+	std::ostringstream tj;
+	tj << "{\n  \"format\": \"shadyloc localise timing\",\n  \"version\": 1,\n  \"threads\": " << threads
+	   << ",\n  \"frames\": " << ups.size() << ",\n  \"ms_per_frame\": {\"median\": " << num(percentile(tot, 0.5), 3)
+	   << ", \"p95\": " << num(percentile(tot, 0.95), 3) << "},\n  \"vo_ms\": {\"median\": "
+	   << num(percentile(voMs, 0.5), 3) << "},\n  \"localiser_ms\": {";
+	for (size_t c = 0; c < perLoc.size(); c++)
+		tj << (c ? ", " : "") << jsonString(ups.front().localisers[c].channel) << ": {\"median\": "
+		   << num(percentile(perLoc[c], 0.5), 3) << ", \"p95\": " << num(percentile(perLoc[c], 0.95), 3) << "}";
+	tj << "}\n}\n";
+	return tj.str();
+}
+
+}  // namespace shadyloc::localisation

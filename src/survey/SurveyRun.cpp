@@ -1,0 +1,215 @@
+/* ShadyLoc — a survey rawlog into a keyframe map (docs/map.md). */
+#include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/io/StereoFrameSource.h>
+#include <shadyloc/survey/SurveyBuilder.h>
+#include <shadyloc/survey/SurveyRun.h>
+#include <shadyloc/vo/ChannelOptions.h>
+#include <shadyloc/vo/StereoVO.h>
+
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <stdexcept>
+
+namespace shadyloc::survey
+{
+namespace
+{
+/** One channel of the survey: the filter that makes it, where its frames
+ * come from, and its feature extractor. */
+struct TSurveyChannel
+{
+	filters::TChannel channel;
+	filters::TChannelInput input;
+	features::StereoFeatureExtractor extractor;
+	map::TChannelParams params;	 //!< what the map records
+	std::unique_ptr<io::StereoFrameSource> source;
+	io::TStereoFrame frame;	 //!< the current frame
+};
+
+bool sameCalib(const geometry::TStereoCalib& a, const geometry::TStereoCalib& b)
+{
+	const auto eq = [](double x, double y) { return std::abs(x - y) <= 1e-9 * std::max(1.0, std::abs(x)); };
+	return eq(a.fx, b.fx) && eq(a.fy, b.fy) && eq(a.cx, b.cx) && eq(a.cy, b.cy) && eq(a.cxR, b.cxR) &&
+		   eq(a.baseline, b.baseline);
+}
+}  // namespace
+
+struct CSurveyRun::TImpl
+{
+	std::string inPath;
+	TSurveyRunOptions opts;
+	CKeyframeMap::Ptr map;
+	std::vector<TSurveyChannel> channels;
+	std::unique_ptr<vo::StereoVO> voChain;
+	bool ran = false;
+};
+
+CSurveyRun::CSurveyRun(const std::string& inPath, const mrpt::config::CConfigFileBase& cfg, const TSurveyRunOptions& o)
+	: mrpt::system::COutputLogger("CSurveyRun"), m_impl(std::make_unique<TImpl>())
+{
+	auto& I = *m_impl;
+	I.inPath = inPath;
+	I.opts = o;
+	if (!std::filesystem::exists(inPath)) throw std::runtime_error("input rawlog '" + inPath + "' does not exist");
+	I.map = CKeyframeMap::Create();
+	if (cfg.sectionExists("map")) I.map->options.loadFromConfigFile(cfg, "map");
+	if (o.channels.empty()) throw std::invalid_argument("--channels: no channel named");
+	const std::string& cfgName = o.configName;
+	for (const auto& name : o.channels)
+	{
+		TSurveyChannel c{
+			filters::channelFromConfig(cfg, name, cfgName), {}, features::StereoFeatureExtractor(), {}, {}, {}};
+		for (const auto& other : I.channels)
+			if (other.channel.label == c.channel.label)
+				throw std::invalid_argument("--channels: channel '" + c.channel.label + "' given twice");
+		c.input = filters::resolveChannelInput(inPath, c.channel, o.sensorLabel);
+		const auto fo = vo::featureOptionsFor(cfg, c.channel.label);
+		c.extractor = features::StereoFeatureExtractor(fo);
+		// The map records what made the images: for a filtered rawlog the
+		// filter its record names, not the config's.
+		const CObservationFilter* madeBy = c.channel.filter.get();
+		if (c.input.filtered)
+		{
+			if (!c.input.recorded)
+				throw std::runtime_error(
+					inPath + ": holds " + c.channel.label + " images '" + c.input.sensorLabel + "' but no filter record" +
+					(c.input.hasRecord ? " of suffix " + c.channel.suffix() : std::string()) +
+					": how they were made is unknown, so the map could not be checked against live data (re-filter "
+					"it with shadyloc filter, or survey the unfiltered run)");
+			madeBy = c.input.recorded.get();
+			if (!c.input.recorded->sameImagesAs(*c.channel.filter))
+				m_warnings.push_back(
+					inPath + ": its " + c.channel.label + " images were made with " + c.input.recorded->describe() +
+					" (filter record), not with " + cfgName + "'s [" + c.channel.label + "] " +
+					c.channel.filter->describe() + "; the map records the filter that made them");
+		}
+		c.params = channelParams(c.channel.label, *madeBy, fo);
+		c.source = std::make_unique<io::StereoFrameSource>(inPath, c.input.sourceOptions);
+		I.channels.push_back(std::move(c));
+	}
+	const vo::TStereoVOOptions vopt = vo::voOptionsFor(cfg, I.channels[0].channel.label);
+	I.voChain = std::make_unique<vo::StereoVO>(vopt, I.channels[0].extractor.options());
+	m_runName = o.runName.empty() ? std::filesystem::path(inPath).stem().string() : o.runName;
+}
+
+CSurveyRun::~CSurveyRun() = default;
+
+const CKeyframeMap& CSurveyRun::map() const { return *m_impl->map; }
+
+void CSurveyRun::describe(std::ostream& out) const
+{
+	const auto& I = *m_impl;
+	out << "survey of " << I.inPath << "\n";
+	for (const auto& c : I.channels)
+		out << "channel " << c.params.asString() << "\n  "
+			<< (c.input.filtered ? "from the filtered observations '" + c.input.sensorLabel + "'"
+								 : "filtered on the fly from the colour camera" +
+									   (c.input.sensorLabel.empty() ? std::string() : " '" + c.input.sensorLabel + "'"))
+			<< "\n";
+	out << "keyframe chain: the " << I.channels[0].channel.label << " VO\n[map]\n";
+	I.map->options.dumpToTextStream(out);
+}
+
+CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onFrame)
+{
+	auto& I = *m_impl;
+	if (I.ran) throw std::logic_error("CSurveyRun::run: called twice");
+	I.ran = true;
+	CKeyframeMap& kfmap = *I.map;
+	auto& channels = I.channels;
+	auto& voChain = *I.voChain;
+	voChain.setMinLoggingLevel(getMinLoggingLevel());
+	const std::string& inPath = I.inPath;
+	std::unique_ptr<CSurveyBuilder> builder;
+	size_t& nFrames = m_stats.frames;
+
+	// The channels' sources walk the rawlog in lockstep: the same frame index
+	// and timestamp from each, or the run is refused.
+	for (;;)
+	{
+		const auto tf = std::chrono::steady_clock::now();
+		size_t have = 0;
+		for (auto& c : channels) have += c.source->next(c.frame) ? 1 : 0;
+		if (have == 0) break;
+		const auto& f0 = channels[0].frame;
+		const std::string where0 = "'" + inPath + "': frame " + std::to_string(nFrames);
+		if (have != channels.size())
+		{
+			std::string ended;
+			for (const auto& c : channels)
+				if (c.source->frames() == nFrames) ended += (ended.empty() ? "" : ", ") + c.channel.label;
+			throw std::runtime_error(
+				where0 + ": the frames of channel(s) " + ended +
+				" end here while the other channels have more (a partly filtered rawlog?)");
+		}
+		for (const auto& c : channels)
+		{
+			const auto& f = c.frame;
+			const std::string where = c.source->reader().where(
+				"frame " + std::to_string(f.index) + " (sensor '" + f.sensorLabel + "', channel '" + c.channel.label + "')");
+			if (f.index != f0.index || f.timestamp != f0.timestamp)
+				throw std::runtime_error(
+					where + ": timestamp " + std::to_string(f.timestamp) + " is not channel '" +
+					channels[0].channel.label + "''s frame " + std::to_string(f0.index) + " at " +
+					std::to_string(f0.timestamp) + " (the channels' frames must pair up)");
+			if (f.left.type() != CV_8UC1)
+				throw std::runtime_error(
+					where + ": " + std::to_string(f.left.channels()) + "-channel images; the survey needs grey ones");
+			if (!sameCalib(f.calib, f0.calib) || f.left.size() != f0.left.size())
+				throw std::runtime_error(
+					where + ": calibration or image size differs from channel '" + channels[0].channel.label + "''s");
+		}
+		if (nFrames == 0)
+		{
+			m_stats.calib = f0.calib;
+			std::vector<map::TChannelParams> params;
+			for (const auto& c : channels) params.push_back(c.params);
+			kfmap.setup(m_stats.calib, f0.left.cols, f0.left.rows, params);
+			builder = std::make_unique<CSurveyBuilder>(kfmap, m_runName);
+		}
+		const auto& calib = m_stats.calib;
+		const double t = f0.timestamp;
+		const size_t before = voChain.keyframes().size();
+		const auto res = voChain.process(f0.left, f0.right, calib, t);
+		if (builder->offer(res, voChain.keyframes(), before))
+		{
+			std::vector<std::vector<features::TStereoMeasurement>> meas(channels.size());
+			for (size_t c = 0; c < channels.size(); c++)
+			{
+				if (c == 0 && res.keyframe)
+				{
+					meas[c] = voChain.keyframes().back().meas;	// the VO just extracted them
+					continue;
+				}
+				features::TStereoFrame fr;
+				channels[c].extractor.process(channels[c].frame.left, channels[c].frame.right, calib, fr);
+				meas[c] = std::move(fr.meas);
+			}
+			std::optional<Eigen::Isometry3d> T_gt;
+			if (I.opts.gt)
+			{
+				const io::Trajectory one{{t, Eigen::Isometry3d::Identity()}};
+				const auto pairs = io::associate(*I.opts.gt, one, 0.01);
+				if (!pairs.empty())
+				{
+					T_gt = (*I.opts.gt)[pairs[0].first].T;
+					m_stats.gtKeyframes++;
+				}
+			}
+			builder->addKeyframe(meas, T_gt);
+		}
+		nFrames++;
+		m_stats.msTotal += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tf).count();
+		if (onFrame) onFrame(nFrames, channels[0].source->progress());
+	}
+	if (nFrames == 0) throw std::runtime_error(channels[0].source->noFramesMessage());
+	if (kfmap.isEmpty()) throw std::runtime_error(inPath + ": the VO never tracked: no keyframes, no map written");
+	if (I.opts.gt && m_stats.gtKeyframes == 0)
+		throw std::runtime_error(
+			I.opts.gtName + ": no ground-truth pose within 10 ms of any keyframe of " + inPath);
+	m_stats.breaks = builder->breaks();
+	return I.map;
+}
+
+}  // namespace shadyloc::survey

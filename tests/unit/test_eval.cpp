@@ -1,0 +1,330 @@
+/* ShadyLoc tests: the leave-one-out evaluation (`shadyloc eval`,
+ * docs/evaluation.md): the run list, the job plan, bad input, and results
+ * that do not depend on how the jobs ran (one worker, two workers, one
+ * process per job then --merge). */
+#include "../support/TestSupport.h"
+
+#include <shadyloc/eval/LeaveOneOut.h>
+#include <shadyloc/eval/RunList.h>
+#include <shadyloc/localisation/Evaluation.h>
+
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+namespace fs = std::filesystem;
+using namespace shadyloc;
+
+namespace
+{
+void writeText(const std::string& path, const std::string& text)
+{
+	std::ofstream f(path);
+	f << text;
+}
+
+std::string readText(const std::string& path)
+{
+	std::ifstream f(path, std::ios::binary);
+	std::stringstream s;
+	s << f.rdbuf();
+	return s.str();
+}
+
+/** Every regular file below dir (relative path -> bytes), timings left out:
+ * they are the only outputs allowed to differ between runs. */
+std::map<std::string, std::string> resultFiles(const std::string& dir)
+{
+	std::map<std::string, std::string> out;
+	for (const auto& e : fs::recursive_directory_iterator(dir))
+	{
+		if (!e.is_regular_file()) continue;
+		const std::string name = e.path().filename().string();
+		if (name == "timing.json" || name == "job_timing.json") continue;
+		out[fs::relative(e.path(), dir).string()] = readText(e.path().string());
+	}
+	return out;
+}
+
+/** Synthetic colour stereo frames (test support) of a w x h camera. */
+void writeRun(const std::string& path, int frames, int w = 160, int h = 120)
+{
+	mrpt::io::CFileGZOutputStream f(path);
+	auto arch = mrpt::serialization::archiveFrom(f);
+	for (int i = 0; i < frames; i++) arch << *test::syntheticStereoFrame(i, w, h);
+}
+
+std::string app() { return test::appPath() + " eval"; }
+}  // namespace
+
+// ---------------------------------------------------------------- run list
+TEST(EvalRunList, ParsesCommentsBlankLinesAndRelativePaths)
+{
+	const std::string dir = test::tempDir("eval_runlist");
+	fs::create_directories(dir + "/data");
+	writeText(dir + "/data/a.rawlog", "x");
+	writeText(dir + "/data/b.rawlog", "x");
+	writeText(dir + "/data/b.tum", "");
+	writeText(
+		dir + "/runs.txt",
+		"# name rawlog gt\n\n  a\tdata/a.rawlog   # no ground truth\nb data/b.rawlog data/b.tum\r\n" + std::string("c ") +
+			dir + "/data/a.rawlog\n");
+	const auto runs = eval::readRunList(dir + "/runs.txt");
+	ASSERT_EQ(runs.size(), 3u);
+	EXPECT_EQ(runs[0].name, "a");
+	EXPECT_EQ(runs[0].line, 3);
+	EXPECT_FALSE(runs[0].hasGt());
+	EXPECT_EQ(runs[0].rawlog, "data/a.rawlog");	 // as written
+	EXPECT_EQ(fs::path(runs[0].rawlogPath), fs::path(dir) / "data/a.rawlog");  // resolved against the list's folder
+	EXPECT_EQ(runs[1].gt, "data/b.tum");
+	EXPECT_EQ(fs::path(runs[1].gtPath), fs::path(dir) / "data/b.tum");
+	EXPECT_EQ(runs[2].rawlogPath, dir + "/data/a.rawlog");	// absolute stays
+	EXPECT_EQ(runs[2].line, 5);
+}
+
+TEST(EvalRunList, ErrorsNameFileLineAndRun)
+{
+	const std::string dir = test::tempDir("eval_runlist_bad");
+	writeText(dir + "/a.rawlog", "x");
+	const auto error = [&](const std::string& text) {
+		writeText(dir + "/runs.txt", text);
+		try
+		{
+			eval::readRunList(dir + "/runs.txt");
+		}
+		catch (const std::exception& e)
+		{
+			return std::string(e.what());
+		}
+		return std::string("(no error)");
+	};
+	const std::string where = dir + "/runs.txt:";
+	EXPECT_EQ(error("a a.rawlog\na a.rawlog\n"), where + "2: run name 'a' is already used on line 1 (names must be unique)");
+	EXPECT_NE(error("a a.rawlog\n# x\nb missing.rawlog\n").find(where + "3: run 'b': rawlog '"), std::string::npos);
+	EXPECT_NE(error("a a.rawlog\nb a.rawlog nogt.tum\n").find(where + "2: run 'b': ground truth '"), std::string::npos);
+	EXPECT_NE(error("a/b a.rawlog\nc a.rawlog\n").find(where + "1: run name 'a/b'"), std::string::npos);
+	EXPECT_NE(error("a a.rawlog x.tum extra\n").find(where + "1: 4 fields"), std::string::npos);
+	EXPECT_NE(error("a\n").find(where + "1: 1 field;"), std::string::npos);
+	EXPECT_NE(error("a a.rawlog\n").find("1 run(s); leave-one-out needs at least 2"), std::string::npos);
+	EXPECT_NE(error("").find("0 run(s)"), std::string::npos);
+}
+
+// ---------------------------------------------------------------- plan
+TEST(EvalPlan, MapsFirstThenPairsInTheDocumentedOrder)
+{
+	std::vector<eval::TRun> runs(4);
+	for (size_t i = 0; i < runs.size(); i++) runs[i].name = std::string(1, char('a' + i));
+	const auto jobs = eval::makePlan(runs);
+	ASSERT_EQ(jobs.size(), 4u + 2 * 4 * 3);	 // N maps + 2 N (N-1) pairs
+	for (size_t k = 0; k < jobs.size(); k++) EXPECT_EQ(jobs[k].index, k);
+	for (size_t i = 0; i < 4; i++)
+	{
+		EXPECT_TRUE(jobs[i].isMap);
+		EXPECT_EQ(jobs[i].name, "map_" + runs[i].name);
+	}
+	EXPECT_EQ(jobs[4].name, "pair_a__b__baseline");
+	EXPECT_EQ(jobs[5].name, "pair_a__b__combined");
+	EXPECT_EQ(jobs[6].name, "pair_a__c__baseline");
+	EXPECT_EQ(jobs[10].name, "pair_b__a__baseline");
+	EXPECT_EQ(jobs.back().name, "pair_d__c__combined");
+	for (const auto& j : jobs)
+	{
+		if (j.isMap) continue;
+		EXPECT_NE(j.run, j.map);
+		EXPECT_EQ(eval::pairJobIndex(4, j.run, j.map, j.system), j.index) << j.name;
+		EXPECT_LT(j.map, 4u);  // its map job comes before every pair
+	}
+	EXPECT_EQ(eval::localisersOf(eval::EvalSystem::Baseline), std::vector<std::string>{"mono"});
+	EXPECT_EQ(eval::localisersOf(eval::EvalSystem::Combined), (std::vector<std::string>{"mono", "invariant"}));
+}
+
+TEST(EvalPlan, PooledBlindProbabilityIsTheRunsOwn)
+{
+	// The merge pools episodes through the same function evaluate() uses.
+	localisation::TEvalOptions o;
+	const auto p = localisation::blindProbability({10, 120, 30, 100, 5}, o);
+	EXPECT_EQ(p.episodes, 5u);
+	EXPECT_EQ(p.reaching, 2u);	// 120 and exactly 100
+	EXPECT_DOUBLE_EQ(p.p, 0.4);
+	EXPECT_LE(p.lo, p.p);
+	EXPECT_GE(p.hi, p.p);
+	EXPECT_GT(p.hi, p.lo);	// five episodes: a wide interval
+	EXPECT_EQ(localisation::blindProbability({}, o).episodes, 0u);
+	EXPECT_EQ(localisation::blindProbability({}, o).p, 0.0);
+}
+
+// ---------------------------------------------------------------- the command
+TEST(EvalApp, BadInputNamesTheCulpritAndLeavesNothing)
+{
+	const std::string dir = test::tempDir("eval_bad");
+	writeRun(dir + "/a.rawlog", 2);
+	writeRun(dir + "/b.rawlog", 2);
+	writeRun(dir + "/wide.rawlog", 2, 200, 120);  // another camera
+	std::string out;
+	const auto run = [&](const std::string& args) { return test::runCommand(app() + " " + args, &out); };
+
+	// A run list naming a file that is not there.
+	writeText(dir + "/missing.txt", "a a.rawlog\n\nb gone.rawlog\n");
+	EXPECT_EQ(run("--runs " + dir + "/missing.txt -o " + dir + "/o1"), 1);
+	EXPECT_NE(out.find("missing.txt:3: run 'b': rawlog '"), std::string::npos) << out;
+	EXPECT_NE(out.find("gone.rawlog' does not exist"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(dir + "/o1"));
+
+	// Duplicate names.
+	writeText(dir + "/dup.txt", "a a.rawlog\na b.rawlog\n");
+	EXPECT_EQ(run("--runs " + dir + "/dup.txt -o " + dir + "/o2"), 1);
+	EXPECT_NE(out.find("dup.txt:2: run name 'a' is already used on line 1"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(dir + "/o2"));
+
+	// Runs of different cameras: both named, with their lines.
+	writeText(dir + "/cams.txt", "a a.rawlog\nb b.rawlog\nw wide.rawlog\n");
+	EXPECT_EQ(run("--runs " + dir + "/cams.txt -o " + dir + "/o3 --plan"), 1);
+	EXPECT_NE(out.find("cams.txt:3: run 'w': its camera"), std::string::npos) << out;
+	EXPECT_NE(out.find("200x120 px"), std::string::npos) << out;
+	EXPECT_NE(out.find("differs from run 'a''s (line 1"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(dir + "/o3"));
+
+	// An unknown key in one of several configs: that file and line.
+	writeText(dir + "/ok.ini", "[localise]\nthreads = 1\n");
+	writeText(dir + "/typo.ini", "[localiser]\nmin_inliers = 12\nmin_inlier = 3\n");
+	writeText(dir + "/runs.txt", "a a.rawlog\nb b.rawlog\n");
+	EXPECT_EQ(run("--runs " + dir + "/runs.txt -o " + dir + "/o4 -c " + dir + "/ok.ini -c " + dir + "/typo.ini"), 1);
+	EXPECT_NE(out.find(dir + "/typo.ini:3: [localiser] min_inlier: unknown key"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(dir + "/o4"));
+
+	// --job and --merge need the plan; --job K within it.
+	const std::string o5 = dir + "/o5", base = "--runs " + dir + "/runs.txt -o " + o5 + " -c " + dir + "/ok.ini";
+	EXPECT_EQ(run(base + " --job 0"), 1);
+	EXPECT_NE(out.find("plan.tsv' does not exist: make the plan first"), std::string::npos) << out;
+	ASSERT_EQ(run(base + " --plan"), 0) << out;
+	EXPECT_EQ(out, "maps 0 1\npairs 2 5\n");
+	EXPECT_EQ(run(base + " --job 6"), 1);
+	EXPECT_NE(out.find("--job 6: the plan in '" + o5 + "' has jobs 0..5"), std::string::npos) << out;
+	// A plan made with other configs is refused.
+	EXPECT_EQ(run("--runs " + dir + "/runs.txt -o " + o5 + " --job 2"), 1);
+	EXPECT_NE(out.find("made with other configs"), std::string::npos) << out;
+
+	// A pair whose map job has not run: the map job to run is named.
+	EXPECT_EQ(run(base + " --job 2"), 1);
+	EXPECT_NE(out.find("job 2 (live run 'a' against the map of 'b', baseline): the map of run 'b' is missing"), std::string::npos)
+		<< out;
+	EXPECT_NE(out.find("run map job 1 first"), std::string::npos) << out;
+	// A map that fails to load (a damaged job output): named, with its job.
+	fs::create_directories(o5 + "/jobs/map_b");
+	writeText(o5 + "/jobs/map_b/map.kfmap", "not a map");
+	EXPECT_EQ(run(base + " --job 2"), 1);
+	EXPECT_NE(out.find("the map of run 'b' ('" + o5 + "/jobs/map_b/map.kfmap', from map job 1) fails to load"), std::string::npos)
+		<< out;
+	EXPECT_NE(out.find("run map job 1 again"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(o5 + "/jobs/pair_a__b__baseline"));
+	// Merging with jobs missing names every one of them, writes nothing.
+	EXPECT_EQ(run(base + " --merge"), 1);
+	EXPECT_NE(out.find("cannot merge: 6 of 6 jobs"), std::string::npos) << out;
+	EXPECT_NE(out.find("job 1 (map of run 'b')"), std::string::npos) << out;
+	EXPECT_NE(out.find("job 5 (live run 'b' against the map of 'a', combined): no output"), std::string::npos) << out;
+	for (const char* f : {"table1.md", "table1.csv", "eval.json", "timing.json", "summary.md", "figures_inputs.tsv", "pairs"})
+		EXPECT_FALSE(fs::exists(o5 + "/" + f)) << f;
+	// One mode at a time.
+	EXPECT_EQ(run(base + " --plan --merge"), 2);
+}
+
+TEST(EvalApp, ResultsIdenticalAcrossWorkersAndJobs)
+{
+	// Three traversals of the simulator, 12 frames each (about 8 m: the
+	// global search finds its place within a few frames, so the pairs have
+	// fixes), evaluated three ways: two workers, one worker, and one process
+	// per job then --merge, from another working directory and output folder.
+	const std::string dir = test::tempDir("eval_identical");
+	const std::string src = SHADYLOC_SOURCE_DIR;
+	std::string out;
+	ASSERT_EQ(
+		test::runCommand(
+			test::appPath() + " sim -q -c " + src + "/config/sim.ini -o " + dir +
+				"/data --frames 12 --traversals noon,overcast,morning_low_sun",
+			&out),
+		0)
+		<< out;
+	writeText(
+		dir + "/data/runs.txt",
+		"# three lighting conditions\nnoon noon.rawlog noon.tum\novercast overcast.rawlog overcast.tum\n"
+		"morning morning_low_sun.rawlog morning_low_sun.tum\n");
+	const std::string cfg = " -c " + src + "/config/vo_sim.ini -c " + src + "/config/localise_sim.ini";
+	const std::string runs = " --runs " + dir + "/data/runs.txt";
+
+	ASSERT_EQ(test::runCommand(app() + runs + " -o " + dir + "/j2" + cfg + " -j 2", &out), 0) << out;
+	EXPECT_NE(out.find("| **mean** | 2 |"), std::string::npos) << out;
+	ASSERT_EQ(test::runCommand(app() + " -q" + runs + " -o " + dir + "/j1" + cfg + " -j 1", &out), 0) << out;
+
+	// The cluster way: the plan's ranges, every job alone, the merge.
+	const std::string jobs = dir + "/cluster/out";
+	fs::create_directories(jobs);
+	const std::string rel = "cd " + dir + "/cluster && " + app() + " -q --runs ../data/runs.txt -o out" + cfg;
+	ASSERT_EQ(test::runCommand(rel + " --plan", &out), 0) << out;
+	EXPECT_EQ(out, "maps 0 2\npairs 3 14\n");
+	for (int k = 14; k >= 3; k--)  // pairs first: they must wait for their maps
+		EXPECT_EQ(test::runCommand(rel + " --job " + std::to_string(k), &out), 1) << "job " << k;
+	for (int k = 0; k <= 14; k++) ASSERT_EQ(test::runCommand(rel + " --job " + std::to_string(k), &out), 0) << out;
+	// A job run again replaces its output.
+	ASSERT_EQ(test::runCommand(rel + " --job 4", &out), 0) << out;
+	ASSERT_EQ(test::runCommand(rel + " --merge", &out), 0) << out;
+
+	const auto a = resultFiles(dir + "/j2"), b = resultFiles(dir + "/j1"), c = resultFiles(jobs);
+	for (const char* f :
+		 {"table1.md", "table1.csv", "summary.md", "eval.json", "figures_inputs.tsv", "plan.tsv",
+		  "pairs/noon__overcast__combined/frames.csv", "pairs/morning__noon__baseline/summary.json",
+		  "pairs/overcast__morning__combined/trajectory.tum", "jobs/map_noon/map.kfmap"})
+		EXPECT_TRUE(a.count(f)) << f;
+	// Outputs and plan, the map jobs (map, record), pairs/ (3 files each),
+	// the pair jobs (those 3 and the record).
+	EXPECT_EQ(a.size(), 6u + 3 * 2 + 12 * 3 + 12 * 4);
+	const auto same = [](const auto& x, const auto& y, const char* what) {
+		EXPECT_EQ(x.size(), y.size()) << what;
+		for (const auto& [name, bytes] : x)
+		{
+			const auto it = y.find(name);
+			ASSERT_NE(it, y.end()) << what << ": " << name << " missing";
+			EXPECT_TRUE(bytes == it->second) << what << ": " << name << " differs";
+		}
+	};
+	same(a, b, "-j 2 vs -j 1");
+	same(a, c, "-j 2 vs --plan/--job/--merge");
+	EXPECT_TRUE(fs::exists(dir + "/j2/timing.json"));
+
+	// Table I: a row per live run and the mean; true coverage never above
+	// self-reported (a true fix is a fix), and the runs did localise.
+	std::istringstream csv(a.at("table1.csv"));
+	std::string line;
+	std::getline(csv, line);
+	EXPECT_EQ(line, "live,maps,baseline_pct,invariant_pct,combined_pct,baseline_self_pct,invariant_self_pct,combined_self_pct");
+	std::vector<std::string> names;
+	while (std::getline(csv, line))
+	{
+		std::vector<double> v;
+		std::stringstream s(line);
+		std::string f;
+		std::getline(s, f, ',');
+		names.push_back(f);
+		std::getline(s, f, ',');
+		EXPECT_EQ(f, "2");
+		while (std::getline(s, f, ',')) v.push_back(std::stod(f));
+		ASSERT_EQ(v.size(), 6u) << line;
+		for (int k = 0; k < 3; k++) EXPECT_LE(v[k], v[k + 3] + 1e-9) << line;
+		EXPECT_GT(v[3], 0) << line;	 // the baseline localised
+		EXPECT_GT(v[5], 0) << line;	 // the combined system too
+	}
+	EXPECT_EQ(names, (std::vector<std::string>{"noon", "overcast", "morning", "mean"}));
+	const std::string js = a.at("eval.json");
+	EXPECT_NE(js.find("\"format\": \"shadyloc eval\",\n  \"version\": 1"), std::string::npos);
+	EXPECT_NE(js.find("\"runs_file\": \"runs.txt\""), std::string::npos);
+	EXPECT_NE(js.find("\"config\": \"vo_sim.ini + localise_sim.ini\""), std::string::npos);
+	EXPECT_NE(js.find("\"rawlog\": \"noon.rawlog\", \"rawlog_fnv1a64\": \""), std::string::npos);
+	EXPECT_EQ(js.find(dir), std::string::npos) << "no absolute paths in the results";
+	EXPECT_NE(a.at("figures_inputs.tsv").find("noon\tovercast\tpairs/noon__overcast__baseline/frames.csv\tpairs/noon__overcast__combined/frames.csv\n"),
+			  std::string::npos);
+}
