@@ -9,10 +9,13 @@
 # runs the same evaluation locally and checks that every output file except
 # timing.json is byte-identical.
 #
-#   scripts/slurm-smoke.sh [--shadyloc PATH] [--frames N] [--keep]
+#   scripts/slurm-smoke.sh [--shadyloc PATH] [--frames N] [-c CONFIG]... [--keep]
 #
 #   --shadyloc PATH  the shadyloc program (default: build/shadyloc)
 #   --frames N       frames per rendered run (default 12)
+#   -c CONFIG        settings for every `shadyloc eval` (repeatable; default
+#                    config/vo_sim.ini and config/localise_sim.ini, the
+#                    simulator's camera)
 #   --keep           keep the scratch folder (configs, daemon logs, outputs)
 #
 # Needs root (the daemons run as root with SlurmUser=root). Exit codes:
@@ -26,16 +29,19 @@ here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 shadyloc="$here/build/shadyloc"
 frames=12
 keep=0
+eval_cfg=()
 while [ $# -gt 0 ]; do
 	case "$1" in
 	--shadyloc) shadyloc="$2"; shift 2 ;;
 	--frames) frames="$2"; shift 2 ;;
+	-c | --config) eval_cfg+=(-c "$(cd "$(dirname "$2")" && pwd)/$(basename "$2")"); shift 2 ;;
 	--keep) keep=1; shift ;;
 	-h | --help) sed -n '2,/^set -euo/{/^set -euo/d;s/^# \{0,1\}//;p}' "$0"; exit 0 ;;
 	*) echo "slurm-smoke: unknown argument '$1' (see --help)" >&2; exit 2 ;;
 	esac
 done
 job_timeout="${SHADYLOC_SLURM_TIMEOUT:-900}"
+[ ${#eval_cfg[@]} -gt 0 ] || eval_cfg=(-c "$here/config/vo_sim.ini" -c "$here/config/localise_sim.ini")
 
 say() { echo "[slurm-smoke] $*"; }
 skip() { echo "[slurm-smoke] SKIPPED: $*"; exit 77; }
@@ -251,7 +257,8 @@ say "runs: ${trav[*]} ($frames frames each)"
 begin "eval --plan"
 runs="$work/data/runs.txt"
 cluster="$work/cluster"
-plan="$("$shadyloc" eval --runs "$runs" -o "$cluster" --plan)" || fail "shadyloc eval --plan failed"
+say "settings: ${eval_cfg[*]}"
+plan="$("$shadyloc" eval --runs "$runs" -o "$cluster" "${eval_cfg[@]}" --plan)" || fail "shadyloc eval --plan failed"
 echo "$plan" | sed 's/^/  /'
 read -r _ map_first map_last < <(grep -E '^maps [0-9]+ [0-9]+$' <<<"$plan") || true
 read -r _ pair_first pair_last < <(grep -E '^pairs [0-9]+ [0-9]+$' <<<"$plan") || true
@@ -266,7 +273,7 @@ begin "submit and run the job arrays"
 # One job = one `shadyloc eval --job K`; the array index is K.
 cat >"$work/eval-job.sh" <<EOF
 #!/bin/bash
-exec $(printf '%q' "$shadyloc") eval --runs $(printf '%q' "$runs") -o $(printf '%q' "$cluster") -q --job "\$SLURM_ARRAY_TASK_ID"
+exec $(printf '%q' "$shadyloc") eval --runs $(printf '%q' "$runs") -o $(printf '%q' "$cluster") $(printf '%q ' "${eval_cfg[@]}")-q --job "\$SLURM_ARRAY_TASK_ID"
 EOF
 chmod +x "$work/eval-job.sh"
 submit() {  # submit NAME RANGE [sbatch options...] -> prints the job id
@@ -320,10 +327,10 @@ say "all $((pair_last + 1)) jobs completed"
 
 # ---- merge, local run, comparison --------------------------------------------
 begin "eval --merge"
-"$shadyloc" eval --runs "$runs" -o "$cluster" -q --merge || fail "shadyloc eval --merge failed"
+"$shadyloc" eval --runs "$runs" -o "$cluster" "${eval_cfg[@]}" -q --merge || fail "shadyloc eval --merge failed"
 
 begin "local eval"
-"$shadyloc" eval --runs "$runs" -o "$work/local" -q -j 2 || fail "local shadyloc eval failed"
+"$shadyloc" eval --runs "$runs" -o "$work/local" "${eval_cfg[@]}" -q -j 2 || fail "local shadyloc eval failed"
 
 begin "compare outputs"
 for f in table1.md table1.csv eval.json; do
@@ -353,7 +360,7 @@ if [ ${#differ[@]} -gt 0 ]; then
 	printf '[slurm-smoke]   %s\n' "${differ[@]}" >&2
 	fail "merged and local outputs differ in ${#differ[@]} file(s)"
 fi
-say "$compared output files byte-identical (timing.json aside): $(cd "$work/local" && find . -type f ! -name timing.json | sed 's|^\./||' | sort | tr '\n' ' ')"
+say "$compared output files byte-identical (timing.json aside): $(cd "$work/local" && find . -type f ! -name timing.json | sed 's|^\./||' | sort | paste -s -d ' ')"
 
 begin "done"
 say "timings:"
