@@ -92,10 +92,10 @@ pid_munged="" pid_ctld="" pid_slurmd=""
 job_ids=()
 
 stop_pid() {  # stop_pid PID NAME: TERM, up to 10 s, then KILL
-	local pid="$1" i
+	local pid="$1"
 	[ -n "$pid" ] && kill -0 "$pid" 2>/dev/null || return 0
 	kill -TERM "$pid" 2>/dev/null || true
-	for i in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.2; done
+	for _ in $(seq 50); do kill -0 "$pid" 2>/dev/null || break; sleep 0.2; done
 	if kill -0 "$pid" 2>/dev/null; then
 		say "$2 (pid $pid) did not stop on TERM; killing it"
 		kill -KILL "$pid" 2>/dev/null || true
