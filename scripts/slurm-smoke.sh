@@ -47,6 +47,8 @@ say() { echo "[slurm-smoke] $*"; }
 skip() { echo "[slurm-smoke] SKIPPED: $*"; exit 77; }
 
 # ---- preconditions: skip where this machine cannot run the test ------------
+# The daemons live in /usr/sbin, not on every root PATH (sudo, CI shells).
+PATH="$PATH:/usr/sbin:/sbin"
 [ "$(id -u)" -eq 0 ] || skip "needs root (munged, slurmctld and slurmd run as root with their own configuration)"
 missing=()
 for c in munged mungekey slurmctld slurmd sbatch squeue sinfo scontrol scancel; do
