@@ -18,6 +18,7 @@ packages=(
   libegl-mesa0 libgl1-mesa-dri   # headless offscreen rendering (EGL/Mesa)
   zlib1g-dev                     # checked gzip reading of rawlogs
   clang libclang-rt-14-dev       # sanitizer build and libFuzzer targets (scripts/ci-hardening.sh)
+  slurm-wlm munge                # one-node Slurm cluster of the eval smoke test (scripts/slurm-smoke.sh)
 )
 
 missing=()
