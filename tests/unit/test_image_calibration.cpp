@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <numeric>
 #include <random>
 #include <regex>
 
@@ -266,6 +267,101 @@ struct SimData
 	std::vector<TSameViewPair> views;
 	std::vector<cv::Mat> images;
 	double reference = 0, peakFormula = 0, referenceFlat = 0;
+	/** The simulator's own lights instead of black bodies: the alpha
+	 * minimising the variance of I over the sun + sky mixtures of noon (the
+	 * shadow pairs' light) and of noon with morning / with evening (the
+	 * same-view pairs' lights), from the spectra (sceneIlluminantAlpha()). */
+	double illumPairs = 0, illumViews = 0;
+	/** Each estimator's own criterion on the exact (float, before noise and
+	 * 8 bits) log-chromaticities of the pixels it uses (ExactChroma): the
+	 * direction of the scene's light changes as that method sees it. */
+	double exactPairs = 0, exactViews = 0;
+};
+
+/** alpha (beta = 1 - alpha) minimising the variance of I, pooled over the
+ * simulator's 20 material spectra, over the illuminants a point receives in
+ * the given traversals: V max(0, n.s) E_sun + v E_sky (CStereoSimulator::shade)
+ * for direct-sun factors 0, 0.1, .., 1 and sky visibilities 0.5 (a wall) and
+ * 1 (the road). Each group of traversals pools its lights (a same-view pair
+ * sees two traversals); the groups' within-material covariances are summed.
+ * Closed form as sim::blackBodyReferenceAlpha: sum cov(x, y) / sum var(x). */
+double sceneIlluminantAlpha(
+	shadyloc::sim::CStereoSimulator& sim, const std::vector<std::vector<shadyloc::sim::TTraversal>>& groups)
+{
+	using namespace shadyloc::sim;
+	double sumCov = 0, sumVar = 0;
+	for (const auto& g : groups)
+		for (int m = kAsphalt; m < kMarker; m++)
+			for (float mix : {0.f, 1.f})
+			{
+				std::vector<double> xs, ys;
+				for (const auto& t : g)
+				{
+					sim.setTraversal(t);
+					for (int s = 0; s <= 10; s++)
+						for (float v : {0.5f, 1.f})
+						{
+							const Rgb r = sim.shade(m, mix, 1.f, 0.1f * float(s), v);
+							xs.push_back(std::log(r[0] / r[2]));
+							ys.push_back(std::log(r[1] / r[2]));
+						}
+				}
+				const double n = double(xs.size());
+				const double mx = std::accumulate(xs.begin(), xs.end(), 0.0) / n;
+				const double my = std::accumulate(ys.begin(), ys.end(), 0.0) / n;
+				for (size_t i = 0; i < xs.size(); i++)
+					sumCov += (xs[i] - mx) * (ys[i] - my), sumVar += (xs[i] - mx) * (xs[i] - mx);
+			}
+	return sumCov / sumVar;
+}
+
+/** Exact log-chromaticities (x, y) of the pixels an estimator uses, from
+ * the float linear renders (BGR) before noise and 8 bits, one item per pair
+ * of images; and the estimators' own criteria on them, so that the estimate
+ * on the 8-bit noisy data can be told apart from the direction of the light
+ * changes in the scene. */
+struct ExactChroma
+{
+	struct Item
+	{
+		std::vector<float> xa, ya, xb, yb;
+	};
+	std::vector<Item> items;
+	void add(const cv::Vec3f& a, const cv::Vec3f& b)
+	{
+		auto& it = items.back();
+		it.xa.push_back(std::log(a[0] / a[2])), it.ya.push_back(std::log(a[1] / a[2]));
+		it.xb.push_back(std::log(b[0] / b[2])), it.yb.push_back(std::log(b[1] / b[2]));
+	}
+	/** Argmin over alpha (grid 0.0025) of the sum over items of the log of
+	 * the same-view criterion (relativeStep false: the median of
+	 * |dy - alpha dx| / sqrt(1 + alpha^2)) or of the pair criterion (true:
+	 * relativeShadowStepOfValues() on 255 I). */
+	double fit(bool relativeStep) const
+	{
+		double best = 0, bestCost = 1e30;
+		for (double al = 0.05; al <= 0.95; al += 0.0025)
+		{
+			double cost = 0;
+			for (const auto& it : items)
+			{
+				if (it.xa.size() < 100) continue;
+				std::vector<double> va(it.xa.size()), vb(it.xa.size());
+				for (size_t i = 0; i < va.size(); i++)
+					va[i] = 255 * (it.ya[i] - al * it.xa[i]), vb[i] = 255 * (it.yb[i] - al * it.xb[i]);
+				if (relativeStep)
+					cost += std::log(relativeShadowStepOfValues(va, vb).relative());
+				else
+				{
+					for (size_t i = 0; i < va.size(); i++) va[i] = std::abs(vb[i] - va[i]);
+					std::nth_element(va.begin(), va.begin() + long(va.size() / 2), va.end());
+					cost += std::log(std::max(1e-9, va[va.size() / 2] / std::sqrt(1 + al * al)));
+				}
+			}
+			if (cost < bestCost) bestCost = cost, best = al;
+		}
+		return best;
+	}
 };
 
 SimData simulate(const CameraModel& cam)
@@ -290,6 +386,11 @@ SimData simulate(const CameraModel& cam)
 	TTraversal noonTurned = noon;  // same light, sun from elsewhere: shadows move
 	noonTurned.sun_azimuth_deg += 100;
 	const TTraversal morning = opts.traversal("morning_low_sun"), evening = opts.traversal("evening_warm");
+	d.illumPairs = sceneIlluminantAlpha(sim, {{noon}});
+	d.illumViews = sceneIlluminantAlpha(sim, {{noon, morning}, {noon, evening}});
+	TCalibrationInput in;
+	in.linearisation = cam.srgb ? Linearisation::SRGB : Linearisation::None;
+	ExactChroma exactPairs, exactViews;
 	uint64_t seed = 1;
 	for (int frame : {10, 60, 110, 160, 220, 280, 340, 400})
 	{
@@ -316,7 +417,42 @@ SimData simulate(const CameraModel& cam)
 		d.views.push_back({f + "m", a, m});
 		d.views.push_back({f + "e", a, e});
 		for (const auto* img : {&a, &m, &e}) d.images.push_back(*img);
+		// The exact changes at the pixels the estimators use: the pair's
+		// shadow mask; for same view, pixels trusted in both 8-bit images
+		// whose exact chromaticity moved by more than 0.03 (every 2nd pixel).
+		for (int k : {2, 1})
+		{
+			const auto& pair = d.pairs[d.pairs.size() - size_t(k)];
+			const cv::Mat mask = shadowMask(pair, in);
+			if (cv::countNonZero(mask) < std::max(100.0, 0.01 * double(mask.total()))) continue;	// as the estimator
+			const cv::Mat& linFree = k == 2 ? linNoon : linTurned;
+			const cv::Mat& linShadow = k == 2 ? linTurned : linNoon;
+			exactPairs.items.emplace_back();
+			for (int y = 0; y < mask.rows; y++)
+				for (int x = 0; x < mask.cols; x++)
+					if (mask.at<uint8_t>(y, x)) exactPairs.add(linFree.at<cv::Vec3f>(y, x), linShadow.at<cv::Vec3f>(y, x));
+		}
+		const auto trustedPx = [&](const cv::Mat& img, int y, int x) {
+			const auto v = img.at<cv::Vec3b>(y, x);
+			return std::all_of(v.val, v.val + 3, [&](uint8_t c) { return c >= in.minCode && c < in.maxCode; });
+		};
+		for (const auto& [other8, otherLin] : {std::pair{&m, &linMorning}, std::pair{&e, &linEvening}})
+		{
+			exactViews.items.emplace_back();
+			auto& it = exactViews.items.back();
+			for (int y = 0; y < a.rows; y += 2)
+				for (int x = 0; x < a.cols; x += 2)
+				{
+					if (!trustedPx(a, y, x) || !trustedPx(*other8, y, x)) continue;
+					exactViews.add(linNoon.at<cv::Vec3f>(y, x), otherLin->at<cv::Vec3f>(y, x));
+					const float ddx = it.xb.back() - it.xa.back(), ddy = it.yb.back() - it.ya.back();
+					if (ddx * ddx + ddy * ddy < 0.03f * 0.03f)
+						it.xa.pop_back(), it.ya.pop_back(), it.xb.pop_back(), it.yb.pop_back();
+				}
+		}
 	}
+	d.exactPairs = exactPairs.fit(true);
+	d.exactViews = exactViews.fit(false);
 	return d;
 }
 }  // namespace
@@ -329,9 +465,9 @@ TEST(InvariantCalibrationSim, EstimatesAgainstBlackBodyReference)
 		{{450, 560, 620}, 10, true},  {{490, 540, 600}, 25, true},	{{470, 520, 640}, 40, true},
 	};
 	std::printf(
-		"%-24s %7s %7s %7s | %7s %7s %7s %7s | %6s %6s %6s\n", "camera", "ref", "refFlat", "peak", "pairs", "sameV",
-		"edges", "entropy", "clipD%", "clipC%", "span");
-	std::vector<double> errPairs, errView, errEdges, errEntropy;
+		"%-24s %7s %7s %7s | %7s %7s %7s | %7s %7s %7s | %7s %7s | %6s %6s %6s\n", "camera", "ref", "refFlat", "peak",
+		"illumP", "exactP", "pairs", "illumV", "exactV", "sameV", "edges", "entropy", "clipD%", "clipC%", "span");
+	std::vector<double> errPairs, errView, errEdges, errEntropy, errPairsExact, errViewExact, errViewIllum;
 	for (const auto& cam : cams)
 	{
 		const auto d = simulate(cam);
@@ -348,25 +484,41 @@ TEST(InvariantCalibrationSim, EstimatesAgainstBlackBodyReference)
 		const auto cal = calibrateMapping(d.images, in.params(d.reference));
 		const auto clipCal = mappingStats(d.images, cal);
 		std::printf(
-			"%-24s %7.4f %7.4f %7.4f | %7.4f %7.4f %7.4f %7.4f | %6.2f %6.2f %6.1f\n", cam.name().c_str(), d.reference,
-			d.referenceFlat, d.peakFormula, pairs.best, views.best, edges.best, entropy.best, 100 * clipDef.clipped(),
+			"%-24s %7.4f %7.4f %7.4f | %7.4f %7.4f %7.4f | %7.4f %7.4f %7.4f | %7.4f %7.4f | %6.2f %6.2f %6.1f\n",
+			cam.name().c_str(), d.reference, d.referenceFlat, d.peakFormula, d.illumPairs, d.exactPairs, pairs.best,
+			d.illumViews, d.exactViews, views.best, edges.best, entropy.best, 100 * clipDef.clipped(),
 			100 * clipCal.clipped(), clipCal.span());
 		errPairs.push_back(std::abs(pairs.best - d.reference));
 		errView.push_back(std::abs(views.best - d.reference));
 		errEdges.push_back(std::abs(edges.best - d.reference));
 		errEntropy.push_back(std::abs(entropy.best - d.reference));
+		errPairsExact.push_back(std::abs(pairs.best - d.exactPairs));
+		errViewExact.push_back(std::abs(views.best - d.exactViews));
+		errViewIllum.push_back(std::abs(views.best - d.illumViews));
 		EXPECT_LE(clipCal.clipped(), 0.005) << cam.name();
 	}
 	auto worst = [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); };
 	std::printf(
-		"worst |estimate - reference|: pairs %.4f, same-view %.4f, edges %.4f, entropy %.4f\n", worst(errPairs),
-		worst(errView), worst(errEdges), worst(errEntropy));
-	// The goal is 0.03; measured (docs/calibration.md) the pair and
-	// same-view methods stay within 0.072 and 0.047 of the black-body
-	// reference: shadows and sun/sky mixtures are not black-body changes, and
-	// the same-view estimate sits 0.035-0.047 above the reference on every
-	// camera. These bounds guard that; the unsupervised methods miss on the
-	// simulator (printed, not asserted).
+		"worst |estimate - black-body reference|: pairs %.4f, same-view %.4f, edges %.4f, entropy %.4f\n"
+		"worst |estimate - the data's exact direction|: pairs %.4f, same-view %.4f; "
+		"|same-view - the scene lights' reference| %.4f\n",
+		worst(errPairs), worst(errView), worst(errEdges), worst(errEntropy), worst(errPairsExact), worst(errViewExact),
+		worst(errViewIllum));
+	// The goal is 0.03 from the black-body reference. The same-view
+	// estimate sits 0.035-0.047 above it on every camera, and the cause is
+	// physical (docs/calibration.md): the simulator's lights are sun + sky
+	// mixtures, and the reference computed from those spectra instead of
+	// black bodies (illumViews) is met within 0.016 (bound 0.025); its own
+	// criterion on the noise-free renders (exactViews) within 0.026 (bound
+	// 0.035). The pair criterion on noise-free renders (exactPairs) lies
+	// -0.065..+0.025 from the black-body reference (dappled shadows: sun
+	// fractions between 0 and 1, mixtures again); on the noisy 8-bit pairs the
+	// estimate falls 0.006-0.057 below it (bound 0.065): few small shadow
+	// masks and a shallow curve. These bounds guard the measured figures; the
+	// unsupervised methods miss on the simulator (printed, not asserted).
+	EXPECT_LE(worst(errViewIllum), 0.025);
+	EXPECT_LE(worst(errViewExact), 0.035);
+	EXPECT_LE(worst(errPairsExact), 0.065);
 	EXPECT_LE(worst(errPairs), 0.08);
 	EXPECT_LE(worst(errView), 0.05);
 }
