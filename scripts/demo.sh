@@ -8,8 +8,10 @@
 #  4. the dual-channel keyframe map of one traversal (shadyloc survey), its
 #     summary and its chain's error against ground truth (shadyloc map-info);
 #  5. offscreen pictures of the trajectories and of the map (shadyloc render);
-#  6. localisation of another traversal against the map (shadyloc localise),
-#     the baseline (mono) alone and the combined system, against ground truth.
+#  6. the leave-one-out evaluation (shadyloc eval): every traversal localised
+#     against the map of every other, baseline (mono) alone and combined, against
+#     ground truth: the paper's Table I, Figures 7-9 (build/demo/eval/figures/);
+#  7. one localised pair rendered offscreen, coloured by localiser.
 # Everything goes to build/demo/.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -55,13 +57,25 @@ echo "== 5. trajectories and the map, rendered offscreen"
   --width 1000 --height 600 -o "$out/noon_map.png"
 
 echo
-echo "== 6. localisation: the 'overcast' run against the 'noon' map, baseline (mono) alone, then combined (mono + invariant)"
+echo "== 6. leave-one-out evaluation (shadyloc eval): every traversal against the map of every other,"
+echo "      the baseline (mono) alone and the combined system (mono + invariant), against ground truth"
 loc_cfg="$here/config/localise_sim.ini"
-"$app" localise -m "$out/noon.kfmap" -i "$data/overcast.rawlog" -c "$vo_cfg" -c "$loc_cfg" \
-  --gt "$data/overcast.tum" --localisers mono -o "$out/loc_noon_overcast_baseline" | tail -n 3
-"$app" localise -m "$out/noon.kfmap" -i "$data/overcast.rawlog" -c "$vo_cfg" -c "$loc_cfg" \
-  --gt "$data/overcast.tum" -o "$out/loc_noon_overcast_combined" | tail -n 3
+runs="$out/runs.txt"
+{
+  echo "# the default dataset's traversals: name rawlog ground-truth (docs/evaluation.md)"
+  for r in "$data"/*.rawlog; do
+    n="$(basename "$r" .rawlog)"
+    echo "$n $r $data/$n.tum"
+  done
+} > "$runs"
+"$app" eval --runs "$runs" -o "$out/eval" -c "$vo_cfg" -c "$loc_cfg"
 
 echo
-echo "Done. Results in $out/"
+echo "== 7. one pair of the evaluation rendered offscreen: 'overcast' against the 'noon' map, coloured by localiser"
+"$app" render --title "overcast live run on the noon map: which localiser held each frame" \
+  -m "$out/eval/jobs/map_noon/map.kfmap:noon map" --localised "$out/eval/pairs/overcast__noon__combined:overcast" \
+  --gt "$data/overcast.tum" --width 1000 --height 600 -o "$out/overcast_on_noon.png"
+
+echo
+echo "Done. Results in $out/ (Table I: $out/eval/table1.md, figures: $out/eval/figures/)"
 echo "Open the filtered rawlog: RawLogViewer -l $plugin $out/noon_filtered.rawlog"

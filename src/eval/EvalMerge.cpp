@@ -2,6 +2,7 @@
  * Table I, the ground-truth summaries, the pooled blind distances and
  * eval.json (docs/evaluation.md). Deterministic: the same job records give
  * the same bytes, whichever way the jobs ran. */
+#include <shadyloc/eval/Figures.h>
 #include <shadyloc/eval/LeaveOneOut.h>
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/localisation/Evaluation.h>
@@ -496,9 +497,9 @@ TMergeResult merge(const std::string& outDir, const TEvalInputs& in, const std::
 		   << ", \"wall_s\": " << readJobWall((out / "jobs" / j.name / "job_timing.json").string()) << "}";
 	tj << "\n  ]\n}\n";
 
-	// ---- figures_inputs.tsv. Figures 7-9 (eval/Figures.h) are drawn from
-	// these per-pair frames.csv paths (relative to OUTDIR): THE place where
-	// the merge step hands over to the figures.
+	// ---- figures_inputs.tsv: the per-pair frames.csv paths (relative to
+	// OUTDIR) Figures 7-9 are drawn from (below), for redrawing with
+	// `shadyloc figures`.
 	std::ostringstream fig;
 	fig << "live\tmap\tbaseline_frames\tcombined_frames\n";
 	for (size_t i = 0; i < n; i++)
@@ -537,6 +538,27 @@ TMergeResult merge(const std::string& outDir, const TEvalInputs& in, const std::
 		fs::create_directory(d);
 		for (const char* f : kPairFiles) fs::copy_file(out / "jobs" / j.name / f, d / f);
 	}
+	// ---- Figures 7-9 from the pairs' frames.csv (docs/figures.md): Figure 7
+	// per (live, map), Figure 8 per live run, Figure 9 from the pooled
+	// episodes of eval.json, so the figure and the JSON agree.
+	const fs::path figTmp = tx.addDirectory((out / "figures").string(), "figures");
+	for (size_t i = 0; i < n; i++)
+	{
+		std::vector<TFigurePair> rows;
+		for (size_t m = 0; m < n; m++)
+		{
+			if (m == i) continue;
+			const auto csvOf = [&](EvalSystem s) {
+				return (pairsTmp / pairDirName(jobs[pairJobIndex(n, i, m, s)], runs) / "frames.csv").string();
+			};
+			rows.push_back({runs[m].name, csvOf(EvalSystem::Baseline), csvOf(EvalSystem::Combined)});
+			figure7(runs[i].name, runs[m].name, rows.back().baselineCsv, rows.back().combinedCsv,
+					(figTmp / ("figure7_" + runs[i].name + "__" + runs[m].name + ".png")).string());
+		}
+		figure8(runs[i].name, rows, (figTmp / ("figure8_" + runs[i].name + ".png")).string());
+	}
+	figure9(pooled[0].between, pooled[1].between, (figTmp / "figure9.png").string(),
+			pooled[0].gtPairs + pooled[1].gtPairs > 0 ? "ground truth" : "VO", evo.blind_long_m);
 	tx.commit();
 	return {md.str(), sm.str()};
 }

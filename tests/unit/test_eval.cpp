@@ -278,11 +278,13 @@ TEST(EvalApp, ResultsIdenticalAcrossWorkersAndJobs)
 	for (const char* f :
 		 {"table1.md", "table1.csv", "summary.md", "eval.json", "figures_inputs.tsv", "plan.tsv",
 		  "pairs/noon__overcast__combined/frames.csv", "pairs/morning__noon__baseline/summary.json",
-		  "pairs/overcast__morning__combined/trajectory.tum", "jobs/map_noon/map.kfmap"})
+		  "pairs/overcast__morning__combined/trajectory.tum", "jobs/map_noon/map.kfmap",
+		  "figures/figure7_noon__overcast.png", "figures/figure8_morning.png", "figures/figure9.png"})
 		EXPECT_TRUE(a.count(f)) << f;
 	// Outputs and plan, the map jobs (map, record), pairs/ (3 files each),
-	// the pair jobs (those 3 and the record).
-	EXPECT_EQ(a.size(), 6u + 3 * 2 + 12 * 3 + 12 * 4);
+	// the pair jobs (those 3 and the record), figures (Figure 7 per ordered
+	// pair, Figure 8 per live run, one Figure 9); the PNGs compare too.
+	EXPECT_EQ(a.size(), 6u + 3 * 2 + 12 * 3 + 12 * 4 + 6 + 3 + 1);
 	const auto same = [](const auto& x, const auto& y, const char* what) {
 		EXPECT_EQ(x.size(), y.size()) << what;
 		for (const auto& [name, bytes] : x)
