@@ -359,11 +359,11 @@ TSimOptions TSimOptions::FromFile(const std::string& path)
 void TSimOptions::validateTraversal(const TTraversal& t) const
 {
 	t.validate();
-	if (t.endsByDistance() && t.end_s_m > scene.route_length_m)
+	if (t.endsByDistance() && t.end_s_m > scene.route_length_m + TSimSceneOptions::kEndMargin_m)
 		throw std::invalid_argument(
 			"[traversal." + t.name + "] end_s_m = " + core::formatSetting(t.end_s_m) +
-			" lies past the end of the route ([sim.scene] route_length_m = " +
-			core::formatSetting(scene.route_length_m) + ")");
+			" lies past the end of the scene (at most " + core::formatSetting(TSimSceneOptions::kEndMargin_m) +
+			" m past [sim.scene] route_length_m = " + core::formatSetting(scene.route_length_m) + ")");
 }
 
 const TTraversal& TSimOptions::traversal(const std::string& name) const

@@ -155,11 +155,11 @@ TEST(SimApp, EndByDistance)
 		// The plan printed before rendering names the count and the stretch.
 		EXPECT_NE(out.find(std::to_string(n) + " frames, route s = 100.0 .. "), std::string::npos) << out;
 	}
-	// A count and an end are alternatives; an end must lie ahead, on the route.
+	// A count and an end are alternatives; an end must lie ahead, within the scene.
 	for (const auto& [args, msg] : std::vector<std::pair<std::string, std::string>>{
 			 {"--frames 3 --end-s 120", "--frames and --end-s: give one, not both"},
 			 {"--start-s 100 --end-s 90", "end_s_m must be > start_s_m"},
-			 {"--end-s 301", "end_s_m = 301 lies past the end of the route"}})
+			 {"--end-s 320.5", "end_s_m = 320.5 lies past the end of the scene"}})
 	{
 		EXPECT_NE(runCommand(appPath() + " sim -q -c " + cfg + " -o " + dir + "/bad " + args, &out), 0) << args;
 		EXPECT_NE(out.find(msg), std::string::npos) << "expected '" << msg << "' in: " << out;
@@ -182,16 +182,17 @@ TEST(SimApp, FramesOrEndInTheIni)
 		EXPECT_NE(out.find(msg), std::string::npos) << "expected '" << msg << "' in: " << out;
 		EXPECT_EQ(filesIn(dir + "/out"), 0u) << to;
 	}
-	// The shipped file ends by distance, on the route.
+	// An end too far past the route is refused.
 	std::ifstream in(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
 	std::stringstream ss;
 	ss << in.rdbuf();
 	std::string s = ss.str();
-	s = std::regex_replace(s, std::regex("\nend_s_m = 170[^\n]*"), "\nend_s_m = 320", std::regex_constants::format_first_only);
+	s = std::regex_replace(s, std::regex("\nend_s_m = 170[^\n]*"), "\nend_s_m = 321", std::regex_constants::format_first_only);
 	std::ofstream(dir + "/past.ini") << s;
 	std::string out;
 	EXPECT_NE(runCommand(appPath() + " sim -q -c " + dir + "/past.ini -o " + dir + "/out", &out), 0);
-	EXPECT_NE(out.find("[traversal.morning_low_sun] end_s_m = 320 lies past the end of the route"), std::string::npos)
+	EXPECT_NE(out.find("[traversal.morning_low_sun] end_s_m = 321 lies past the end of the scene (at most 20 m past [sim.scene] "
+						  "route_length_m = 300)"), std::string::npos)
 		<< out;
 }
 

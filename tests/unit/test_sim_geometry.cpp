@@ -271,7 +271,7 @@ TEST(SimOptions, DefaultTraversalsCoverOneStretch)
 	CStereoSimulator sim(o);
 	const double start = o.traversals.front().start_s_m, end = o.traversals.front().end_s_m;
 	EXPECT_GE(end - start, 60.0) << "long enough to show failures and recoveries";
-	EXPECT_LE(end, o.scene.route_length_m);
+	EXPECT_LE(end, o.scene.route_length_m) << "the default stretch lies on the route";
 	double firstEnd = 1e9, lastEnd = -1e9, maxStep = 0;
 	for (const auto& t : o.traversals)
 	{
