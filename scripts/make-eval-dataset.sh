@@ -6,7 +6,8 @@
 # through the canopy, afternoon sun from the right, low evening sun from
 # behind-right, hazy sun, overcast) plus one noon drive 3.5 m to the side in
 # the other lane; each from route s = 0 to its first frame at or past
-# s = 300 m, 512x384 stereo at 10 Hz, with ground truth. About 2600 stereo
+# s = 301 m (1 m past the route's end, so every ground-truth path is at
+# least 300 m), 512x384 stereo at 10 Hz, with ground truth. 2667 stereo
 # frames, ~2 GB, ~8 min of CPU time. Not run in CI.
 #
 #   scripts/make-eval-dataset.sh [OUTDIR] [extra `shadyloc sim` options]
@@ -27,12 +28,12 @@ if [ ! -x "$app" ]; then
   exit 1
 fi
 start=$(date +%s)
-echo "make-eval-dataset: rendering config/sim_eval.ini into $out (progress below; ~2600 frames)"
+echo "make-eval-dataset: rendering config/sim_eval.ini into $out (progress below; 2667 frames)"
 # Without -q the simulator prints its plan (frames and route stretch of each
 # run), then each run's progress every 2 s.
 # (The options dump it prints first is left out: config/sim_eval.ini is it.)
 if ! "$app" sim -c "$here/config/sim_eval.ini" -o "$out" "$@" |
-  { grep -v -E '^(\[sim|\[traversal|; |[a-zA-Z_]+ = |$|Simulator options)' || true; }; then
+  { grep --line-buffered -v -E '^(\[sim|\[traversal|; |[a-zA-Z_]+ = |$|Simulator options)' || true; }; then
   echo "make-eval-dataset: shadyloc sim failed (nothing of this run was kept)" >&2
   exit 1
 fi
