@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # ShadyLoc's main job on the built-in default data (run scripts/setup.sh first):
 #  1. the default dataset: 4 simulated traversals of one road under different
-#     light (generated deterministically on first use, ~30 s);
+#     light, one common 90 m stretch (generated deterministically on first
+#     use, ~85 s of CPU time);
 #  2. observation filters: monochrome + invariant channels of one traversal,
 #     checked with stock MRPT tools through the plugin;
 #  3. stereo VO on both channels of every traversal, errors against ground truth;

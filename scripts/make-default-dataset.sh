@@ -1,9 +1,12 @@
 #!/usr/bin/env bash
 # Generates ShadyLoc's default dataset with the simulator, deterministically
 # (every pixel follows from the seeds in config/sim.ini): 4 traversals of the
-# same 50 m of road (tree-lined avenue into a street of buildings) under
-# morning low sun, noon, warm evening and overcast light, 60 stereo frames
-# each at 512x384, 10 Hz: ~20 s on two cores, ~180 MB. See rawlogs/README.md.
+# same 90 m of road (route s = 80 to 170 m: the last 30 m of the tree-lined
+# avenue, then 60 m of the street of buildings) under morning low sun, noon,
+# warm evening and overcast light, each starting at s = 80 m and ending at
+# its first frame at or past s = 170 m (105-124 stereo frames at 512x384,
+# 10 Hz; 455 in all): ~85 s of CPU time, ~345 MB.
+# See rawlogs/README.md.
 #
 #   scripts/make-default-dataset.sh [OUTDIR] [extra `shadyloc sim` options]
 #
@@ -19,5 +22,5 @@ if [ ! -x "$app" ]; then
   exit 1
 fi
 start=$(date +%s)
-"$app" sim -c "$here/config/sim.ini" -o "$out" --frames 60 "$@"
+"$app" sim -c "$here/config/sim.ini" -o "$out" "$@"
 echo "make-default-dataset: $(ls "$out"/*.rawlog | wc -l) rawlogs in $out ($(( $(date +%s) - start )) s, $(du -sh "$out" | cut -f1))"

@@ -38,7 +38,7 @@ for t in $traversals; do
 done
 echo "# Stereo VO trajectories on the default dataset, made by"
 echo "#   bash scripts/vo-golden-hashes.sh WORK_DIR"
-echo "# = scripts/make-default-dataset.sh (shadyloc sim -c config/sim.ini --frames 60), then for"
+echo "# = scripts/make-default-dataset.sh (shadyloc sim -c config/sim.ini: s = 80 to 170 m), then for"
 echo "# each traversal and channel: shadyloc vo -q -i T.rawlog --channel mono|invariant -c config/vo_sim.ini -o T_channel.tum"
 echo "# The rawlogs' hashes come first: if they differ the simulator changed, not the VO."
 (cd "$data" && for t in $traversals; do sha256sum "$t.rawlog" | sed 's|  |  data/|'; done)

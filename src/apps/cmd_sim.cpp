@@ -99,7 +99,7 @@ int run(int argc, char** argv)
 	TCLAP::ValueArg<std::string> cfg("c", "config", "simulator .ini (see config/sim.ini)", true, "", "sim.ini", cmd);
 	TCLAP::ValueArg<std::string> out("o", "output", "output directory (created if missing)", true, "", "dir", cmd);
 	shadyloc::apps::NumberArg<int> frames(
-		cli, "", "frames", "frames per traversal, >= 1 (default: the .ini's)", -1, "N", 1, 10000000);
+		cli, "", "frames", "frames per traversal, >= 1 (default: the .ini's frames or end_s_m)", -1, "N", 1, 10000000);
 	TCLAP::ValueArg<std::string> which(
 		"", "traversals", "comma-separated traversal names (default: all in [sim] traversals)", false, "", "a,b", cmd);
 	TCLAP::ValueArg<std::string> sheet(
@@ -110,6 +110,10 @@ int run(int argc, char** argv)
 		cli, "", "sheet-scale", "contact sheet tile size / image size, in [0.05, 1]", 0.375, "f", 0.05, 1.0);
 	shadyloc::apps::NumberArg<double> startS(
 		cli, "", "start-s", "route position of the first frame, m (default: each traversal's start_s_m)", 0, "m");
+	shadyloc::apps::NumberArg<double> endS(cli, "", "end-s",
+		"end every traversal at its first frame at or past this route position, m (instead of a frame count; "
+		"default: the .ini's frames or end_s_m)",
+		0, "m");
 	TCLAP::SwitchArg dump("", "dump-options", "print the effective options and exit", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no progress output", cmd);
 	if (const auto rc = cli.parse(argc, argv)) return *rc;
@@ -137,8 +141,29 @@ int run(int argc, char** argv)
 	}
 	else
 		todo = opts.traversals;
-	if (startS.isSet())
-		for (auto& t : todo) t.start_s_m = startS.getValue();
+	if (frames.isSet() && endS.isSet()) throw std::invalid_argument("--frames and --end-s: give one, not both");
+	// Overrides apply to the traversal copies, which are then checked again;
+	// every frame count is known before anything is rendered.
+	for (auto& t : todo)
+	{
+		if (startS.isSet()) t.start_s_m = startS.getValue();
+		if (frames.isSet()) t.frames = frames.getValue();
+		if (endS.isSet())
+		{
+			t.frames = 0;
+			t.end_s_m = endS.getValue();
+		}
+		try
+		{
+			opts.validateTraversal(t);
+		}
+		catch (const std::invalid_argument& e)
+		{
+			throw std::invalid_argument(std::string(e.what()) + (startS.isSet() || endS.isSet() || frames.isSet()
+																	 ? " (after --start-s/--end-s/--frames)"
+																	 : ""));
+		}
+	}
 
 	const fs::path dir(out.getValue());
 	std::error_code ec;
@@ -170,13 +195,30 @@ int run(int argc, char** argv)
 
 	shadyloc::sim::CStereoSimulator sim(opts);
 	sim.setMinLoggingLevel(quiet.getValue() ? mrpt::system::LVL_WARN : mrpt::system::LVL_INFO);
+	std::vector<int> counts;
+	for (const auto& t : todo)
+	{
+		sim.setTraversal(t);
+		counts.push_back(sim.frameCount());
+		if (!quiet.getValue())
+		{
+			char line[256];
+			std::snprintf(line, sizeof(line), "%-22s %5d frames, route s = %.1f .. %.1f m\n", t.name.c_str(),
+				counts.back(), sim.routePosition(0), sim.routePosition(counts.back() - 1));
+			std::cout << line;
+		}
+	}
 	const auto t0 = std::chrono::steady_clock::now();
 	int total = 0;
 	for (const auto& t : todo)
 	{
 		sim.setTraversal(t);
-		const int n = frames.isSet() ? frames.getValue() : t.frames;
+		const int n = counts[static_cast<size_t>(&t - todo.data())];
 		ContactSheet cs(n, tiles.getValue(), sheetScale.getValue(), opts.camera);
+		if (!quiet.getValue())
+			std::cout << "[" << (&t - todo.data()) + 1 << "/" << todo.size() << "] " << t.name << ": " << n
+					  << " frames\n"
+					  << std::flush;
 		sim.generate((dir / (t.name + ".rawlog")).string(), (dir / (t.name + ".tum")).string(), n,
 			[&](const shadyloc::sim::TSimFrame& f) {
 				if (sheet.isSet()) cs.add(f);

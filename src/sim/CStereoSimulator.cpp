@@ -19,6 +19,8 @@
 #include <fstream>
 #include <future>
 #include <iomanip>
+#include <stdexcept>
+#include <string>
 
 namespace shadyloc::sim
 {
@@ -128,6 +130,17 @@ double CStereoSimulator::routePosition(int frame) const
 	const double t = frame / m_opts.camera.fps, v0 = m_trav.speed_mps, a = m_trav.speed_variation;
 	const double w = 2 * M_PI / kSpeedPeriod_s;
 	return m_trav.start_s_m + v0 * t - v0 * a / w * (std::cos(w * t + m_phaseSpeed) - std::cos(m_phaseSpeed));
+}
+
+int CStereoSimulator::frameCount() const
+{
+	if (!m_trav.endsByDistance()) return m_trav.frames;
+	constexpr int kMaxFrames = 1000000;
+	for (int i = 0; i < kMaxFrames; i++)
+		if (routePosition(i) >= m_trav.end_s_m) return i + 1;
+	throw std::invalid_argument(
+		"[traversal." + m_trav.name + "] more than 1e6 frames from start_s_m to end_s_m at speed_mps = " +
+		std::to_string(m_trav.speed_mps));
 }
 
 mrpt::poses::CPose3D CStereoSimulator::T_world_vehicle(int frame) const
@@ -348,7 +361,7 @@ mrpt::obs::CObservationStereoImages::Ptr CStereoSimulator::makeObservation(const
 void CStereoSimulator::generate(const std::string& rawlogPath, const std::string& tumPath, int frames,
 	const std::function<void(const TSimFrame&)>& onFrame, io::OutputTransaction* outputs)
 {
-	const int n = frames > 0 ? frames : m_trav.frames;
+	const int n = frames > 0 ? frames : frameCount();
 	m_prevGain = 0;
 	// Rawlog and ground truth: one transaction, ours or the caller's.
 	std::unique_ptr<io::OutputTransaction> own;

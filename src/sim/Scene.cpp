@@ -463,7 +463,9 @@ void Scene::layout()
 	const float L = static_cast<float>(m_opts.route_length_m);
 	const float treesEnd = static_cast<float>(m_opts.trees_end_m);
 	const float bEnd = static_cast<float>(m_opts.buildings_end_m);
-	const float sBegin = -40.0f, sEnd = L + 60.0f;
+	// Scenery from 40 m before the route to 60 m past it: a traversal may end
+	// kEndMargin_m past the route and still see 40 m of it ahead.
+	const float sBegin = -40.0f, sEnd = L + static_cast<float>(TSimSceneOptions::kEndMargin_m) + 40.0f;
 
 	auto at = [&](float s, float d, float& x, float& y, float& hd) {
 		double xx, yy, hh;

@@ -217,7 +217,17 @@ void TTraversal::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, cons
 	r.read("speed_mps", speed_mps);
 	r.read("speed_variation", speed_variation);
 	r.read("start_s_m", start_s_m);
+	// A count or an end, never both: which one wins would be a guess.
+	if (r.has("frames") && r.has("end_s_m"))
+		r.fail("end_s_m", "give either frames (a count) or end_s_m (a route position), not both");
 	r.read("frames", frames);
+	if (r.has("end_s_m"))
+	{
+		r.read("end_s_m", end_s_m);
+		frames = 0;
+	}
+	else if (r.has("frames") && frames == 0)
+		r.fail("frames", "must be >= 1 (or give end_s_m instead)");
 	r.read("wind_seed", wind_seed);
 	r.read("noise_seed", noise_seed);
 	r.read("start_time_s", start_time);
@@ -236,7 +246,10 @@ void TTraversal::validate() const
 	require(std::abs(weave_amplitude_m) < 5, s, "weave_amplitude_m must be in (-5, 5) m");
 	require(speed_mps > 0 && speed_mps < 100, s, "speed_mps must be in (0, 100) m/s");
 	require(speed_variation >= 0 && speed_variation < 1, s, "speed_variation must be in [0, 1)");
-	require(frames >= 1 && frames <= 1000000, s, "frames must be in [1, 1e6]");
+	require(frames >= 0 && frames <= 1000000, s, "frames must be in [1, 1e6] (0: up to end_s_m)");
+	require(std::isfinite(start_s_m) && std::abs(start_s_m) <= 1e6, s, "start_s_m must be in [-1e6, 1e6] m");
+	if (endsByDistance())
+		require(std::isfinite(end_s_m) && end_s_m > start_s_m, s, "end_s_m must be > start_s_m");
 	require(start_time >= 0, s, "start_time_s must be >= 0");
 }
 
@@ -267,7 +280,10 @@ void TTraversal::dumpToTextStream(std::ostream& o) const
 	w.value("speed_mps", speed_mps);
 	w.value("speed_variation", speed_variation);
 	w.value("start_s_m", start_s_m);
-	w.value("frames", frames);
+	if (endsByDistance())
+		w.value("end_s_m", end_s_m, "the last frame is the first at or past this route position");
+	else
+		w.value("frames", frames);
 	w.value("wind_seed", wind_seed);
 	w.value("noise_seed", noise_seed);
 	w.value("start_time_s", start_time);
@@ -300,6 +316,7 @@ void TSimOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, con
 		TTraversal t;
 		t.name = n;
 		t.loadFromConfigFile(c, sect);
+		validateTraversal(t);
 		traversals.push_back(t);
 	}
 }
@@ -337,6 +354,16 @@ TSimOptions TSimOptions::FromFile(const std::string& path)
 		throw SimOptionsError(core::withSource(path, e.what()));
 	}
 	return o;
+}
+
+void TSimOptions::validateTraversal(const TTraversal& t) const
+{
+	t.validate();
+	if (t.endsByDistance() && t.end_s_m > scene.route_length_m + TSimSceneOptions::kEndMargin_m)
+		throw std::invalid_argument(
+			"[traversal." + t.name + "] end_s_m = " + core::formatSetting(t.end_s_m) +
+			" lies past the end of the scene (at most " + core::formatSetting(TSimSceneOptions::kEndMargin_m) +
+			" m past [sim.scene] route_length_m = " + core::formatSetting(scene.route_length_m) + ")");
 }
 
 const TTraversal& TSimOptions::traversal(const std::string& name) const

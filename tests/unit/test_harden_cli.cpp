@@ -65,7 +65,7 @@ TEST(CommandLine, SimRefusesBadFrameCountsBeforeRendering)
 	std::ifstream in(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
 	std::stringstream s;
 	s << in.rdbuf();
-	const std::string ini = std::regex_replace(s.str(), std::regex("frames = [0-9]+"), "frames = 2");
+	const std::string ini = std::regex_replace(s.str(), std::regex("(frames|end_s_m) = [0-9]+"), "frames = 2");
 	std::ofstream(dir + "/sim.ini") << ini;
 	const std::string sim = "sim -q -c " + dir + "/sim.ini -o " + dir + "/out";
 	expectRefused(

@@ -65,7 +65,7 @@ std::string smallSimConfig(const std::string& dir, int frames)
 	std::stringstream s;
 	s << in.rdbuf();
 	const std::string path = dir + "/sim.ini";
-	std::ofstream(path) << std::regex_replace(s.str(), std::regex("frames = [0-9]+"), "frames = " + std::to_string(frames));
+	std::ofstream(path) << std::regex_replace(s.str(), std::regex("(frames|end_s_m) = [0-9]+"), "frames = " + std::to_string(frames));
 	return path;
 }
 

@@ -3,12 +3,17 @@
 #include "../support/TestSupport.h"
 
 #include <shadyloc/io/Rawlog.h>
+#include <shadyloc/sim/CStereoSimulator.h>
 
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 #include <regex>
+#include <sstream>
+#include <tuple>
+#include <utility>
+#include <vector>
 
 namespace fs = std::filesystem;
 using shadyloc::test::appPath;
@@ -27,7 +32,7 @@ std::string tinyConfig(const std::string& dir, const std::string& from = "", con
 	std::string s = ss.str();
 	s = std::regex_replace(s, std::regex("\nwidth_px = 512"), "\nwidth_px = 96");
 	s = std::regex_replace(s, std::regex("\nheight_px = 384"), "\nheight_px = 72");
-	s = std::regex_replace(s, std::regex("\nframes = 80"), "\nframes = 3");
+	s = std::regex_replace(s, std::regex("\nend_s_m = 170[^\n]*"), "\nframes = 3");
 	if (!from.empty())
 	{
 		const auto at = s.find(from);
@@ -115,6 +120,80 @@ TEST(SimApp, BadValueIsRejected)
 		EXPECT_NE(out.find(msg), std::string::npos) << "expected '" << msg << "' in: " << out;
 		EXPECT_EQ(filesIn(dir + "/out"), 0u) << to;
 	}
+}
+
+// --end-s ends every traversal at its first frame at or past a route
+// position, whatever its speed: the count the library computes, and the
+// last frame within one frame's travel past the end.
+TEST(SimApp, EndByDistance)
+{
+	const std::string dir = tempDir("sim_app_end");
+	const std::string cfg = tinyConfig(dir);
+	std::string out;
+	ASSERT_EQ(runCommand(appPath() + " sim -c " + cfg + " -o " + dir + "/out --traversals noon,evening_warm "
+							 "--start-s 100 --end-s 103.5",
+				  &out),
+		0)
+		<< out;
+	auto o = shadyloc::sim::TSimOptions::FromFile(cfg);
+	shadyloc::sim::CStereoSimulator sim(o);
+	for (const std::string t : {"noon", "evening_warm"})
+	{
+		auto tr = o.traversal(t);
+		tr.start_s_m = 100;
+		tr.frames = 0;
+		tr.end_s_m = 103.5;
+		sim.setTraversal(tr);
+		const int n = sim.frameCount();
+		EXPECT_GE(sim.routePosition(n - 1), 103.5) << t;
+		EXPECT_LT(sim.routePosition(n - 2), 103.5) << t;
+		EXPECT_LT(sim.routePosition(n - 1) - 103.5, 1.2 * tr.speed_mps / o.camera.fps) << t;
+		shadyloc::io::RawlogReader r(dir + "/out/" + t + ".rawlog");
+		int frames = 0;
+		while (r.next()) frames++;
+		EXPECT_EQ(frames, n) << t;
+		// The plan printed before rendering names the count and the stretch.
+		EXPECT_NE(out.find(std::to_string(n) + " frames, route s = 100.0 .. "), std::string::npos) << out;
+	}
+	// A count and an end are alternatives; an end must lie ahead, within the scene.
+	for (const auto& [args, msg] : std::vector<std::pair<std::string, std::string>>{
+			 {"--frames 3 --end-s 120", "--frames and --end-s: give one, not both"},
+			 {"--start-s 100 --end-s 90", "end_s_m must be > start_s_m"},
+			 {"--end-s 320.5", "end_s_m = 320.5 lies past the end of the scene"}})
+	{
+		EXPECT_NE(runCommand(appPath() + " sim -q -c " + cfg + " -o " + dir + "/bad " + args, &out), 0) << args;
+		EXPECT_NE(out.find(msg), std::string::npos) << "expected '" << msg << "' in: " << out;
+		EXPECT_EQ(filesIn(dir + "/bad"), 0u) << args;
+	}
+}
+
+// In the .ini, `frames` and `end_s_m` are alternatives too.
+TEST(SimApp, FramesOrEndInTheIni)
+{
+	const std::string dir = tempDir("sim_app_end_ini");
+	for (const auto& [from, to, msg] : std::vector<std::tuple<std::string, std::string, std::string>>{
+			 {"\nstart_s_m = 80\n", "\nstart_s_m = 80\nend_s_m = 120\n",
+				 "[traversal.noon] end_s_m: give either frames (a count) or end_s_m (a route position), not both"},
+			 {"\nframes = 3\n", "\nframes = 0\n", "[traversal.morning_low_sun] frames: must be >= 1 (or give end_s_m instead)"}})
+	{
+		const std::string cfg = tinyConfig(dir, from, to);
+		std::string out;
+		EXPECT_NE(runCommand(appPath() + " sim -q -c " + cfg + " -o " + dir + "/out", &out), 0) << to;
+		EXPECT_NE(out.find(msg), std::string::npos) << "expected '" << msg << "' in: " << out;
+		EXPECT_EQ(filesIn(dir + "/out"), 0u) << to;
+	}
+	// An end too far past the route is refused.
+	std::ifstream in(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
+	std::stringstream ss;
+	ss << in.rdbuf();
+	std::string s = ss.str();
+	s = std::regex_replace(s, std::regex("\nend_s_m = 170[^\n]*"), "\nend_s_m = 321", std::regex_constants::format_first_only);
+	std::ofstream(dir + "/past.ini") << s;
+	std::string out;
+	EXPECT_NE(runCommand(appPath() + " sim -q -c " + dir + "/past.ini -o " + dir + "/out", &out), 0);
+	EXPECT_NE(out.find("[traversal.morning_low_sun] end_s_m = 321 lies past the end of the scene (at most 20 m past [sim.scene] "
+						  "route_length_m = 300)"), std::string::npos)
+		<< out;
 }
 
 TEST(SimApp, UnknownTraversalAndMissingConfig)

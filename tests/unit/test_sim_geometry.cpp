@@ -14,6 +14,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <algorithm>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -255,4 +256,43 @@ TEST(SimOptions, DumpLoadsBackIdentically)
 	EXPECT_TRUE(o2.traversal("overcast").overcast);
 	EXPECT_EQ(o2.camera.width, 512);
 	EXPECT_THROW(o2.traversal("dusk"), SimOptionsError);
+}
+
+// The default traversals cover one common stretch: they start at the same
+// route position and end at their first frame at or past end_s_m, so their
+// last frames lie within one frame's travel of each other, whatever their
+// speeds (7.5-8.5 m/s, +-20 %).
+TEST(SimOptions, DefaultTraversalsCoverOneStretch)
+{
+	auto o = TSimOptions::FromFile(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
+	o.camera.width = 64;  // no rendering here: a small camera builds quickly
+	o.camera.height = 48;
+	ASSERT_EQ(o.traversals.size(), 4u);
+	CStereoSimulator sim(o);
+	const double start = o.traversals.front().start_s_m, end = o.traversals.front().end_s_m;
+	EXPECT_GE(end - start, 60.0) << "long enough to show failures and recoveries";
+	EXPECT_LE(end, o.scene.route_length_m) << "the default stretch lies on the route";
+	double firstEnd = 1e9, lastEnd = -1e9, maxStep = 0;
+	for (const auto& t : o.traversals)
+	{
+		ASSERT_TRUE(t.endsByDistance()) << t.name;
+		EXPECT_EQ(t.start_s_m, start) << t.name;
+		EXPECT_EQ(t.end_s_m, end) << t.name;
+		sim.setTraversal(t);
+		const int n = sim.frameCount();
+		ASSERT_GE(n, 2) << t.name;
+		EXPECT_EQ(sim.routePosition(0), start) << t.name;
+		for (int i = 1; i < n; i++)
+		{
+			const double step = sim.routePosition(i) - sim.routePosition(i - 1);
+			ASSERT_GT(step, 0) << t.name << " frame " << i;
+			maxStep = std::max(maxStep, step);
+		}
+		EXPECT_GE(sim.routePosition(n - 1), end) << t.name;
+		EXPECT_LT(sim.routePosition(n - 2), end) << t.name;
+		firstEnd = std::min(firstEnd, sim.routePosition(n - 1));
+		lastEnd = std::max(lastEnd, sim.routePosition(n - 1));
+	}
+	EXPECT_LT(lastEnd - firstEnd, maxStep) << "last frames between " << firstEnd << " and " << lastEnd << " m";
+	EXPECT_LT(maxStep, 1.2 * 8.5 / o.camera.fps + 1e-9);
 }

@@ -93,6 +93,11 @@ class CStereoSimulator : public mrpt::system::COutputLogger
 	double timestamp(int frame) const;
 	/** Route arc length (m) of the vehicle at frame i. */
 	double routePosition(int frame) const;
+	/** Frames of the current traversal: its `frames`, or with end_s_m the
+	 * count up to and including the first frame at or past end_s_m (the
+	 * speed never drops to zero, so route position grows with the frame).
+	 * Throws std::invalid_argument when that takes more than 1e6 frames. */
+	int frameCount() const;
 
 	// ---- light
 	/** Unit vector towards the sun, world frame. */
@@ -119,7 +124,7 @@ class CStereoSimulator : public mrpt::system::COutputLogger
 	 * calibration, rightCameraPose, cameraPose = T_vehicle_left. */
 	mrpt::obs::CObservationStereoImages::Ptr makeObservation(const TSimFrame& f) const;
 
-	/** Renders the current traversal (frames <= 0: the traversal's count) to
+	/** Renders the current traversal (frames <= 0: frameCount()) to
 	 * rawlogPath and its ground truth (TUM, T_world_left) to tumPath. Both
 	 * appear only if everything succeeded. onFrame sees each frame. With
 	 * `outputs`, both are outputs of that transaction (put in place by its

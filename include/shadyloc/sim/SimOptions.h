@@ -78,6 +78,11 @@ struct TSimSceneOptions : public mrpt::config::CLoadableOptions
 	 * several separated by ','. For geometry checks. */
 	std::vector<std::array<double, 4>> markers;
 
+	/** Scenery is laid out from 40 m before the route's start to 60 m past
+	 * its end (Scene::layout), so a traversal may end up to this far past
+	 * route_length_m and still look at 40 m of it ahead (m). */
+	static constexpr double kEndMargin_m = 20.0;
+
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
 	void validate() const;
@@ -101,7 +106,15 @@ struct TTraversal : public mrpt::config::CLoadableOptions
 	double speed_mps = 5.0;	 //!< mean speed (m/s)
 	double speed_variation = 0.2;  //!< relative amplitude of the speed's slow oscillation
 	double start_s_m = 0.0;	 //!< route position of the first frame (m)
-	int frames = 80;  //!< frames to render
+	/** Frames to render; 0 = as many as it takes to reach end_s_m (the .ini
+	 * gives either `frames` or `end_s_m`, not both). */
+	int frames = 80;
+	/** With frames = 0: the traversal ends at the first frame at or past this
+	 * route position (m), so traversals with the same start and end cover
+	 * the same stretch whatever their speeds, ending within one frame's
+	 * travel of each other. At most the scene's route_length_m +
+	 * TSimSceneOptions::kEndMargin_m. */
+	double end_s_m = 0.0;
 	uint32_t wind_seed = 1;	 //!< canopy leaf-pattern shift
 	uint32_t noise_seed = 1;  //!< sensor noise, speed and weave phases
 	double start_time = 1.7e9;	//!< timestamp of the first frame (s, UNIX)
@@ -109,6 +122,8 @@ struct TTraversal : public mrpt::config::CLoadableOptions
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
 	void validate() const;
+	/** True when the frame count follows from end_s_m (frames = 0). */
+	bool endsByDistance() const { return frames == 0; }
 	/** Effective direct-sun irradiance (0 when overcast or below the horizon). */
 	double effectiveSunIrradiance() const;
 };
@@ -127,6 +142,11 @@ struct TSimOptions : public mrpt::config::CLoadableOptions
 	/** Loads a file; SimOptionsError naming the file (missing, unknown key,
 	 * bad value, unknown traversal section). */
 	static TSimOptions FromFile(const std::string& path);
+
+	/** t.validate(), and with end_s_m, that the end lies within this scene
+	 * (end_s_m <= route_length_m + kEndMargin_m); std::invalid_argument
+	 * naming the key. */
+	void validateTraversal(const TTraversal& t) const;
 
 	/** The traversal called name, or SimOptionsError listing the known ones. */
 	const TTraversal& traversal(const std::string& name) const;
