@@ -196,17 +196,36 @@ int run(int argc, char** argv)
 			std::vector<map::TChannelParams> params;
 			for (const auto& c : channels) params.push_back(c.params);
 			kfmap.setup(calib, f0.left.cols, f0.left.rows, params);
-			builder = std::make_unique<survey::CSurveyBuilder>(kfmap, run);
+			builder = std::make_unique<survey::CSurveyBuilder>(kfmap, run, vopt);
 			if (talk) std::cout << "calibration: " << calib.asString() << "\n";
 		}
 		const double t = f0.timestamp;
 		const size_t before = voChain.keyframes().size();
-		const auto res = voChain.process(f0.left, f0.right, calib, t);
-		if (builder->offer(res, voChain.keyframes(), before))
+		// Selecting landmarks by re-observation needs every channel's
+		// measurements of every frame; otherwise only at map keyframes.
+		const bool everyFrame = builder->needsFrames();
+		std::vector<features::TStereoFrame> frames(everyFrame ? channels.size() : 0);
+		for (size_t c = 0; c < frames.size(); c++)
+			channels[c].extractor.process(channels[c].frame.left, channels[c].frame.right, calib, frames[c]);
+		vo::TFrameResult res;
+		if (everyFrame)
+		{
+			voChain.track(frames[0], calib, t);
+			res = voChain.commit();
+		}
+		else
+			res = voChain.process(f0.left, f0.right, calib, t);
+		const bool isKeyframe = builder->offer(res, voChain.keyframes(), before);
+		if (isKeyframe)
 		{
 			std::vector<std::vector<features::TStereoMeasurement>> meas(channels.size());
 			for (size_t c = 0; c < channels.size(); c++)
 			{
+				if (everyFrame)
+				{
+					meas[c] = frames[c].meas;
+					continue;
+				}
 				if (c == 0 && res.keyframe)
 				{
 					meas[c] = voChain.keyframes().back().meas;	// the VO just extracted them
@@ -227,8 +246,11 @@ int run(int argc, char** argv)
 					nGt++;
 				}
 			}
+			if (everyFrame) builder->addFrame(std::move(frames));
 			builder->addKeyframe(meas, T_gt);
 		}
+		else if (everyFrame)
+			builder->addFrame(std::move(frames));
 		nFrames++;
 		msTotal += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tf).count();
 		if (talk && nFrames % 100 == 0)
@@ -237,6 +259,7 @@ int run(int argc, char** argv)
 					  << std::setprecision(1) << kfmap.pathLength() << " m" << std::endl;
 	}
 	if (nFrames == 0) throw std::runtime_error(channels[0].source->noFramesMessage());
+	builder->finish();
 	if (kfmap.isEmpty()) throw std::runtime_error(inPath + ": the VO never tracked: no keyframes, no map written");
 	if (gt && nGt == 0)
 		throw std::runtime_error(gtArg.getValue() + ": no ground-truth pose within 10 ms of any keyframe of " + inPath);
@@ -249,6 +272,14 @@ int run(int argc, char** argv)
 			  << std::fixed << std::setprecision(2) << "frames: " << nFrames << ", VO breaks: " << builder->breaks()
 			  << ", build " << msTotal / nFrames << " ms/frame (reading, filters, VO, every channel's features), save "
 			  << msSave << " ms, wall " << sWall << " s; map -> " << outPath << "\n";
+	const auto reobs = builder->meanKeptReobservations();
+	if (!reobs.empty())
+	{
+		std::cout << "kept landmarks re-found, mean frames (window " << std::setprecision(1)
+				  << kfmap.options.reobservation_window_m << " m):";
+		for (size_t c = 0; c < reobs.size(); c++) std::cout << " " << channels[c].channel.label << " " << reobs[c];
+		std::cout << "\n";
+	}
 	return 0;
 }
 shadyloc::apps::RegisterCommand reg(
