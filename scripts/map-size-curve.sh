@@ -75,6 +75,8 @@ EOF
     END { printf "%.2f %.2f %.0f %.0f", kb[0] / 1e3 / (L / 1e3), kb[1] / 1e3 / (L / 1e3), mk[0] / (n / 2), mk[1] / (n / 2) }
   ' "$d"/maps/*.info)"
   read -r mono_mb inv_mb mono_n inv_n <<<"$sizes"
+  # A setting run again replaces its rows.
+  awk -F'\t' -v s="$name" '$1 != s' "$out/pairs.tsv" >"$out/pairs.tsv.tmp" && mv "$out/pairs.tsv.tmp" "$out/pairs.tsv"
   for m in "${conds[@]}"; do
     for l in "${conds[@]}"; do
       [ "$m" = "$l" ] && continue

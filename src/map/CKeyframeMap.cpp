@@ -252,7 +252,10 @@ TKeyframeMapOptions getOptions(ByteReader& r, uint8_t version)
 		o.patch_bits = r.get<int32_t>();
 	}
 	else
+	{
 		o.landmark_selection = TKeyframeMapOptions::LandmarkSelection::Strongest;
+		o.patch_bits = 8;
+	}
 	try
 	{
 		o.validate();

@@ -392,6 +392,7 @@ TEST(MapFormat, Version1MapsStillLoad)
 	EXPECT_EQ(m->options.landmarks_per_keyframe, 77);
 	EXPECT_EQ(m->options.kf_spacing_m, 2.25);
 	EXPECT_EQ(m->options.reobservation_window_m, TKeyframeMapOptions().reobservation_window_m);
+	EXPECT_EQ(m->options.patch_bits, 8);
 	EXPECT_EQ(m->keyframeCount(), 3u);
 	ASSERT_EQ(m->channels().size(), 2u);
 	EXPECT_EQ(m->channels()[1].label, "inv9");

@@ -65,7 +65,7 @@ inline CKeyframeMap::Ptr makeSyntheticMap(int n = 24, int perKf = 40, int breakA
 	if (mutate == kOptDraw) m->options.draw_landmarks = true;
 	if (mutate == kOptSelection) m->options.landmark_selection = TKeyframeMapOptions::LandmarkSelection::Strongest;
 	if (mutate == kOptReobservation) m->options.reobservation_window_m = 3.5;
-	if (mutate == kOptPatchBits) m->options.patch_bits = 6;
+	m->options.patch_bits = mutate == kOptPatchBits ? 6 : 8;  // 8: the patches as drawn below
 	geometry::TStereoCalib cal;
 	cal.fx = cal.fy = 400;
 	cal.cx = 256;
