@@ -99,6 +99,14 @@ int run(int argc, char** argv)
 			  << std::fixed << std::setprecision(2) << "frames: " << nFrames << ", VO breaks: " << st.breaks
 			  << ", build " << st.msTotal / nFrames << " ms/frame (reading, filters, VO, every channel's features), save "
 			  << msSave << " ms, wall " << sWall << " s; map -> " << outPath << "\n";
+	if (!st.meanKeptReobservations.empty())
+	{
+		std::cout << "kept landmarks re-found, mean frames (window " << std::setprecision(1)
+				  << kfmap.options.reobservation_window_m << " m):";
+		for (size_t c = 0; c < st.meanKeptReobservations.size(); c++)
+			std::cout << " " << kfmap.channels()[c].label << " " << st.meanKeptReobservations[c];
+		std::cout << "\n";
+	}
 	return 0;
 }
 shadyloc::apps::RegisterCommand reg(

@@ -57,6 +57,14 @@ constexpr uint8_t kMaxChannels = 16;
  * beyond any map (150,000 keyframes of 120 measurements per channel are ~3.7 GB). */
 constexpr uint64_t kMaxSerializedBytes = uint64_t(1) << 36;
 
+/** A patch pixel kept to `bits` bits (its top bits q) as held in memory:
+ * the middle of the range q stands for, so quantising again changes nothing. */
+uint8_t dequantisePixel(uint8_t q, int bits)
+{
+	const int s = 8 - bits;
+	return static_cast<uint8_t>((q << s) + (s > 0 ? 1 << (s - 1) : 0));
+}
+
 void putPose(ByteWriter& w, const Eigen::Isometry3d& T)
 {
 	for (int i = 0; i < 3; i++)
@@ -209,8 +217,16 @@ void putOptions(ByteWriter& w, const TKeyframeMapOptions& o)
 	w.put<uint8_t>(o.draw_landmarks);
 	w.put<double>(o.draw_landmark_max_depth_m);
 	w.put<double>(o.draw_frame_every_m);
+	// version 2
+	w.put<uint8_t>(static_cast<uint8_t>(o.landmark_selection));
+	w.put<double>(o.reobservation_window_m);
+	w.put<double>(o.reobservation_radius_px);
+	w.put<int32_t>(o.min_reobservations);
+	w.put<int32_t>(o.patch_bits);
 }
-TKeyframeMapOptions getOptions(ByteReader& r)
+/** The options as stored by format `version`: version 1 maps were thinned
+ * by the strongest corners (the only selection then). */
+TKeyframeMapOptions getOptions(ByteReader& r, uint8_t version)
 {
 	TKeyframeMapOptions o;
 	o.kf_spacing_m = r.get<double>();
@@ -225,6 +241,21 @@ TKeyframeMapOptions getOptions(ByteReader& r)
 	o.draw_landmarks = d;
 	o.draw_landmark_max_depth_m = r.get<double>();
 	o.draw_frame_every_m = r.get<double>();
+	if (version >= 2)
+	{
+		const auto sel = r.get<uint8_t>();
+		if (sel > 1) r.fail("landmark_selection " + std::to_string(sel) + " unknown");
+		o.landmark_selection = static_cast<TKeyframeMapOptions::LandmarkSelection>(sel);
+		o.reobservation_window_m = r.get<double>();
+		o.reobservation_radius_px = r.get<double>();
+		o.min_reobservations = r.get<int32_t>();
+		o.patch_bits = r.get<int32_t>();
+	}
+	else
+	{
+		o.landmark_selection = TKeyframeMapOptions::LandmarkSelection::Strongest;
+		o.patch_bits = 8;
+	}
 	try
 	{
 		o.validate();
@@ -246,8 +277,15 @@ void TKeyframeMapOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase
 	r.read("kf_spacing_m", kf_spacing_m);
 	r.read("kf_spacing_deg", kf_spacing_deg);
 	r.read("landmarks_per_keyframe", landmarks_per_keyframe);
+	r.readChoice<LandmarkSelection>(
+		"landmark_selection", landmark_selection,
+		{{"strongest", LandmarkSelection::Strongest}, {"reobserved", LandmarkSelection::Reobserved}});
+	r.read("reobservation_window_m", reobservation_window_m);
+	r.read("reobservation_radius_px", reobservation_radius_px);
+	r.read("min_reobservations", min_reobservations);
 	r.read("selection_grid_cols", selection_grid_cols);
 	r.read("selection_grid_rows", selection_grid_rows);
+	r.read("patch_bits", patch_bits);
 	r.read("compression_level", compression_level);
 	r.read("index_cell_m", index_cell_m);
 	r.read("draw_landmarks", draw_landmarks);
@@ -270,9 +308,18 @@ void TKeyframeMapOptions::dumpToTextStream(std::ostream& out) const
 	w.value("kf_spacing_m", kf_spacing_m, "a new map keyframe after this path distance along the VO chain [m]");
 	w.value("kf_spacing_deg", kf_spacing_deg, "... or this change of heading [deg]");
 	w.value("landmarks_per_keyframe", landmarks_per_keyframe,
-			"kept per keyframe and channel, strongest per image bucket first; 0 = all");
+			"kept per keyframe and channel, the best (landmark_selection) per image bucket first; 0 = all");
+	w.value("landmark_selection", toString(landmark_selection),
+			"strongest (FAST response) | reobserved (re-found most often by the survey's own frames)");
+	w.value("reobservation_window_m", reobservation_window_m,
+			"reobserved: survey frames within this path distance of the keyframe are matched [m]");
+	w.value("reobservation_radius_px", reobservation_radius_px,
+			"reobserved: search circle around a landmark's projection at the VO pose [px]");
+	w.value("min_reobservations", min_reobservations,
+			"reobserved: landmarks re-found in fewer frames are dropped (0 = as the budget allows)");
 	w.value("selection_grid_cols", selection_grid_cols, "landmark selection buckets across the image");
 	w.value("selection_grid_rows", selection_grid_rows, "... and down the image");
+	w.value("patch_bits", patch_bits, "bits kept of each stored patch pixel, 1..8 (fewer compress better)");
 	w.value("compression_level", compression_level, "zstd level 1 (fast) .. 22 (small)");
 	w.value("index_cell_m", index_cell_m, "cell of the spatial hash grid over camera centres [m]");
 	w.value("draw_landmarks", draw_landmarks, "drawings show landmarks, coloured by channel");
@@ -288,12 +335,24 @@ void TKeyframeMapOptions::validate() const
 	need(kf_spacing_m >= 0 && std::isfinite(kf_spacing_m), "kf_spacing_m must be >= 0 [m]");
 	need(kf_spacing_deg > 0 && kf_spacing_deg <= 180, "kf_spacing_deg must be in (0, 180] [deg]");
 	need(landmarks_per_keyframe >= 0, "landmarks_per_keyframe must be >= 0 (0 = all)");
+	need(landmark_selection == LandmarkSelection::Strongest || landmark_selection == LandmarkSelection::Reobserved,
+		 "landmark_selection must be strongest or reobserved");
+	need(reobservation_window_m > 0 && std::isfinite(reobservation_window_m), "reobservation_window_m must be > 0 [m]");
+	need(reobservation_radius_px >= 1 && reobservation_radius_px <= 200,
+		 "reobservation_radius_px must be in [1, 200] [px]");
+	need(min_reobservations >= 0, "min_reobservations must be >= 0");
 	need(selection_grid_cols >= 1 && selection_grid_cols <= 256, "selection_grid_cols must be in 1..256");
 	need(selection_grid_rows >= 1 && selection_grid_rows <= 256, "selection_grid_rows must be in 1..256");
+	need(patch_bits >= 1 && patch_bits <= 8, "patch_bits must be in 1..8");
 	need(compression_level >= 1 && compression_level <= 22, "compression_level must be in 1..22");
 	need(index_cell_m > 0 && std::isfinite(index_cell_m), "index_cell_m must be > 0 [m]");
 	need(draw_landmark_max_depth_m > 0, "draw_landmark_max_depth_m must be > 0 [m]");
 	need(draw_frame_every_m >= 0, "draw_frame_every_m must be >= 0 [m]");
+}
+
+std::string shadyloc::toString(TKeyframeMapOptions::LandmarkSelection s)
+{
+	return s == TKeyframeMapOptions::LandmarkSelection::Strongest ? "strongest" : "reobserved";
 }
 
 bool TKeyframeMapOptions::operator==(const TKeyframeMapOptions& o) const
@@ -360,6 +419,7 @@ bool CKeyframeMap::quantise(features::TStereoMeasurement& m, const map::TChannel
 	m.uR = m.uL - static_cast<float>(d) / kPixelQuantum;
 	m.response = static_cast<float>(std::clamp<long>(std::lround(m.response), 0, 65535));
 	m.zncc = static_cast<float>(std::clamp<long>(std::lround(m.zncc * 127.f), -127, 127)) / 127.f;
+	for (auto& p : m.patch) p = dequantisePixel(static_cast<uint8_t>(p >> (8 - options.patch_bits)), options.patch_bits);
 	Eigen::Matrix3d J;
 	if (!m_calib.triangulate(m.uL, m.v, m.uR, m.P, &J)) return false;
 	m.cov = m_calib.triangulationCovariance(J, ch.sigma_px);
@@ -615,9 +675,12 @@ static TBlocks encode(
 			{
 				// Horizontal differences (PNG's "Sub" filter): neighbouring pixels
 				// are alike, their differences compress.
+				// Only the kept top bits (patch_bits) are stored.
+				const int sh = 8 - o.patch_bits;
 				uint8_t row[features::kPatchSize * features::kPatchSize];
 				for (int i = 0; i < features::kPatchSize * features::kPatchSize; i++)
-					row[i] = (i % features::kPatchSize) ? uint8_t(mm.patch[i] - mm.patch[i - 1]) : mm.patch[i];
+					row[i] = (i % features::kPatchSize) ? uint8_t((mm.patch[i] >> sh) - (mm.patch[i - 1] >> sh))
+														: uint8_t(mm.patch[i] >> sh);
 				x.bytes(row, sizeof(row));
 			}
 		}
@@ -629,7 +692,10 @@ static TBlocks encode(
 // 0: channels recorded as a kind (mono / invariant) with the invariant
 //    parameters, before channels were filters; refused (no map of it was kept).
 // 1: channels recorded as the filter that made them (class, image options).
-uint8_t CKeyframeMap::serializeGetVersion() const { return 1; }
+// 2: the options' landmark selection (policy, re-observation window and
+//    radius, minimum re-observations) after the version 1 options; a
+//    version 1 map reads as thinned by the strongest corners.
+uint8_t CKeyframeMap::serializeGetVersion() const { return 2; }
 
 void CKeyframeMap::serializeTo(mrpt::serialization::CArchive& out) const
 {
@@ -655,10 +721,12 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 				": format version 0 (channels stored as mono/invariant kinds) is no longer read; rebuild the map "
 				"with `shadyloc survey`");
 		case 1:
+		case 2:
 		{
 			// The stream's size is unknown here: the budget is the largest map
 			// (kMaxSerializedBytes); offsets count from the object's data.
-			io::BoundedReader in_(in, std::string(kClass) + " (version 1)", kMaxSerializedBytes);
+			io::BoundedReader in_(
+				in, std::string(kClass) + " (version " + std::to_string(version) + ")", kMaxSerializedBytes);
 			const auto nBlocks = in_.read<uint8_t>("block count");
 			if (nBlocks < 1 || nBlocks > kMaxChannels + 1)
 				in_.fail("block count", std::to_string(nBlocks) + " blocks: 1 + channels (at most " +
@@ -678,7 +746,7 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 			}
 			// Parse into locals, then swap in: a failed load leaves the map as it was.
 			ByteReader r(raw[0].data(), raw[0].size(), std::string(kClass) + " metadata");
-			TKeyframeMapOptions o = getOptions(r);
+			TKeyframeMapOptions o = getOptions(r, version);
 			geometry::TStereoCalib cal;
 			for (double* x : {&cal.fx, &cal.fy, &cal.cx, &cal.cy, &cal.cxR, &cal.baseline})
 			{
@@ -754,6 +822,12 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 						x.bytes(m.patch.data(), m.patch.size());
 						for (size_t j = 0; j < m.patch.size(); j++)
 							if (j % features::kPatchSize) m.patch[j] = uint8_t(m.patch[j] + m.patch[j - 1]);
+						const int maxQ = (1 << o.patch_bits) - 1;
+						for (auto& p : m.patch)
+						{
+							if (p > maxQ) x.fail("patch pixel beyond patch_bits " + std::to_string(o.patch_bits));
+							p = dequantisePixel(p, o.patch_bits);
+						}
 					}
 					for (size_t j = 0; j < ms.size(); j++)
 					{
@@ -1088,8 +1162,12 @@ std::string CKeyframeMap::asString() const
 	}
 	if (sized) s << "  stored: " << sz.total_bytes << " bytes (metadata " << sz.meta_bytes << ")\n";
 	s << "  options: kf_spacing " << std::setprecision(2) << options.kf_spacing_m << " m / " << options.kf_spacing_deg
-	  << " deg, landmarks_per_keyframe " << options.landmarks_per_keyframe << ", zstd level "
-	  << options.compression_level;
+	  << " deg, landmarks_per_keyframe " << options.landmarks_per_keyframe << " ("
+	  << toString(options.landmark_selection);
+	if (options.landmark_selection == TKeyframeMapOptions::LandmarkSelection::Reobserved)
+		s << ": window " << options.reobservation_window_m << " m, radius " << options.reobservation_radius_px
+		  << " px, at least " << options.min_reobservations << " re-observations";
+	s << "), zstd level " << options.compression_level;
 	return s.str();
 }
 

@@ -15,33 +15,47 @@ map::TChannelParams channelParams(
 	return map::TChannelParams::From(label, madeBy.GetRuntimeClass()->className, madeBy.imageOptionsAsIni(), fo);
 }
 
-std::vector<features::TStereoMeasurement> selectLandmarks(
-	const std::vector<features::TStereoMeasurement>& all, int keep, int cols, int rows, int width, int height)
+std::vector<size_t> selectLandmarkIndices(
+	const std::vector<features::TStereoMeasurement>& all, int keep, int cols, int rows, int width, int height,
+	const std::vector<int>* score, int minScore)
 {
-	if (keep <= 0 || all.size() <= static_cast<size_t>(keep)) return all;
+	if (score && score->size() != all.size())
+		throw std::invalid_argument(
+			"selectLandmarks: " + std::to_string(score->size()) + " scores for " + std::to_string(all.size()) +
+			" measurements");
+	const bool floor = score && minScore > 0;
+	if (!floor && (keep <= 0 || all.size() <= static_cast<size_t>(keep)))
+	{
+		std::vector<size_t> idx(all.size());
+		std::iota(idx.begin(), idx.end(), size_t(0));
+		return idx;
+	}
+	const size_t budget = keep > 0 ? static_cast<size_t>(keep) : all.size();
 	cols = std::max(1, cols);
 	rows = std::max(1, rows);
 	std::vector<std::vector<size_t>> buckets(static_cast<size_t>(cols * rows));
 	for (size_t i = 0; i < all.size(); i++)
 	{
+		if (floor && (*score)[i] < minScore) continue;
 		const int c = std::clamp(static_cast<int>(all[i].uL * cols / std::max(1, width)), 0, cols - 1);
 		const int r = std::clamp(static_cast<int>(all[i].v * rows / std::max(1, height)), 0, rows - 1);
 		buckets[r * cols + c].push_back(i);
 	}
 	for (auto& b : buckets)
 		std::stable_sort(b.begin(), b.end(), [&](size_t x, size_t y) {
+			if (score && (*score)[x] != (*score)[y]) return (*score)[x] > (*score)[y];
 			return all[x].response > all[y].response ||
 				   (all[x].response == all[y].response && all[x].zncc > all[y].zncc);
 		});
-	std::vector<features::TStereoMeasurement> out;
-	out.reserve(keep);
-	for (size_t round = 0; out.size() < static_cast<size_t>(keep); round++)
+	std::vector<size_t> out;
+	out.reserve(std::min(budget, all.size()));
+	for (size_t round = 0; out.size() < budget; round++)
 	{
 		bool any = false;
 		for (const auto& b : buckets)
-			if (round < b.size() && out.size() < static_cast<size_t>(keep))
+			if (round < b.size() && out.size() < budget)
 			{
-				out.push_back(all[b[round]]);
+				out.push_back(b[round]);
 				any = true;
 			}
 		if (!any) break;
@@ -49,9 +63,69 @@ std::vector<features::TStereoMeasurement> selectLandmarks(
 	return out;
 }
 
-CSurveyBuilder::CSurveyBuilder(CKeyframeMap& map, const std::string& runName)
-	: mrpt::system::COutputLogger("CSurveyBuilder"), m_map(map)
+std::vector<features::TStereoMeasurement> selectLandmarks(
+	const std::vector<features::TStereoMeasurement>& all, int keep, int cols, int rows, int width, int height,
+	const std::vector<int>* score, int minScore)
 {
+	std::vector<features::TStereoMeasurement> out;
+	for (size_t i : selectLandmarkIndices(all, keep, cols, rows, width, height, score, minScore)) out.push_back(all[i]);
+	return out;
+}
+
+TReobservationMatching TReobservationMatching::From(const vo::TStereoVOOptions& vo, double radius_px)
+{
+	TReobservationMatching m;
+	m.matcher = vo::matcherOptionsFrom(vo);
+	m.matcher.region = vo::SearchRegion::Circle;
+	// The VO's pose of a survey frame is good to centimetres: a small circle,
+	// no wide retry, and every landmark scored (far ones included).
+	m.matcher.search_radius_px = radius_px;
+	m.matcher.search_radius_lost_px = radius_px;
+	m.matcher.min_matches = 0;
+	m.matcher.near_min_disparity = 0;
+	m.pose = vo::poseEstimatorOptionsFrom(vo);
+	return m;
+}
+
+std::vector<int> countReobservations(
+	const std::vector<features::TStereoMeasurement>& landmarks, const geometry::TStereoCalib& calib,
+	const std::vector<TReobservingFrame>& frames, const TReobservationMatching& m)
+{
+	std::vector<int> n(landmarks.size(), 0);
+	if (landmarks.empty()) return n;
+	const vo::CKeyframeMatcher matcher(m.matcher);
+	const vo::CRelativePoseEstimator estimator(m.pose);
+	for (const auto& f : frames)
+	{
+		if (!f.frame) throw std::invalid_argument("countReobservations: a frame without measurements");
+		vo::TKeyframeMatchInput in;
+		in.landmarks = &landmarks;
+		in.calib_kf = calib;
+		in.frame = f.frame;
+		in.calib = calib;
+		in.T_curr_kf_pred = f.T_frame_kf;
+		vo::TKeyframeMatchOutput out;
+		matcher.match(in, out);
+		if (out.corr.empty()) continue;
+		vo::TRelativePoseInput pin;
+		pin.corr = &out.corr;
+		pin.calib = calib;
+		pin.T_curr_ref_pred = &f.T_frame_kf;
+		vo::TRelativePoseOutput po;
+		estimator.estimate(pin, po);
+		if (!po.ok()) continue;
+		for (size_t i = 0; i < out.corr.size(); i++)
+			if (po.inlier[i]) n[static_cast<size_t>(out.landmark[i])]++;
+	}
+	return n;
+}
+
+CSurveyBuilder::CSurveyBuilder(CKeyframeMap& map, const std::string& runName, const vo::TStereoVOOptions& vo)
+	: mrpt::system::COutputLogger("CSurveyBuilder"),
+	  m_map(map),
+	  m_matching(TReobservationMatching::From(vo, map.options.reobservation_radius_px))
+{
+	map.options.validate();
 	if (map.channels().empty()) throw std::logic_error("CSurveyBuilder: set the map up (CKeyframeMap::setup) first");
 	m_run = map.addRun(runName);
 	if (!map.keyframes().empty()) m_segment = map.keyframes().back().segment + 1;
@@ -61,7 +135,19 @@ bool CSurveyBuilder::offer(
 	const vo::TFrameResult& res, const std::vector<vo::TKeyframe>& voKfs, size_t voKfsBefore)
 {
 	m_pending.valid = false;
-	if (!vo::isTracked(res.status)) return false;  // a predicted pose is no place for a keyframe
+	// The VO chain's segments and path distance, frame by frame (re-observation windows).
+	m_lastTracked = vo::isTracked(res.status);
+	m_lastFrame = res.frame;
+	if (res.status == vo::FrameStatus::First || res.status == vo::FrameStatus::Reinit)
+	{
+		if (m_voStarted) m_voSegment++;
+		m_voStarted = true;
+		m_voDist = 0;
+	}
+	else if (m_lastTracked)
+		m_voDist += (m_T_world_lastTracked.inverse() * res.T_world_curr).translation().norm();
+	if (m_lastTracked) m_T_world_lastTracked = res.T_world_curr;
+	if (!m_lastTracked) return false;  // a predicted pose is no place for a keyframe
 	TPending p;
 	p.res = res;
 	const bool restart = res.status == vo::FrameStatus::First || res.status == vo::FrameStatus::Reinit;
@@ -108,7 +194,6 @@ void CSurveyBuilder::addKeyframe(
 {
 	if (!m_pending.valid) throw std::logic_error("CSurveyBuilder::addKeyframe without an accepted offer()");
 	const auto& p = m_pending;
-	const auto& o = m_map.options;
 	map::TMapKeyframe kf;
 	kf.run = m_run;
 	kf.frame = p.res.frame;
@@ -126,9 +211,10 @@ void CSurveyBuilder::addKeyframe(
 		if (m_segmentOpen) m_segment++;
 		// After a break (or a second survey run) the segment's map pose is a
 		// prediction through the VO's dead reckoning, never a measurement.
-		m_predictedSegment = !m_map.keyframes().empty();
-		kf.T_prev_kf = m_map.keyframes().empty() ? Eigen::Isometry3d::Identity() : m_T_map_last.inverse() * kf.T_map_kf;
-		kf.cov_prev_kf = m_map.keyframes().empty() ? geometry::Matrix6d(geometry::Matrix6d::Zero()) : geometry::Matrix6d(geometry::Matrix6d::Identity() * 1e2);
+		const bool first = m_map.keyframes().empty() && m_added == 0;
+		m_predictedSegment = !first;
+		kf.T_prev_kf = first ? Eigen::Isometry3d::Identity() : m_T_map_last.inverse() * kf.T_map_kf;
+		kf.cov_prev_kf = first ? geometry::Matrix6d(geometry::Matrix6d::Zero()) : geometry::Matrix6d(geometry::Matrix6d::Identity() * 1e2);
 	}
 	else
 	{
@@ -137,18 +223,134 @@ void CSurveyBuilder::addKeyframe(
 	}
 	kf.segment = m_segment;
 	kf.predicted = m_predictedSegment;
-	kf.channels.resize(perChannel.size());
-	for (size_t c = 0; c < perChannel.size(); c++)
-		kf.channels[c] = selectLandmarks(
-			perChannel[c], o.landmarks_per_keyframe, o.selection_grid_cols, o.selection_grid_rows, m_map.imageWidth(),
-			m_map.imageHeight());
-	m_map.appendKeyframe(std::move(kf));
+	if (perChannel.size() != m_map.channels().size())
+		throw std::invalid_argument(
+			"CSurveyBuilder::addKeyframe: " + std::to_string(perChannel.size()) + " channels of measurements, the map has " +
+			std::to_string(m_map.channels().size()));
 	m_segmentOpen = true;
 	m_lastRef = p.ref;
 	m_T_ref_last = p.T_ref_f;
 	m_cov_ref_last = p.cov_ref_f;
-	m_T_map_last = m_map.keyframes().back().T_map_kf;
+	m_T_map_last = kf.T_map_kf;
+	m_added++;
 	m_pending.valid = false;
+	TWaiting w;
+	w.voSegment = m_voSegment;
+	w.dist = m_voDist;
+	w.T_world = p.res.T_world_curr;
+	w.kf = std::move(kf);
+	w.kf.channels = perChannel;
+	if (!needsFrames())
+	{
+		append(std::move(w));
+		return;
+	}
+	m_waiting.push_back(std::move(w));
+	flush(false);
+}
+
+bool CSurveyBuilder::needsFrames() const
+{
+	const auto& o = m_map.options;
+	// Keeping everything needs no score; a floor on it does.
+	return o.landmark_selection == TKeyframeMapOptions::LandmarkSelection::Reobserved &&
+		   (o.landmarks_per_keyframe > 0 || o.min_reobservations > 0);
+}
+
+void CSurveyBuilder::addFrame(std::vector<features::TStereoFrame> perChannel)
+{
+	if (!needsFrames() || !m_lastTracked) return;
+	if (perChannel.size() != m_map.channels().size())
+		throw std::invalid_argument(
+			"CSurveyBuilder::addFrame: " + std::to_string(perChannel.size()) + " channels of measurements, the map has " +
+			std::to_string(m_map.channels().size()));
+	if (!m_frames.empty() && m_frames.back().frame == m_lastFrame)
+		throw std::logic_error("CSurveyBuilder::addFrame: frame " + std::to_string(m_lastFrame) + " given twice");
+	TFrame f;
+	f.frame = m_lastFrame;
+	f.voSegment = m_voSegment;
+	f.dist = m_voDist;
+	f.T_world = m_T_world_lastTracked;
+	f.channels = std::move(perChannel);
+	m_frames.push_back(std::move(f));
+	flush(false);
+}
+
+void CSurveyBuilder::finish() { flush(true); }
+
+void CSurveyBuilder::flush(bool all)
+{
+	const double win = m_map.options.reobservation_window_m;
+	// In chain order: a keyframe is ready when the survey is past its window
+	// (or out of its segment), so every frame it could see is known.
+	size_t done = 0;
+	for (; done < m_waiting.size(); done++)
+	{
+		const auto& w = m_waiting[done];
+		const bool ready = all || (!m_frames.empty() && (m_frames.back().voSegment != w.voSegment ||
+														   m_frames.back().dist - w.dist > win));
+		if (!ready) break;
+	}
+	for (size_t i = 0; i < done; i++) append(std::move(m_waiting[i]));
+	m_waiting.erase(m_waiting.begin(), m_waiting.begin() + static_cast<std::ptrdiff_t>(done));
+	// Frames no keyframe can reach any more: not within the window of a
+	// waiting keyframe, nor of one still to come (at or beyond the newest frame).
+	if (m_frames.empty()) return;
+	const TFrame& last = m_frames.back();
+	std::vector<TFrame> keep;
+	for (auto& f : m_frames)
+	{
+		bool need = f.voSegment == last.voSegment && last.dist - f.dist <= win;
+		for (const auto& w : m_waiting) need = need || (f.voSegment == w.voSegment && std::abs(f.dist - w.dist) <= win);
+		if (need || all) keep.push_back(std::move(f));
+	}
+	m_frames = std::move(keep);
+	if (all) m_frames.clear();
+}
+
+void CSurveyBuilder::append(TWaiting w)
+{
+	const auto& o = m_map.options;
+	auto& kf = w.kf;
+	const bool scored = needsFrames();
+	for (size_t c = 0; c < kf.channels.size(); c++)
+	{
+		std::vector<int> score;
+		if (scored)
+		{
+			std::vector<TReobservingFrame> frames;
+			for (const auto& f : m_frames)
+				if (f.voSegment == w.voSegment && f.frame != kf.frame && std::abs(f.dist - w.dist) <= o.reobservation_window_m)
+					frames.push_back({&f.channels[c], f.T_world.inverse() * w.T_world});
+			score = countReobservations(kf.channels[c], m_map.calibration(), frames, m_matching);
+		}
+		const auto idx = selectLandmarkIndices(
+			kf.channels[c], o.landmarks_per_keyframe, o.selection_grid_cols, o.selection_grid_rows, m_map.imageWidth(),
+			m_map.imageHeight(), scored ? &score : nullptr, o.min_reobservations);
+		std::vector<features::TStereoMeasurement> kept;
+		kept.reserve(idx.size());
+		if (scored && m_keptSum.size() < kf.channels.size())
+		{
+			m_keptSum.resize(kf.channels.size(), 0);
+			m_keptCount.resize(kf.channels.size(), 0);
+		}
+		for (size_t i : idx)
+		{
+			kept.push_back(kf.channels[c][i]);
+			if (!scored) continue;
+			m_keptSum[c] += score[i];
+			m_keptCount[c] += 1;
+		}
+		kf.channels[c] = std::move(kept);
+	}
+	m_map.appendKeyframe(std::move(kf));
+}
+
+std::vector<double> CSurveyBuilder::meanKeptReobservations() const
+{
+	std::vector<double> out;
+	for (size_t c = 0; c < m_keptSum.size(); c++) out.push_back(m_keptCount[c] > 0 ? m_keptSum[c] / m_keptCount[c] : 0.0);
+	return out;
 }
 
 }  // namespace shadyloc::survey

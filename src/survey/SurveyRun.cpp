@@ -41,6 +41,7 @@ struct CSurveyRun::TImpl
 	TSurveyRunOptions opts;
 	CKeyframeMap::Ptr map;
 	std::vector<TSurveyChannel> channels;
+	vo::TStereoVOOptions voOptions;	 //!< of the chain's VO (its matcher re-finds landmarks)
 	std::unique_ptr<vo::StereoVO> voChain;
 	bool ran = false;
 };
@@ -88,8 +89,8 @@ CSurveyRun::CSurveyRun(const std::string& inPath, const mrpt::config::CConfigFil
 		c.source = std::make_unique<io::StereoFrameSource>(inPath, c.input.sourceOptions);
 		I.channels.push_back(std::move(c));
 	}
-	const vo::TStereoVOOptions vopt = vo::voOptionsFor(cfg, I.channels[0].channel.label);
-	I.voChain = std::make_unique<vo::StereoVO>(vopt, I.channels[0].extractor.options());
+	I.voOptions = vo::voOptionsFor(cfg, I.channels[0].channel.label);
+	I.voChain = std::make_unique<vo::StereoVO>(I.voOptions, I.channels[0].extractor.options());
 	m_runName = o.runName.empty() ? std::filesystem::path(inPath).stem().string() : o.runName;
 }
 
@@ -166,17 +167,35 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 			std::vector<map::TChannelParams> params;
 			for (const auto& c : channels) params.push_back(c.params);
 			kfmap.setup(m_stats.calib, f0.left.cols, f0.left.rows, params);
-			builder = std::make_unique<CSurveyBuilder>(kfmap, m_runName);
+			builder = std::make_unique<CSurveyBuilder>(kfmap, m_runName, I.voOptions);
 		}
 		const auto& calib = m_stats.calib;
 		const double t = f0.timestamp;
 		const size_t before = voChain.keyframes().size();
-		const auto res = voChain.process(f0.left, f0.right, calib, t);
+		// Selecting landmarks by re-observation needs every channel's
+		// measurements of every frame; otherwise only at map keyframes.
+		const bool everyFrame = builder->needsFrames();
+		std::vector<features::TStereoFrame> frames(everyFrame ? channels.size() : 0);
+		for (size_t c = 0; c < frames.size(); c++)
+			channels[c].extractor.process(channels[c].frame.left, channels[c].frame.right, calib, frames[c]);
+		vo::TFrameResult res;
+		if (everyFrame)
+		{
+			voChain.track(frames[0], calib, t);
+			res = voChain.commit();
+		}
+		else
+			res = voChain.process(f0.left, f0.right, calib, t);
 		if (builder->offer(res, voChain.keyframes(), before))
 		{
 			std::vector<std::vector<features::TStereoMeasurement>> meas(channels.size());
 			for (size_t c = 0; c < channels.size(); c++)
 			{
+				if (everyFrame)
+				{
+					meas[c] = frames[c].meas;
+					continue;
+				}
 				if (c == 0 && res.keyframe)
 				{
 					meas[c] = voChain.keyframes().back().meas;	// the VO just extracted them
@@ -197,13 +216,18 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 					m_stats.gtKeyframes++;
 				}
 			}
+			if (everyFrame) builder->addFrame(std::move(frames));
 			builder->addKeyframe(meas, T_gt);
 		}
+		else if (everyFrame)
+			builder->addFrame(std::move(frames));
 		nFrames++;
 		m_stats.msTotal += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tf).count();
 		if (onFrame) onFrame(nFrames, channels[0].source->progress());
 	}
 	if (nFrames == 0) throw std::runtime_error(channels[0].source->noFramesMessage());
+	builder->finish();
+	m_stats.meanKeptReobservations = builder->meanKeptReobservations();
 	if (kfmap.isEmpty()) throw std::runtime_error(inPath + ": the VO never tracked: no keyframes, no map written");
 	if (I.opts.gt && m_stats.gtKeyframes == 0)
 		throw std::runtime_error(

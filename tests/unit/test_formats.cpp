@@ -172,6 +172,11 @@ CKeyframeMap::Ptr populatedKeyframeMap()
 	o.draw_landmarks = true;
 	o.draw_landmark_max_depth_m = 22.5;
 	o.draw_frame_every_m = 3.75;
+	o.landmark_selection = TKeyframeMapOptions::LandmarkSelection::Strongest;
+	o.reobservation_window_m = 4.5;
+	o.reobservation_radius_px = 12.5;
+	o.min_reobservations = 2;
+	o.patch_bits = 7;
 	geometry::TStereoCalib cal;
 	cal.fx = 401.5;
 	cal.fy = 402.25;

@@ -92,6 +92,35 @@ TEST(MapFormat, RoundTripIsByteIdenticalAndLossless)
 	EXPECT_NEAR(m->chainDistance(10), loaded->chainDistance(10), 0);
 }
 
+TEST(MapFormat, FewerPatchBitsRoundTripAndStoreLess)
+{
+	// patch_bits = 6: every patch pixel is held as the middle of its 4-level
+	// step (within 2 grey levels of the original), in memory as in the file.
+	const auto m8 = test::makeSyntheticMap(), m6 = test::makeSyntheticMap(24, 40, 15, test::kOptPatchBits);
+	ASSERT_EQ(m6->options.patch_bits, 6);
+	const auto b6 = bytesOf(*m6);
+	const auto back = CKeyframeMap::LoadFromBytes(b6.data(), b6.size());
+	EXPECT_EQ(bytesOf(*back), b6);
+	int worst = 0;
+	for (uint32_t i = 0; i < m8->keyframeCount(); i++)
+		for (size_t c = 0; c < 2; c++)
+			for (size_t j = 0; j < m8->keyframe(i).channels[c].size(); j++)
+			{
+				const auto &a = m8->keyframe(i).channels[c][j].patch, &b = m6->keyframe(i).channels[c][j].patch,
+						   &l = back->keyframe(i).channels[c][j].patch;
+				EXPECT_EQ(b, l);
+				for (size_t k = 0; k < a.size(); k++)
+				{
+					worst = std::max(worst, std::abs(int(a[k]) - int(b[k])));
+					EXPECT_EQ(b[k] % 4, 2) << "not the middle of its step";
+				}
+			}
+	EXPECT_LE(worst, 2);
+	// Two bits fewer of 81 patch bytes per measurement: the channel blocks shrink.
+	const auto s8 = m8->sizeReport(), s6 = m6->sizeReport();
+	for (size_t c = 0; c < 2; c++) EXPECT_LT(s6.channel_bytes[c], s8.channel_bytes[c]) << "channel " << c;
+}
+
 TEST(MapFormat, EveryFieldReachesTheBytes)
 {
 	const auto ref = bytesOf(*test::makeSyntheticMap());
@@ -271,7 +300,7 @@ TEST(MapFormat, OldVersionAndLyingBlockSizesAreRefused)
 	const std::string name = "shadyloc::CKeyframeMap";
 	const size_t ver = 1 + name.size();	 // MRPT's header: 0x80 | length, the name, the version
 	ASSERT_EQ(std::string(good.begin() + 1, good.begin() + 1 + name.size()), name);
-	ASSERT_EQ(good[ver], 1);
+	ASSERT_EQ(good[ver], 2);
 	// The loader on bytes in memory (the fuzz entry point) loads them as the file loader does.
 	EXPECT_EQ(CKeyframeMap::LoadFromBytes(good.data(), good.size())->keyframeCount(), 6u);
 	try
@@ -345,6 +374,35 @@ TEST(MapFormat, OldVersionAndLyingBlockSizesAreRefused)
 		EXPECT_NE(w.find(path), std::string::npos) << w;
 		EXPECT_NE(w.find("block 0"), std::string::npos) << w;
 	}
+}
+
+TEST(MapFormat, Version1MapsStillLoad)
+{
+	// tests/golden/CKeyframeMap_v1.bin: the format-test map (test_formats.cpp,
+	// populatedKeyframeMap) as version 1 wrote it, before the options held
+	// the landmark selection. It loads; its selection reads as the strongest
+	// corners (the only one then), the rest as stored; saved again it is a
+	// version 2 map that loads to the same content.
+	const auto v1 = fileBytes(std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/CKeyframeMap_v1.bin");
+	const std::string name = "shadyloc::CKeyframeMap";
+	ASSERT_GT(v1.size(), 2 + name.size());
+	ASSERT_EQ(v1[1 + name.size()], 1) << "the fixture is not a version 1 map";
+	const auto m = CKeyframeMap::LoadFromBytes(v1.data(), v1.size(), "CKeyframeMap_v1.bin");
+	EXPECT_EQ(m->options.landmark_selection, TKeyframeMapOptions::LandmarkSelection::Strongest);
+	EXPECT_EQ(m->options.landmarks_per_keyframe, 77);
+	EXPECT_EQ(m->options.kf_spacing_m, 2.25);
+	EXPECT_EQ(m->options.reobservation_window_m, TKeyframeMapOptions().reobservation_window_m);
+	EXPECT_EQ(m->options.patch_bits, 8);
+	EXPECT_EQ(m->keyframeCount(), 3u);
+	ASSERT_EQ(m->channels().size(), 2u);
+	EXPECT_EQ(m->channels()[1].label, "inv9");
+	EXPECT_EQ(m->runs(), (std::vector<std::string>{"dawn", "dusk"}));
+	EXPECT_EQ(m->keyframe(2).channels[1].size(), 3u);
+	const auto v2 = bytesOf(*m);
+	EXPECT_EQ(v2[1 + name.size()], 2);
+	const auto back = CKeyframeMap::LoadFromBytes(v2.data(), v2.size());
+	EXPECT_TRUE(back->options == m->options);
+	EXPECT_EQ(bytesOf(*back), v2);
 }
 
 TEST(MapFormat, KilledSavesLeaveThePreviousFileLoadable)

@@ -17,6 +17,8 @@
 #include <mrpt/opengl/CSetOfObjects.h>
 #include <mrpt/poses/CPose3D.h>
 
+#include <opencv2/imgproc.hpp>
+
 #include <fstream>
 #include <random>
 #include <regex>
@@ -226,6 +228,107 @@ TEST(MapQueries, LandmarkSelectionSpreadsOverTheImage)
 	for (const auto& m : kept) weak += m.response == 15;
 	EXPECT_EQ(weak, 20) << "every bucket must give up its corners before a bucket gives a second";
 	EXPECT_EQ(survey::selectLandmarks(all, 0, 8, 6, 512, 384).size(), all.size());
+}
+
+TEST(MapQueries, LandmarkSelectionByScoreKeepsTheSpreadAndTheFloor)
+{
+	// Two buckets (left and right half of a 2x1 grid), 10 corners each: the
+	// strongest corners of each bucket score 0, the weakest score highest.
+	std::vector<features::TStereoMeasurement> all;
+	std::vector<int> score;
+	for (int b = 0; b < 2; b++)
+		for (int i = 0; i < 10; i++)
+		{
+			features::TStereoMeasurement m;
+			m.uL = 10 + 300 * b + i;
+			m.v = 100;
+			m.response = 100 - i;  // i = 0 strongest
+			all.push_back(m);
+			score.push_back(i < 5 ? 0 : i);	 // the five weakest re-observed, the weakest most often
+		}
+	const auto idx = survey::selectLandmarkIndices(all, 4, 2, 1, 512, 384, &score);
+	ASSERT_EQ(idx.size(), 4u);
+	// Round robin over the buckets, best score first in each: 9, 19, 8, 18.
+	EXPECT_EQ(idx, (std::vector<size_t>{9, 19, 8, 18}));
+	// Without a score: the strongest corners.
+	EXPECT_EQ(survey::selectLandmarkIndices(all, 4, 2, 1, 512, 384), (std::vector<size_t>{0, 10, 1, 11}));
+	// A floor drops the never re-observed even when the budget has room (0 = no budget).
+	const auto floor = survey::selectLandmarkIndices(all, 0, 2, 1, 512, 384, &score, 1);
+	EXPECT_EQ(floor.size(), 10u);
+	for (size_t i : floor) EXPECT_GE(score[i], 1) << i;
+	const std::vector<int> wrong(3, 0);  // not one score per measurement
+	EXPECT_THROW(survey::selectLandmarkIndices(all, 4, 2, 1, 512, 384, &wrong), std::invalid_argument);
+}
+
+TEST(MapQueries, ReobservationsFindStableLandmarksAndRejectMovedOnes)
+{
+	// A corridor keyframe re-observed by three frames 0.3, 0.6, 0.9 m ahead
+	// at their true poses. Half of the keyframe's landmarks are kept as they
+	// are; a quarter are moved (their measurement shifted 8 px sideways, as a
+	// leaf that moved between the frames: the descriptor still finds the
+	// corner, but the solve rejects it); a quarter get foreign descriptors
+	// (nothing matches them). Only the first half can score.
+	sim::SyntheticCorridor corridor;
+	const auto calib = corridor.calib();
+	features::StereoFeatureExtractor fx;
+	auto grey = [](const cv::Mat& bgr) {
+		cv::Mat g;
+		cv::cvtColor(bgr, g, cv::COLOR_BGR2GRAY);
+		return g;
+	};
+	auto frameAt = [&](const Eigen::Isometry3d& T, uint32_t seed) {
+		cv::Mat l, r;
+		corridor.render(T, l, r, seed);
+		features::TStereoFrame f;
+		fx.process(grey(l), grey(r), calib, f);
+		return f;
+	};
+	const Eigen::Isometry3d T_kf = sim::SyntheticCorridor::examplePose(10, 0.3);
+	const features::TStereoFrame kf = frameAt(T_kf, 1);
+	ASSERT_GT(kf.meas.size(), 80u);
+	std::vector<features::TStereoMeasurement> lm = kf.meas;
+	std::mt19937 rng(3);
+	for (size_t i = 0; i < lm.size(); i++)
+	{
+		if (i % 4 == 2)
+		{
+			lm[i].uL += 8;
+			lm[i].uR += 8;
+			calib.triangulate(lm[i].uL, lm[i].v, lm[i].uR, lm[i].P);
+		}
+		if (i % 4 == 3)
+			for (auto& w : lm[i].desc.w) w = (uint64_t(rng()) << 32) | rng();
+	}
+	std::vector<features::TStereoFrame> frames;
+	std::vector<survey::TReobservingFrame> in;
+	for (int k = 1; k <= 3; k++) frames.push_back(frameAt(sim::SyntheticCorridor::examplePose(10 + k, 0.3), 1 + k));
+	for (int k = 1; k <= 3; k++)
+		in.push_back({&frames[k - 1], sim::SyntheticCorridor::examplePose(10 + k, 0.3).inverse() * T_kf});
+	const auto m = survey::TReobservationMatching::From(vo::TStereoVOOptions(), 10.0);
+	const auto n = survey::countReobservations(lm, calib, in, m);
+	ASSERT_EQ(n.size(), lm.size());
+	int stable = 0, stableSeen = 0, moved = 0, foreign = 0, hist[4] = {0, 0, 0, 0};
+	for (size_t i = 0; i < lm.size(); i++)
+	{
+		EXPECT_LE(n[i], 3);
+		if (i % 4 < 2) stable++, stableSeen += n[i] >= 2, hist[std::clamp(n[i], 0, 3)]++;
+		if (i % 4 == 2) moved += n[i];
+		if (i % 4 == 3) foreign += n[i];
+	}
+	std::printf("[reobservation] %zu landmarks: %d of %d stable ones re-found in >= 2 of 3 frames; moved %d, foreign %d credits (stable: %d %d %d %d)\n",
+				lm.size(), stableSeen, stable, moved, foreign, hist[0], hist[1], hist[2], hist[3]);
+	// FAST corners repeat only partly from frame to frame (here ~60 % of the
+	// stable landmarks are re-found at least once, ~30 % in two or three
+	// frames): that spread is what the score ranks by. The moved and foreign
+	// landmarks must (almost) never score: one matched by chance and agreeing
+	// with the pose is rare.
+	EXPECT_GT(stable - hist[0], stable * 45 / 100);
+	EXPECT_GT(stableSeen, stable / 5);
+	EXPECT_LE(moved, static_cast<int>(lm.size()) / 40);
+	EXPECT_LE(foreign, static_cast<int>(lm.size()) / 40);
+	// No frames, no score; a frame without measurements is a caller's error.
+	EXPECT_EQ(survey::countReobservations(lm, calib, {}, m), std::vector<int>(lm.size(), 0));
+	EXPECT_THROW(survey::countReobservations(lm, calib, {survey::TReobservingFrame{}}, m), std::invalid_argument);
 }
 
 namespace

@@ -17,6 +17,9 @@ enum Mutation
 	kOptSpacing,
 	kOptLandmarks,
 	kOptDraw,
+	kOptSelection,
+	kOptReobservation,
+	kOptPatchBits,
 	kCalibFx,
 	kCalibCxR,
 	kImageWidth,
@@ -60,6 +63,9 @@ inline CKeyframeMap::Ptr makeSyntheticMap(int n = 24, int perKf = 40, int breakA
 	if (mutate == kOptSpacing) m->options.kf_spacing_m = 2.5;
 	if (mutate == kOptLandmarks) m->options.landmarks_per_keyframe = 77;
 	if (mutate == kOptDraw) m->options.draw_landmarks = true;
+	if (mutate == kOptSelection) m->options.landmark_selection = TKeyframeMapOptions::LandmarkSelection::Strongest;
+	if (mutate == kOptReobservation) m->options.reobservation_window_m = 3.5;
+	m->options.patch_bits = mutate == kOptPatchBits ? 6 : 8;  // 8: the patches as drawn below
 	geometry::TStereoCalib cal;
 	cal.fx = cal.fy = 400;
 	cal.cx = 256;

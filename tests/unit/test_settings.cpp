@@ -655,6 +655,11 @@ TEST(Settings, MapOptionsRoundTripWithEveryFieldChanged)
 	o.draw_landmarks = true;
 	o.draw_landmark_max_depth_m = 22.5;
 	o.draw_frame_every_m = 3.75;
+	o.landmark_selection = TKeyframeMapOptions::LandmarkSelection::Strongest;
+	o.reobservation_window_m = 4.5;
+	o.reobservation_radius_px = 12.5;
+	o.min_reobservations = 2;
+	o.patch_bits = 5;
 	std::ostringstream dump;
 	o.dumpToTextStream(dump);
 	mrpt::config::CConfigFileMemory c("[map]\n" + dump.str());
@@ -664,7 +669,8 @@ TEST(Settings, MapOptionsRoundTripWithEveryFieldChanged)
 #define SAME(f) EXPECT_EQ(b.f, o.f) << #f
 	SAME(kf_spacing_m); SAME(kf_spacing_deg); SAME(landmarks_per_keyframe); SAME(selection_grid_cols);
 	SAME(selection_grid_rows); SAME(compression_level); SAME(index_cell_m); SAME(draw_landmarks);
-	SAME(draw_landmark_max_depth_m); SAME(draw_frame_every_m);
+	SAME(draw_landmark_max_depth_m); SAME(draw_frame_every_m); SAME(landmark_selection);
+	SAME(reobservation_window_m); SAME(reobservation_radius_px); SAME(min_reobservations); SAME(patch_bits);
 #undef SAME
 	EXPECT_TRUE(b == o);
 	std::ostringstream again;
@@ -682,6 +688,7 @@ TEST(Settings, MapOptionsRoundTripWithEveryFieldChanged)
 	EXPECT_TRUE(load("[map]\ndraw_landmarks = true ; draw them\n").draw_landmarks);
 	expectRefused([&] { load("[map]\nlandmarks_per_keyframe = 12.5\n"); }, {"[map] landmarks_per_keyframe"}, "integer");
 	expectRefused([&] { load("[map]\ncompression_level = 30\n"); }, {"[map]", "compression_level must be in 1..22"}, "range");
+	expectRefused([&] { load("[map]\nlandmark_selection = best\n"); }, {"[map] landmark_selection", "reobserved"}, "choice");
 }
 
 TEST(Settings, MapSectionsOfTheVOConfigsAreTheDefaults)

@@ -39,11 +39,35 @@ struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 {
 	double kf_spacing_m = 1.5;	//!< a new map keyframe after this distance along the VO path [m]
 	double kf_spacing_deg = 15.0;  //!< ... or this change of heading (rotation angle) [deg]
-	/** Landmarks kept per keyframe and channel (0 = all): the strongest per
-	 * image bucket first, so they stay spread over the image (docs/map.md). */
-	int landmarks_per_keyframe = 0;
+	/** Landmarks kept per keyframe and channel (0 = all), the best by
+	 * `landmark_selection` per image bucket first, so they stay spread over
+	 * the image (docs/map.md). */
+	int landmarks_per_keyframe = 140;
+	/** How a survey ranks a keyframe's landmarks when it thins them. */
+	enum class LandmarkSelection : uint8_t
+	{
+		Strongest = 0,	//!< by FAST response, then stereo correlation
+		/** By how often the survey's own frames near the keyframe re-find the
+		 * landmark (matched and a pose inlier), then as Strongest: stable,
+		 * distinctive landmarks first ("keep the landmarks that localise"). */
+		Reobserved = 1
+	};
+	LandmarkSelection landmark_selection = LandmarkSelection::Reobserved;
+	/** Reobserved: survey frames within this path distance before and after
+	 * the keyframe (same chain segment) are matched against its landmarks [m]. */
+	double reobservation_window_m = 3.0;
+	/** Reobserved: BRIEF search circle around a landmark's projection at the
+	 * VO's pose of the frame [px]. */
+	double reobservation_radius_px = 10.0;
+	/** Reobserved: landmarks re-found in fewer frames than this are dropped
+	 * even when the budget has room (0 = keep them as the budget allows). */
+	int min_reobservations = 0;
 	int selection_grid_cols = 8;  //!< buckets across the image for landmark selection
 	int selection_grid_rows = 6;  //!< buckets down the image
+	/** Bits kept of each pixel of the stored patches, 1..8: the low bits are
+	 * replaced by the middle of their range (in memory as on disk), so the
+	 * patches compress better (docs/map.md, "Sizes"). */
+	int patch_bits = 4;
 	int compression_level = 9;  //!< zstd level, 1 (fast) .. 22 (small); 19 saves 3 % for 5x the time
 	double index_cell_m = 10.0;	 //!< cell size of the spatial hash grid [m]
 	bool draw_landmarks = false;  //!< getVisualizationInto draws landmarks, coloured by channel
@@ -56,6 +80,9 @@ struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 	void validate() const;
 	bool operator==(const TKeyframeMapOptions& o) const;
 };
+
+/** "strongest" | "reobserved" (the [map] spelling). */
+std::string toString(TKeyframeMapOptions::LandmarkSelection s);
 
 class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
 {

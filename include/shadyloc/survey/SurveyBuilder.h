@@ -33,19 +33,70 @@ map::TChannelParams channelParams(
 
 /** Keeps at most `keep` measurements (all if keep <= 0 or fewer), spread
  * over the image: the image is cut into cols x rows buckets and the buckets
- * take turns giving up their strongest remaining corner (FAST response, then
- * stereo correlation), so the kept landmarks cover the view instead of
- * clustering on the most textured object. Order of the result: by bucket
- * round, stable. */
+ * take turns giving up their best remaining landmark, so the kept landmarks
+ * cover the view instead of clustering on the most textured object. "Best":
+ * the higher `score` when given (one per measurement, e.g. its
+ * re-observations), then the FAST response, then the stereo correlation.
+ * With a score, landmarks scoring below `minScore` are never kept. Order of
+ * the result: by bucket round, stable. */
 std::vector<features::TStereoMeasurement> selectLandmarks(
-	const std::vector<features::TStereoMeasurement>& all, int keep, int cols, int rows, int width, int height);
+	const std::vector<features::TStereoMeasurement>& all, int keep, int cols, int rows, int width, int height,
+	const std::vector<int>* score = nullptr, int minScore = 0);
 
+/** selectLandmarks as indices into `all`. */
+std::vector<size_t> selectLandmarkIndices(
+	const std::vector<features::TStereoMeasurement>& all, int keep, int cols, int rows, int width, int height,
+	const std::vector<int>* score = nullptr, int minScore = 0);
+
+/** A survey frame that re-observes a keyframe: its measurements (and the
+ * left image they were cut from) and the keyframe's pose in it. */
+struct TReobservingFrame
+{
+	const features::TStereoFrame* frame = nullptr;
+	Eigen::Isometry3d T_frame_kf = Eigen::Isometry3d::Identity();  //!< from the survey's VO chain
+};
+
+/** How landmarks are re-found: the VO's own keyframe matcher (BRIEF in a
+ * circle around the projection at the VO's pose, the keyframe patch refined
+ * in the frame) and its relative-pose estimator (RANSAC seeded with the VO's
+ * pose, robust solve): a landmark counts in a frame when it is matched and an
+ * inlier of the solve. */
+struct TReobservationMatching
+{
+	vo::TKeyframeMatcherOptions matcher;
+	vo::TRelativePoseOptions pose;
+	/** From the survey's VO options and the map's search radius. */
+	static TReobservationMatching From(const vo::TStereoVOOptions& vo, double radius_px);
+};
+
+/** Per landmark of `landmarks` (a keyframe's measurements, calibration
+ * `calib`): in how many of `frames` it is re-found (see
+ * TReobservationMatching). A frame whose solve fails credits nothing. */
+std::vector<int> countReobservations(
+	const std::vector<features::TStereoMeasurement>& landmarks, const geometry::TStereoCalib& calib,
+	const std::vector<TReobservingFrame>& frames, const TReobservationMatching& m);
+
+/** Builds a map from a survey run, one frame at a time:
+ *
+ *     for each frame:  offer(res, ...)              every frame, tracked or not
+ *                      addFrame(per-channel frames) if offer() saw a tracked frame and needsFrames()
+ *                      addKeyframe(...)             if offer() returned true
+ *     at the end:      finish()
+ *
+ * With landmark_selection = reobserved a keyframe waits until the survey has
+ * passed reobservation_window_m beyond it (or its chain segment ended): its
+ * landmarks are then scored by countReobservations against the tracked
+ * frames of its segment within the window before and after it, and thinned
+ * by selectLandmarks with that score. Otherwise a keyframe is thinned by the
+ * strongest corners and appended at once. */
 class CSurveyBuilder : public mrpt::system::COutputLogger
 {
    public:
 	/** The map must be set up (CKeyframeMap::setup); its options give the
-	 * keyframe spacing and the landmarks per keyframe. */
-	CSurveyBuilder(CKeyframeMap& map, const std::string& runName);
+	 * keyframe spacing and the landmark selection. `vo`: the options of the
+	 * VO that makes the chain (its matcher and pose estimator re-find
+	 * landmarks for the reobserved selection). */
+	CSurveyBuilder(CKeyframeMap& map, const std::string& runName, const vo::TStereoVOOptions& vo = {});
 
 	/** After the chain's VO processed a frame: `res` its result,
 	 * `voKeyframes` the VO's keyframes now, `voKeyframesBefore` their count
@@ -53,20 +104,34 @@ class CSurveyBuilder : public mrpt::system::COutputLogger
 	 * call addKeyframe() with every channel's measurements of this frame. */
 	bool offer(const vo::TFrameResult& res, const std::vector<vo::TKeyframe>& voKeyframes, size_t voKeyframesBefore);
 
+	/** Whether the builder needs every tracked frame's measurements (addFrame). */
+	bool needsFrames() const;
+	/** The frame last offered (tracked), every channel's measurements in the
+	 * map's channel order, for re-observation; ignored when !needsFrames()
+	 * or the frame was not tracked. */
+	void addFrame(std::vector<features::TStereoFrame> perChannel);
+
 	/** Adds the frame last offered (and accepted) with its measurements per
 	 * channel (in the map's channel order), thinned by selectLandmarks, and
-	 * its ground-truth pose if known. */
+	 * its ground-truth pose if known. The keyframe reaches the map now
+	 * (strongest) or once the frames after it are known (reobserved). */
 	void addKeyframe(
 		const std::vector<std::vector<features::TStereoMeasurement>>& perChannel,
 		const std::optional<Eigen::Isometry3d>& T_gt_kf = std::nullopt);
 
+	/** Appends the keyframes still waiting for their re-observations. */
+	void finish();
+
 	size_t breaks() const { return m_breaks; }	//!< VO breaks seen (new segments)
+	/** Mean re-observations per kept landmark, per channel (reobserved only). */
+	std::vector<double> meanKeptReobservations() const;
 
    private:
 	CKeyframeMap& m_map;
 	uint16_t m_run;
 	size_t m_breaks = 0;
 	bool m_haveOrigin = false;
+	size_t m_added = 0;	 //!< keyframes added by this builder (appended or waiting)
 	Eigen::Isometry3d m_T_world_map = Eigen::Isometry3d::Identity();  //!< VO world -> map frame
 	uint32_t m_segment = 0;
 	bool m_segmentOpen = false;	 //!< a map keyframe exists in the current segment
@@ -88,6 +153,38 @@ class CSurveyBuilder : public mrpt::system::COutputLogger
 		geometry::Matrix6d cov_prev_f = geometry::Matrix6d::Zero();
 		bool newSegment = false;
 	} m_pending;
+
+	// ---- re-observation ----------------------------------------------------------
+	TReobservationMatching m_matching;
+	// The VO chain frame by frame: its segment (a new one at First/Reinit)
+	// and the path distance along it.
+	uint32_t m_voSegment = 0;
+	double m_voDist = 0;  //!< [m]
+	bool m_voStarted = false;  //!< the VO chain had its first frame
+	bool m_lastTracked = false;	 //!< the frame last offered was tracked
+	uint64_t m_lastFrame = 0;  //!< index of the frame last offered
+	Eigen::Isometry3d m_T_world_lastTracked = Eigen::Isometry3d::Identity();
+	struct TFrame
+	{
+		uint64_t frame = 0;
+		uint32_t voSegment = 0;
+		double dist = 0;  //!< [m] along the VO chain
+		Eigen::Isometry3d T_world = Eigen::Isometry3d::Identity();
+		std::vector<features::TStereoFrame> channels;
+	};
+	std::vector<TFrame> m_frames;  //!< tracked frames still within reach of a keyframe
+	struct TWaiting
+	{
+		map::TMapKeyframe kf;  //!< all measurements, not yet thinned
+		uint32_t voSegment = 0;
+		double dist = 0;  //!< [m]
+		Eigen::Isometry3d T_world = Eigen::Isometry3d::Identity();
+	};
+	std::vector<TWaiting> m_waiting;
+	std::vector<double> m_keptSum, m_keptCount;	 //!< per channel, for meanKeptReobservations
+
+	void flush(bool all);
+	void append(TWaiting w);
 };
 
 }  // namespace shadyloc::survey

@@ -42,6 +42,9 @@ struct TSurveyStats
 	size_t breaks = 0;	//!< VO breaks (new map segments)
 	double msTotal = 0;	 //!< reading, filters, VO, every channel's features [ms]
 	geometry::TStereoCalib calib;  //!< of the first frame
+	/** Per channel: mean frames in which the kept landmarks were re-found
+	 * (empty unless landmarks are selected by re-observation). */
+	std::vector<double> meanKeptReobservations;
 };
 
 class CSurveyRun : public mrpt::system::COutputLogger
