@@ -467,25 +467,33 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 		out.why = "no keyframes or no measurements";
 		return out;
 	}
-	// ---- BRIEF voting: a map landmark votes for its keyframe when some live
-	// descriptor is within global_vote_hamming of it.
+	// ---- BRIEF voting: every live descriptor votes for the keyframe of its
+	// nearest map landmark (within global_vote_hamming). One vote per live
+	// feature, to the nearest only: counting instead every landmark with some
+	// live descriptor nearby let about half of any keyframe's landmarks vote
+	// in any frame (BRIEF of natural images is far from uniform), so the
+	// keyframes with the most landmarks won everywhere (on the simulator the
+	// street of buildings was never a candidate).
+	std::vector<int> count(among.size(), 0);
+	for (const auto& m : meas.meas)
+	{
+		int best = o.global_vote_hamming + 1;
+		int bestK = -1;
+		for (size_t a = 0; a < among.size(); a++)
+			for (const auto& lm : m_map.measurements(among[a], m_channel))
+			{
+				const int d = features::hamming(lm.desc, m.desc);
+				if (d < best)
+				{
+					best = d;
+					bestK = static_cast<int>(a);
+				}
+			}
+		if (bestK >= 0) count[static_cast<size_t>(bestK)]++;
+	}
 	std::vector<std::pair<int, uint32_t>> votes;  // (-votes, id): most first, then smaller id
 	votes.reserve(among.size());
-	for (const uint32_t k : among)
-	{
-		int v = 0;
-		for (const auto& lm : m_map.measurements(k, m_channel))
-		{
-			int best = 257;
-			for (const auto& m : meas.meas)
-			{
-				best = std::min(best, features::hamming(lm.desc, m.desc));
-				if (best <= o.global_vote_hamming) break;
-			}
-			v += best <= o.global_vote_hamming;
-		}
-		votes.emplace_back(-v, k);
-	}
+	for (size_t a = 0; a < among.size(); a++) votes.emplace_back(-count[a], among[a]);
 	std::sort(votes.begin(), votes.end());
 	// ---- geometric check of the best candidates.
 	struct TVerified
@@ -517,7 +525,11 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 		vo::TRelativePoseOutput po;
 		m_estimator.estimate(pi, po);
 		out.verified++;
-		if (!po.ok()) continue;
+		// A first pass below min_inliers is what random matches give (RANSAC
+		// finds 6-8 consistent ones among ~150 in a world that is not the
+		// map's); the gates around such a pose are wide enough for a second
+		// pass to gather a spurious consensus, so it is not refined.
+		if (!po.ok() || static_cast<int>(po.inliers) < o.min_inliers) continue;
 		// (2) active search around that pose, solved again (without it as prior).
 		TPoseWithCov p1;
 		p1.T = po.T_curr_ref;
