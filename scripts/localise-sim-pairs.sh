@@ -10,7 +10,10 @@
 #
 # DATADIR defaults to rawlogs/generated (scripts/make-default-dataset.sh),
 # OUTDIR to a temporary directory. Maps are built with config/vo_sim.ini;
-# localise runs with config/vo_sim.ini and config/localise_sim.ini.
+# localise runs with config/vo_sim.ini and config/localise_sim.ini (or the
+# file in SHADYLOC_LOCALISE_INI). Below the table: true and false fixes over
+# all pairs per system (inv_in_comb: the invariant localiser's own accepted
+# fixes in the combined runs, used or not).
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 app="${SHADYLOC_APP:-$here/build/shadyloc}"
@@ -30,11 +33,14 @@ for r in "$data"/*.rawlog; do
   [ -f "$out/maps/$c.kfmap" ] || "$app" survey -q -i "$r" -o "$out/maps/$c.kfmap" -c "$here/config/vo_sim.ini" --gt "$data/$c.tum" >/dev/null
 done
 
-# "key": value of summary.json's ground_truth object and localisers list.
-field() { grep -o "\"$2\": [0-9.]*" "$1" | head -1 | sed 's/.*: //'; }
+# A number from summary.json: gt KEY (the ground_truth object) or ch CHANNEL KEY
+# (that localiser's entry of the localisers list).
+gt() { grep '^  "ground_truth"' "$1" | grep -o "\"$2\": [0-9.]*" | head -1 | sed 's/.*: //'; }
+ch() { grep '^  "localisers"' "$1" | grep -o "{\"channel\": \"$2\"[^}]*}" | grep -o "\"$3\": [0-9.]*" | sed 's/.*: //'; }
 pct() { awk -v x="$1" 'BEGIN { printf "%.1f", 100 * x }'; }
 
-echo "| map | live | baseline (mono) | invariant alone | combined | false fixes (mono / inv / comb) |"
+declare -A tot_true tot_false
+echo "| map | live | baseline (mono) | invariant alone | combined | false fixes: baseline / invariant alone / combined (its invariant channel) |"
 echo "|---|---|---|---|---|---|"
 for m in "${conds[@]}"; do
   for l in "${conds[@]}"; do
@@ -44,12 +50,24 @@ for m in "${conds[@]}"; do
     for mode in mono invariant mono,invariant; do
       d="$out/$m--$l--${mode/,/+}"
       "$app" localise -q -m "$out/maps/$m.kfmap" -i "$data/$l.rawlog" -o "$d" -c "$here/config/vo_sim.ini" \
-        -c "$here/config/localise_sim.ini" --gt "$data/$l.tum" --localisers "$mode" "$@" >/dev/null
-      row="$row $(pct "$(field "$d/summary.json" true_coverage_in_map)") |"
-      falses="$falses${falses:+ / }$(field "$d/summary.json" false_fixes)"
+        -c "${SHADYLOC_LOCALISE_INI:-$here/config/localise_sim.ini}" --gt "$data/$l.tum" --localisers "$mode" "$@" >/dev/null
+      s="$d/summary.json"
+      row="$row $(pct "$(gt "$s" true_coverage_in_map)") |"
+      falses="$falses${falses:+ / }$(gt "$s" false_fixes)"
+      tot_true[$mode]=$(( ${tot_true[$mode]:-0} + $(gt "$s" true_fixes) ))
+      tot_false[$mode]=$(( ${tot_false[$mode]:-0} + $(gt "$s" false_fixes) ))
+      if [ "$mode" = mono,invariant ]; then
+        falses="$falses ($(ch "$s" invariant false_fixes) of $(ch "$s" invariant accepted))"
+        tot_true[inv_in_comb]=$(( ${tot_true[inv_in_comb]:-0} + $(ch "$s" invariant true_fixes) ))
+        tot_false[inv_in_comb]=$(( ${tot_false[inv_in_comb]:-0} + $(ch "$s" invariant false_fixes) ))
+      fi
     done
     echo "$row $falses |"
   done
 done
 echo
+for k in mono invariant mono,invariant inv_in_comb; do
+  t=${tot_true[$k]:-0}; f=${tot_false[$k]:-0}
+  echo "$k: $t true fixes, $f false ($(awk -v t="$t" -v f="$f" 'BEGIN { printf "%.2f", (t + f) ? 100 * f / (t + f) : 0 }') %)"
+done
 echo "(outputs in $out)"

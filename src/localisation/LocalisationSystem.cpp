@@ -463,9 +463,9 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 					: Eigen::Vector3d::Zero();
 			MRPT_LOG_DEBUG_FMT(
 				"frame %zu %s: kf %u, predicted at (%.2f %.2f %.2f) m from it, %d matches, %d inliers, gate median "
-				"%.1f px (%d of %d overflow), sigma %.3f m, %s",
+				"%.1f px (%d of %d overflow), sigma %.3f m, rms %.2f px, var factor %.2f, %s",
 				u.frame, r.channel.c_str(), r.kf_id, t.x(), t.y(), t.z(), r.matches, r.inliers, r.gate.median_axis_px,
-				r.gate.overflow, r.gate.predicted, r.sigma_m, toString(r.status).c_str());
+				r.gate.overflow, r.gate.predicted, r.sigma_m, r.rms_px, r.var_factor, toString(r.status).c_str());
 		}
 
 	// ---- the policy
@@ -515,14 +515,20 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 			// prediction for the next frame than dead reckoning: keeping the
 			// gates tight is what lets the localiser reach K consistent frames
 			// after a global search or a failure.
+			// Of the unconfirmed solves and the dead-reckoned prediction, the
+			// most certain (translational variance) predicts: the invariant
+			// solve, noisier, does not displace a tighter prediction.
 			const TLocaliserResult* seed = nullptr;
 			if (m_opts.seed_with_unconfirmed)
+			{
+				double best = pred.valid ? pred.cov.topLeftCorner<3, 3>().trace() : std::numeric_limits<double>::infinity();
 				for (const size_t i : order)
-					if (res[i].status == LocaliserStatus::Unconfirmed)
+					if (res[i].status == LocaliserStatus::Unconfirmed && res[i].cov.topLeftCorner<3, 3>().trace() < best)
 					{
 						seed = &res[i];
-						break;
+						best = res[i].cov.topLeftCorner<3, 3>().trace();
 					}
+			}
 			if (seed)
 			{
 				m_est.valid = true;

@@ -37,8 +37,10 @@ void TLocaliserOptions::load(const mrpt::config::CConfigFileBase& c, const std::
 	r.read("min_matches", min_matches);
 	r.read("min_inliers", min_inliers);
 	r.read("cov_scale", cov_scale);
+	r.read("bootstrap_samples", bootstrap_samples);
 	r.read("max_sigma_m", max_sigma_m);
 	r.read("max_sigma_deg", max_sigma_deg);
+	r.read("uncertain_breaks_chain", uncertain_breaks_chain);
 	r.read("prediction_chi2", prediction_chi2);
 	r.read("motion_chi2", motion_chi2);
 	r.read("consistent_frames", consistent_frames);
@@ -90,8 +92,10 @@ void TLocaliserOptions::dump(std::ostream& out) const
 	w.value("min_matches", min_matches);
 	w.value("min_inliers", min_inliers);
 	w.value("cov_scale", cov_scale, "the solver's covariance is scaled by this");
+	w.value("bootstrap_samples", bootstrap_samples, "resamples of the inliers for the bootstrap covariance (0 = off)");
 	w.value("max_sigma_m", max_sigma_m, "a fix less certain than this is rejected [m]");
 	w.value("max_sigma_deg", max_sigma_deg, "[deg]");
+	w.value("uncertain_breaks_chain", uncertain_breaks_chain, "an uncertain solve needs K consistent frames again");
 	w.value("prediction_chi2", prediction_chi2, "chi^2, 6 dof");
 	w.value("motion_chi2", motion_chi2, "chi^2, 6 dof");
 	w.value("consistent_frames", consistent_frames, "K");
@@ -133,6 +137,7 @@ void TLocaliserOptions::validate() const
 	need(min_matches >= 3, "min_matches", "must be >= 3");
 	need(min_inliers >= 3, "min_inliers", "must be >= 3");
 	need(cov_scale >= 1, "cov_scale", "must be >= 1");
+	need(bootstrap_samples == 0 || (bootstrap_samples >= 2 && bootstrap_samples <= 1000), "bootstrap_samples", "must be 0 (off) or 2..1000");
 	need(max_sigma_m > 0, "max_sigma_m", "must be > 0");
 	need(max_sigma_deg > 0, "max_sigma_deg", "must be > 0");
 	need(global_window_px > 0, "global_window_px", "must be > 0");

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <random>
 #include <cmath>
 #include <stdexcept>
 
@@ -79,6 +80,94 @@ vo::TKeyframeMatcherOptions placeMatcherOptions(const TLocaliserOptions& o)
 	return m;
 }
 
+/** A posteriori variance factor of a solve (Foerstner and Wrobel,
+ * "Photogrammetric Computer Vision", 2016, Sec. 4.2.3): the inliers' squared
+ * residuals whitened by their a priori covariance (pixel noise plus the map
+ * landmark's covariance through the projection, the model of
+ * geometry::solveStereoPose), over the redundancy 3n - 6. About 1 when the
+ * a priori noise is right; larger when the channel's measurements are
+ * noisier than sigma_px says (the invariant image) or the landmarks fit the
+ * pose worse than their covariance allows. */
+double varianceFactor(
+	const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
+	const std::vector<uint8_t>& inlier, const Eigen::Isometry3d& T_curr_ref, double sigma_px)
+{
+	double sum = 0;
+	int n = 0;
+	for (size_t i = 0; i < corr.size(); i++)
+	{
+		if (i < inlier.size() && !inlier[i]) continue;
+		Eigen::Vector3d r;
+		geometry::Matrix36d J;
+		if (!geometry::stereoResidual(calib, T_curr_ref, corr[i].P_ref, corr[i].z_curr, r, &J)) continue;
+		const Eigen::Matrix3d JP = J.leftCols<3>() * T_curr_ref.linear();
+		const Eigen::Matrix3d S = sigma_px * sigma_px * Eigen::Matrix3d::Identity() + JP * corr[i].cov_ref * JP.transpose();
+		sum += r.dot(S.ldlt().solve(r));
+		n++;
+	}
+	return n > 2 ? sum / (3.0 * n - 6.0) : std::numeric_limits<double>::infinity();
+}
+
+/** Bootstrap covariance of T_ref_curr (left perturbation) around the solve
+ * T_curr_ref: the inliers resampled with replacement `samples` times, each
+ * resample solved from T_curr_ref (fixed landmarks with their covariance,
+ * geometry::solveStereoPose), the spread of the solutions about T_curr_ref
+ * (Efron and Tibshirani, "An Introduction to the Bootstrap", 1993, ch. 6).
+ * It sees what the information matrix cannot: a pose that rests on a few
+ * correspondences (a wrong match among the inliers, landmarks all far or on
+ * one side) moves when they are left out. Zero when fewer than 2 resamples
+ * solve. */
+Matrix6d bootstrapCovariance(
+	const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
+	const std::vector<uint8_t>& inlier, const Eigen::Isometry3d& T_curr_ref, const TLocaliserOptions& o, uint32_t seed)
+{
+	std::vector<size_t> idx;
+	for (size_t i = 0; i < corr.size(); i++)
+		if (i >= inlier.size() || inlier[i]) idx.push_back(i);
+	Matrix6d C = Matrix6d::Zero();
+	if (idx.size() < 4 || o.bootstrap_samples < 2) return C;
+	std::mt19937 rng(seed);
+	std::uniform_int_distribution<size_t> pick(0, idx.size() - 1);
+	geometry::TPoseSolverOptions so;
+	so.sigma_px = o.sigma_px;
+	so.huber_k = o.huber_k;
+	so.max_iterations = 5;
+	const Eigen::Isometry3d T_ref_curr = T_curr_ref.inverse();
+	std::vector<geometry::TStereoCorrespondence> sample(idx.size());
+	int solved = 0;
+	for (int b = 0; b < o.bootstrap_samples; b++)
+	{
+		for (auto& c : sample) c = corr[idx[pick(rng)]];
+		const auto sol = geometry::solveStereoPose(calib, sample, {}, T_curr_ref, so);
+		if (!sol.ok) continue;
+		const Vector6d xi = geometry::localLeft(sol.T_curr_ref.inverse(), T_ref_curr);
+		C += xi * xi.transpose();
+		solved++;
+	}
+	return solved >= 2 ? Matrix6d(C / (solved - 1)) : Matrix6d::Zero();
+}
+
+/** The smallest covariance at least as large as both A and B in the
+ * directions where each is larger (A's whitening, B's eigenvalues in it
+ * clamped to >= 1); A when B is zero. B is a sample covariance of `samples`
+ * draws: in A's whitening, when A is right, its eigenvalues scatter up to
+ * the Marchenko-Pastur edge (1 + sqrt(6 / (samples - 1)))^2 (about 2 for 30
+ * draws) by chance alone, so eigenvalues below the edge are taken as 1 (no
+ * evidence that A is too small there). */
+Matrix6d covarianceMax(const Matrix6d& A, const Matrix6d& B, int samples)
+{
+	const Eigen::LLT<Matrix6d> llt(0.5 * (A + A.transpose()));
+	if (llt.info() != Eigen::Success) return A + B;
+	const Matrix6d L = llt.matrixL();
+	const Matrix6d Li = L.inverse();
+	const Matrix6d M = Li * (0.5 * (B + B.transpose())) * Li.transpose();
+	Eigen::SelfAdjointEigenSolver<Matrix6d> es(M);
+	const double edge = std::pow(1.0 + std::sqrt(6.0 / std::max(1, samples - 1)), 2);
+	Vector6d d = es.eigenvalues();
+	for (int i = 0; i < 6; i++) d[i] = d[i] > edge ? d[i] : 1.0;
+	return L * es.eigenvectors() * d.asDiagonal() * es.eigenvectors().transpose() * L.transpose();
+}
+
 vo::TRelativePoseOptions estimatorOptions(const TLocaliserOptions& o)
 {
 	vo::TRelativePoseOptions p;
@@ -141,6 +230,7 @@ CStereoLocaliser::CStereoLocaliser(const CKeyframeMap& map, const std::string& c
 void CStereoLocaliser::reset()
 {
 	m_prevSolve = TKeyframePose();
+	m_prevUncertain = false;
 	m_consistent = 0;
 	m_confirmed = false;
 }
@@ -281,8 +371,14 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 	if (po.status == vo::RelativePoseStatus::SolverFailed) return fail(LocaliserStatus::SolverFailed);
 	if (!po.ok() || r.inliers < o.min_inliers) return fail(LocaliserStatus::FewInliers);
 	r.solved = true;
+	r.var_factor = varianceFactor(in.calib, mo.corr, po.inlier, po.T_curr_ref, o.sigma_px);
 	r.T_kf_live = po.T_curr_ref.inverse();
-	r.cov = o.cov_scale * po.cov_T_ref_curr;
+	r.cov = po.cov_T_ref_curr;
+	if (o.bootstrap_samples > 0)
+		r.cov = covarianceMax(
+			r.cov, bootstrapCovariance(in.calib, mo.corr, po.inlier, po.T_curr_ref, o, pi.seed ^ 0x9e3779b9u),
+			o.bootstrap_samples);
+	r.cov *= o.cov_scale;
 	{
 		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> et(r.cov.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
 		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> er(r.cov.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
@@ -293,8 +389,11 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 	// ---- 4. the failure test -------------------------------------------------------------
 	bool consistent = true;
 	LocaliserStatus why = LocaliserStatus::Ok;
-	// (0) a fix too uncertain to be within the accuracy asked of it.
-	if (r.sigma_m > o.max_sigma_m || r.sigma_deg > o.max_sigma_deg)
+	// (0) a fix too uncertain to be within the accuracy asked of it. With
+	// uncertain_breaks_chain off it is no failure of consistency: unless the
+	// tests below fail, such a frame neither counts towards K nor resets it.
+	const bool uncertain = r.sigma_m > o.max_sigma_m || r.sigma_deg > o.max_sigma_deg;
+	if (uncertain && o.uncertain_breaks_chain)
 	{
 		consistent = false;
 		why = LocaliserStatus::Uncertain;
@@ -324,13 +423,24 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 			if (why == LocaliserStatus::Ok) why = LocaliserStatus::MotionInconsistent;
 		}
 	}
+	// A motion test against an uncertain solve is weak (its covariance is
+	// large): it can reject, but only one between two certain solves counts.
+	const bool motionCounts = motionTested && !m_prevUncertain;
 	m_prevSolve.valid = true;
 	m_prevSolve.kf = pred.kf;
 	m_prevSolve.T_kf_live = r.T_kf_live;
 	m_prevSolve.cov = r.cov;
 	m_prevFrame = in.frame;
+	m_prevUncertain = uncertain;
 	if (!consistent) return fail(why);
-	if (motionTested) m_consistent++;
+	if (uncertain)
+	{
+		r.status = LocaliserStatus::Uncertain;
+		r.consistent = m_consistent;
+		r.ms = msSince(t0);
+		return r;
+	}
+	if (motionCounts) m_consistent++;
 	if (m_consistent >= o.consistent_frames) m_confirmed = true;
 	r.consistent = m_consistent;
 	r.status = m_confirmed ? LocaliserStatus::Ok : LocaliserStatus::Unconfirmed;
@@ -357,25 +467,33 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 		out.why = "no keyframes or no measurements";
 		return out;
 	}
-	// ---- BRIEF voting: a map landmark votes for its keyframe when some live
-	// descriptor is within global_vote_hamming of it.
+	// ---- BRIEF voting: every live descriptor votes for the keyframe of its
+	// nearest map landmark (within global_vote_hamming). One vote per live
+	// feature, to the nearest only: counting instead every landmark with some
+	// live descriptor nearby let about half of any keyframe's landmarks vote
+	// in any frame (BRIEF of natural images is far from uniform), so the
+	// keyframes with the most landmarks won everywhere (on the simulator the
+	// street of buildings was never a candidate).
+	std::vector<int> count(among.size(), 0);
+	for (const auto& m : meas.meas)
+	{
+		int best = o.global_vote_hamming + 1;
+		int bestK = -1;
+		for (size_t a = 0; a < among.size(); a++)
+			for (const auto& lm : m_map.measurements(among[a], m_channel))
+			{
+				const int d = features::hamming(lm.desc, m.desc);
+				if (d < best)
+				{
+					best = d;
+					bestK = static_cast<int>(a);
+				}
+			}
+		if (bestK >= 0) count[static_cast<size_t>(bestK)]++;
+	}
 	std::vector<std::pair<int, uint32_t>> votes;  // (-votes, id): most first, then smaller id
 	votes.reserve(among.size());
-	for (const uint32_t k : among)
-	{
-		int v = 0;
-		for (const auto& lm : m_map.measurements(k, m_channel))
-		{
-			int best = 257;
-			for (const auto& m : meas.meas)
-			{
-				best = std::min(best, features::hamming(lm.desc, m.desc));
-				if (best <= o.global_vote_hamming) break;
-			}
-			v += best <= o.global_vote_hamming;
-		}
-		votes.emplace_back(-v, k);
-	}
+	for (size_t a = 0; a < among.size(); a++) votes.emplace_back(-count[a], among[a]);
 	std::sort(votes.begin(), votes.end());
 	// ---- geometric check of the best candidates.
 	struct TVerified
@@ -407,7 +525,11 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 		vo::TRelativePoseOutput po;
 		m_estimator.estimate(pi, po);
 		out.verified++;
-		if (!po.ok()) continue;
+		// A first pass below min_inliers is what random matches give (RANSAC
+		// finds 6-8 consistent ones among ~150 in a world that is not the
+		// map's); the gates around such a pose are wide enough for a second
+		// pass to gather a spurious consensus, so it is not refined.
+		if (!po.ok() || static_cast<int>(po.inliers) < o.min_inliers) continue;
 		// (2) active search around that pose, solved again (without it as prior).
 		TPoseWithCov p1;
 		p1.T = po.T_curr_ref;

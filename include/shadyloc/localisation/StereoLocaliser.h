@@ -105,12 +105,20 @@ struct TLocaliserOptions
 	/** The solver's covariance is scaled by this before the tests (it is
 	 * optimistic: correlated errors, model error) [-]. */
 	double cov_scale = 4.0;
+	/** Resamples of the inliers for the bootstrap covariance (0 = off): the
+	 * fix's covariance is the larger of the solver's and the bootstrap's in
+	 * every direction (docs/localisation.md, "False fixes") [-]. */
+	int bootstrap_samples = 30;
 
 	/** A fix whose standard deviation (largest axis of the scaled covariance)
-	 * exceeds these is rejected (status uncertain): it could not meet the
-	 * accuracy a fix is judged by (0.5 m, 2 deg at 3 sigma) [m], [deg]. */
-	double max_sigma_m = 0.25;
-	double max_sigma_deg = 1.0;
+	 * exceeds these is not accepted (status uncertain): at 3 sigma it could
+	 * not meet the accuracy a fix is judged by (0.5 m, 2 deg) [m], [deg]. */
+	double max_sigma_m = 0.5 / 3;
+	double max_sigma_deg = 2.0 / 3;
+	/** An uncertain solve is a failure (K consistent frames needed again);
+	 * off: it is only not a fix, and when it passes the consistency tests it
+	 * neither counts towards K nor resets it. */
+	bool uncertain_breaks_chain = false;
 
 	// ---- failure test
 	/** Fix against prediction: Mahalanobis distance^2 bound, chi^2 with 6 dof
@@ -212,6 +220,9 @@ struct TLocaliserResult
 	int matches = 0;  //!< correspondences after refinement
 	int inliers = 0;
 	double rms_px = 0;
+	/** A posteriori variance factor of the solve: the inliers' whitened
+	 * squared residuals over the redundancy (about 1 when sigma_px is right) [-]. */
+	double var_factor = -1;
 	double sigma_m = -1, sigma_deg = -1;  //!< largest standard deviation of the fix (scaled) [m], [deg]
 	double prediction_d2 = -1;	//!< Mahalanobis distance^2 of the prediction test (-1: not run)
 	double motion_d2 = -1;	//!< ... of the motion test (-1: not run)
@@ -272,6 +283,7 @@ class CStereoLocaliser
 	// Failure-test state.
 	TKeyframePose m_prevSolve;	//!< the last frame's solve (any status), for the motion test
 	size_t m_prevFrame = 0;
+	bool m_prevUncertain = false;  //!< the last solve was uncertain (its motion test does not count)
 	int m_consistent = 0;
 	bool m_confirmed = false;
 };

@@ -1,0 +1,188 @@
+/* ShadyLoc — speed of the combined localisation system per frame at 512x384
+ * on the default dataset (docs/localisation.md, "Speed"): the noon map, the
+ * overcast traversal live, frames decoded beforehand (decoding excluded).
+ * BM_CombinedFrame: CLocalisationSystem::processFrame (both channels'
+ * conversion and features, live VO, both localisers, global search when the
+ * place is unknown, policy) with [localise] threads = 2 and 1;
+ * BM_VOFrameMono: the monochrome channel's conversion and the stereo VO alone
+ * on the same frames, for the ratio. Each iteration is one frame, the run
+ * played in order and restarted (as a new run, from the global search) at its
+ * end. Counters: median and 95th percentile per frame [ms], from the frames
+ * timed one by one. Goal (the issue): combined median >= 40 Hz, 95th
+ * percentile >= 20 Hz.
+ *
+ * Needs rawlogs/generated (scripts/make-default-dataset.sh) and the built
+ * `shadyloc` (the map is surveyed once into $TMPDIR/shadyloc_bench_localise);
+ * skipped with a message otherwise.
+ *   build/bench/bench_localise */
+#include <shadyloc/filters/Channel.h>
+#include <shadyloc/io/StereoFrameSource.h>
+#include <shadyloc/localisation/LocalisationSystem.h>
+#include <shadyloc/vo/StereoVO.h>
+#include <shadyloc/vo/ChannelOptions.h>
+
+#include <mrpt/config/CConfigFileMemory.h>
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+using namespace shadyloc;
+namespace fs = std::filesystem;
+
+namespace
+{
+using Clock = std::chrono::steady_clock;
+
+std::string slurp(const std::string& p)
+{
+	std::ifstream f(p);
+	std::ostringstream s;
+	s << f.rdbuf();
+	return s.str();
+}
+
+struct TData
+{
+	std::string skip;  //!< why the data is missing ("" when present)
+	std::vector<io::TStereoFrame> frames;
+	CKeyframeMap::Ptr map;
+	std::string cfgText;
+};
+
+const TData& data()
+{
+	static const TData d = [] {
+		TData d;
+		const std::string src = SHADYLOC_SOURCE_DIR, gen = src + "/rawlogs/generated";
+		for (const char* f : {"noon.rawlog", "noon.tum", "overcast.rawlog"})
+			if (!fs::exists(gen + "/" + f))
+			{
+				d.skip = gen + "/" + f + " is absent: make it with scripts/make-default-dataset.sh";
+				return d;
+			}
+		if (!fs::exists(SHADYLOC_APP))
+		{
+			d.skip = std::string("'") + SHADYLOC_APP + "' is absent: build shadyloc_app (it surveys the map)";
+			return d;
+		}
+		const char* tmp = std::getenv("TMPDIR");
+		const fs::path dir = fs::path(tmp ? tmp : "/tmp") / "shadyloc_bench_localise";
+		fs::create_directories(dir);
+		const std::string mapPath = (dir / "noon.kfmap").string();
+		const std::string cmd = std::string("'") + SHADYLOC_APP + "' survey -q -i '" + gen + "/noon.rawlog' -o '" + mapPath +
+								"' -c '" + src + "/config/vo_sim.ini' --gt '" + gen + "/noon.tum' > /dev/null";
+		if (std::system(cmd.c_str()) != 0)
+		{
+			d.skip = "the survey failed: " + cmd;
+			return d;
+		}
+		d.map = CKeyframeMap::LoadFromFile(mapPath);
+		d.cfgText = slurp(src + "/config/vo_sim.ini") + "\n" + slurp(src + "/config/localise_sim.ini");
+		io::TStereoFrameSourceOptions so;
+		so.sensorLabel = io::findStereoLabel(gen + "/overcast.rawlog", io::labelWithoutSuffixes({"_mono", "_inv", "_lin"}));
+		io::StereoFrameSource source(gen + "/overcast.rawlog", so);
+		io::TStereoFrame f;
+		while (source.next(f))
+		{
+			f.obs.reset();	// the images are kept in left/right
+			d.frames.push_back(f);
+		}
+		return d;
+	}();
+	return d;
+}
+
+double percentile(std::vector<double> v, double p)
+{
+	if (v.empty()) return 0;
+	std::sort(v.begin(), v.end());
+	return v[static_cast<size_t>(std::round(p * static_cast<double>(v.size() - 1)))];
+}
+
+void setCounters(benchmark::State& st, const std::vector<double>& ms, const std::string& prefix)
+{
+	st.counters[prefix + "median_ms"] = percentile(ms, 0.5);
+	st.counters[prefix + "p95_ms"] = percentile(ms, 0.95);
+}
+
+/** The combined system, one frame per iteration. */
+void BM_CombinedFrame(benchmark::State& st, int threads)
+{
+	const auto& d = data();
+	if (!d.skip.empty())
+	{
+		st.SkipWithError(d.skip.c_str());
+		return;
+	}
+	mrpt::config::CConfigFileMemory cfg(d.cfgText);
+	auto sys = localisation::CLocalisationSystem::FromConfig(cfg, d.map, {}, threads, "vo_sim.ini + localise_sim.ini");
+	std::vector<double> ms, voMs;
+	size_t i = 0, fixes = 0;
+	for (auto _ : st)
+	{
+		if (i == d.frames.size())
+		{
+			sys->reset();  // a new run: it starts by the global search again
+			i = 0;
+		}
+		const auto& f = d.frames[i++];
+		const auto t0 = Clock::now();
+		const auto u = sys->processFrame(f.left, f.right, f.calib, f.timestamp);
+		const double t = std::chrono::duration<double>(Clock::now() - t0).count();
+		st.SetIterationTime(t);
+		ms.push_back(1e3 * t);
+		voMs.push_back(u.vo.ms.total);
+		fixes += u.localised();
+	}
+	setCounters(st, ms, "");
+	// The live VO's share inside the system (on the shared measurements).
+	setCounters(st, voMs, "vo_inside_");
+	st.counters["fix_share"] = ms.empty() ? 0.0 : static_cast<double>(fixes) / static_cast<double>(ms.size());
+}
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads2, 2)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(600);
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads1, 1)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(600);
+
+/** The monochrome channel's conversion and the stereo VO alone, on the same frames. */
+void BM_VOFrameMono(benchmark::State& st)
+{
+	const auto& d = data();
+	if (!d.skip.empty())
+	{
+		st.SkipWithError(d.skip.c_str());
+		return;
+	}
+	mrpt::config::CConfigFileMemory cfg(d.cfgText);
+	const auto ch = filters::channelFromConfig(cfg, "mono", "vo_sim.ini");
+	vo::StereoVO vo(vo::voOptionsFor(cfg, ch.label), vo::featureOptionsFor(cfg, ch.label));
+	vo.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+	std::vector<double> ms;
+	size_t i = 0;
+	for (auto _ : st)
+	{
+		if (i == d.frames.size())
+		{
+			vo.reset();
+			i = 0;
+		}
+		const auto& f = d.frames[i++];
+		const auto t0 = Clock::now();
+		cv::Mat l, r;
+		ch.convertPair(f.left, f.right, l, r);
+		vo.process(l, r, f.calib, f.timestamp);
+		const double t = std::chrono::duration<double>(Clock::now() - t0).count();
+		st.SetIterationTime(t);
+		ms.push_back(1e3 * t);
+	}
+	setCounters(st, ms, "");
+}
+BENCHMARK(BM_VOFrameMono)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(600);
+
+}  // namespace
+
+BENCHMARK_MAIN();
