@@ -73,7 +73,7 @@ runs="$out/runs.txt"
 
 echo
 echo "== 7. one pair of the evaluation rendered offscreen: 'overcast' against the 'noon' map, coloured by localiser"
-"$app" render --title "overcast live run on the noon map: which localiser held each frame" \
+"$app" render --title "overcast live run on the noon map, by localiser" \
   -m "$out/eval/jobs/map_noon/map.kfmap:noon map" --localised "$out/eval/pairs/overcast__noon__combined:overcast" \
   --gt "$data/overcast.tum" --width 1000 --height 600 -o "$out/overcast_on_noon.png"
 
