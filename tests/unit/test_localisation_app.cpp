@@ -54,7 +54,10 @@ const TDataset& dataset()
 {
 	static const TDataset d = [] {
 		TDataset t;
-		t.dir = test::tempDir("localise_app");
+		// One folder per test: ctest runs the suite's tests as parallel
+		// processes, and tempDir empties the folder it returns.
+		t.dir = test::tempDir(
+			std::string("localise_app_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
 		std::string sim = test::fixtureDir().empty() ? "" : test::fixtureDir() + "/sim";
 		if (sim.empty() || !fs::exists(sim + "/overcast.rawlog"))
 		{

@@ -42,7 +42,7 @@ struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 	/** Landmarks kept per keyframe and channel (0 = all), the best by
 	 * `landmark_selection` per image bucket first, so they stay spread over
 	 * the image (docs/map.md). */
-	int landmarks_per_keyframe = 140;
+	int landmarks_per_keyframe = 0;
 	/** How a survey ranks a keyframe's landmarks when it thins them. */
 	enum class LandmarkSelection : uint8_t
 	{
@@ -67,7 +67,7 @@ struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 	/** Bits kept of each pixel of the stored patches, 1..8: the low bits are
 	 * replaced by the middle of their range (in memory as on disk), so the
 	 * patches compress better (docs/map.md, "Sizes"). */
-	int patch_bits = 4;
+	int patch_bits = 8;
 	int compression_level = 9;  //!< zstd level, 1 (fast) .. 22 (small); 19 saves 3 % for 5x the time
 	double index_cell_m = 10.0;	 //!< cell size of the spatial hash grid [m]
 	bool draw_landmarks = false;  //!< getVisualizationInto draws landmarks, coloured by channel
