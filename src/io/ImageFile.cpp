@@ -247,15 +247,30 @@ TImageFileInfo checkTiff(const Bytes& b, uint64_t maxPixels)
 		return size == 2 ? u16(at) : u32(at);
 	};
 	size_t offsets = 0, counts = 0;
+	std::vector<uint16_t> seen;
 	for (uint16_t k = 0; k < count; k++)
 	{
 		const size_t e = ifd + 2 + size_t(k) * 12;
 		const uint16_t tag = u16(e);
+		// libtiff keeps the first of duplicated tags; refusing them keeps
+		// this check and the decoder reading the same size.
+		if (std::find(seen.begin(), seen.end(), tag) != seen.end())
+			b.fail("corrupt TIFF: tag " + std::to_string(tag) + " appears twice in the image directory");
+		seen.push_back(tag);
+		// Sizes as libtiff reads them: one value each, 8- or 16-bit samples,
+		// at most 4 of them, strips (tiles make their own buffer sizes).
+		if ((tag == 256 || tag == 257 || tag == 277) && u32(e + 4) != 1)
+			b.fail("corrupt TIFF: tag " + std::to_string(tag) + " holds " + std::to_string(u32(e + 4)) + " values, not one");
+		if (tag == 258 && value(e, 0) != 8 && value(e, 0) != 16)
+			b.fail("unsupported TIFF: " + std::to_string(value(e, 0)) + "-bit samples (8 or 16 are read)");
+		if (tag == 277 && (value(e, 0) < 1 || value(e, 0) > 4))
+			b.fail("unsupported TIFF: " + std::to_string(value(e, 0)) + " samples per pixel (1 to 4 are read)");
+		if (tag == 322 || tag == 323) b.fail("unsupported TIFF: tiled images are not read (strips are)");
 		if (tag == 256) info.width = static_cast<uint32_t>(value(e, 0));
 		if (tag == 257) info.height = static_cast<uint32_t>(value(e, 0));
 		if (tag == 277) info.channels = static_cast<int>(value(e, 0));
-		if (tag == 273 || tag == 324) offsets = e;	// strips or tiles
-		if (tag == 279 || tag == 325) counts = e;
+		if (tag == 273) offsets = e;  // strips
+		if (tag == 279) counts = e;
 	}
 	if (info.channels == 0) info.channels = 1;
 	checkSize(b, info, maxPixels);

@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include <array>
 #include <fstream>
 #include <sstream>
 
@@ -147,4 +148,37 @@ TEST(ImageFiles, BytesOpenCVWouldSendToAnotherDecoderAreRefused)
 	// Without the marker the same PPM decodes.
 	std::copy_n("\x40\x40\x40\x40", 4, ppm.begin() + 128);
 	EXPECT_EQ(io::decodeImageBytes(q, ppm.size(), "plain.ppm", cv::IMREAD_UNCHANGED, 1u << 22).cols, 8);
+}
+
+TEST(ImageFiles, TiffWithADuplicatedSizeTagIsRefused)
+{
+	// Found by fuzz_image: a second ImageWidth entry made this check read a
+	// small image while libtiff (keeping the first) allocated 480 MB.
+	std::string t = "II*";
+	t += '\0';
+	const auto le16 = [&](uint16_t v) { t += char(v & 0xff); t += char(v >> 8); };
+	const auto le32 = [&](uint32_t v) { for (int i = 0; i < 4; i++) t += char((v >> (8 * i)) & 0xff); };
+	le32(8);  // the image directory follows the header
+	const std::vector<std::array<uint32_t, 4>> entries = {
+		{256, 4, 1, 15632}, {257, 4, 1, 10240}, {256, 4, 1, 8}, {273, 4, 1, 0}, {279, 4, 1, 1}};
+	le16(static_cast<uint16_t>(entries.size()));
+	for (const auto& e : entries)
+	{
+		le16(static_cast<uint16_t>(e[0]));
+		le16(static_cast<uint16_t>(e[1]));
+		le32(e[2]);
+		le32(e[3]);
+	}
+	le32(0);
+	const auto* p = reinterpret_cast<const uint8_t*>(t.data());
+	try
+	{
+		io::decodeImageBytes(p, t.size(), "dup.tif", cv::IMREAD_UNCHANGED, 1u << 22);
+		ADD_FAILURE() << "a TIFF with two ImageWidth tags was decoded";
+	}
+	catch (const io::ImageFileError& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("appears twice"), std::string::npos) << e.what();
+		EXPECT_NE(std::string(e.what()).find("dup.tif"), std::string::npos) << e.what();
+	}
 }
