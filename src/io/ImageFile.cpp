@@ -247,6 +247,7 @@ TImageFileInfo checkTiff(const Bytes& b, uint64_t maxPixels)
 		return size == 2 ? u16(at) : u32(at);
 	};
 	size_t offsets = 0, counts = 0;
+	uint64_t rowsPerStrip = 0xFFFFFFFFu;  // TIFF's "one strip"
 	std::vector<uint16_t> seen;
 	for (uint16_t k = 0; k < count; k++)
 	{
@@ -266,6 +267,7 @@ TImageFileInfo checkTiff(const Bytes& b, uint64_t maxPixels)
 		if (tag == 277 && (value(e, 0) < 1 || value(e, 0) > 4))
 			b.fail("unsupported TIFF: " + std::to_string(value(e, 0)) + " samples per pixel (1 to 4 are read)");
 		if (tag == 322 || tag == 323) b.fail("unsupported TIFF: tiled images are not read (strips are)");
+		if (tag == 278) rowsPerStrip = value(e, 0);
 		if (tag == 256) info.width = static_cast<uint32_t>(value(e, 0));
 		if (tag == 257) info.height = static_cast<uint32_t>(value(e, 0));
 		if (tag == 277) info.channels = static_cast<int>(value(e, 0));
@@ -274,6 +276,11 @@ TImageFileInfo checkTiff(const Bytes& b, uint64_t maxPixels)
 	}
 	if (info.channels == 0) info.channels = 1;
 	checkSize(b, info, maxPixels);
+	// OpenCV sizes its strip buffer by RowsPerStrip, not clamped to the
+	// image's height (all but the "one strip" value): bound it like an image.
+	if (rowsPerStrip != 0xFFFFFFFFu && uint64_t(info.width) * rowsPerStrip > maxPixels)
+		b.fail("corrupt TIFF: strips of " + std::to_string(rowsPerStrip) + " rows of " + std::to_string(info.width) +
+			   " pixels exceed the " + std::to_string(maxPixels) + "-pixel limit");
 	if (!offsets || !counts) b.fail("TIFF without image data offsets");
 	const uint32_t n = std::min(u32(offsets + 4), u32(counts + 4));
 	if (n > b.n) b.fail("corrupt TIFF strip count");

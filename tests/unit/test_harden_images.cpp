@@ -150,6 +150,45 @@ TEST(ImageFiles, BytesOpenCVWouldSendToAnotherDecoderAreRefused)
 	EXPECT_EQ(io::decodeImageBytes(q, ppm.size(), "plain.ppm", cv::IMREAD_UNCHANGED, 1u << 22).cols, 8);
 }
 
+namespace
+{
+/** A little-endian TIFF header and one image directory of LONG entries. */
+std::string tiffWith(const std::vector<std::array<uint32_t, 2>>& tags)
+{
+	std::string t = "II*";
+	t += '\0';
+	const auto le16 = [&](uint16_t v) { t += char(v & 0xff); t += char(v >> 8); };
+	const auto le32 = [&](uint32_t v) { for (int i = 0; i < 4; i++) t += char((v >> (8 * i)) & 0xff); };
+	le32(8);
+	le16(static_cast<uint16_t>(tags.size()));
+	for (const auto& e : tags)
+	{
+		le16(static_cast<uint16_t>(e[0]));
+		le16(4);
+		le32(1);
+		le32(e[1]);
+	}
+	le32(0);
+	return t;
+}
+}  // namespace
+
+TEST(ImageFiles, TiffStripsLargerThanTheImageLimitAreRefused)
+{
+	// Found by fuzz_image: OpenCV sized its strip buffer by RowsPerStrip
+	// (16396 rows of 15632 pixels: 1 GB) for an image 12 rows high.
+	const std::string t = tiffWith({{256, 15632}, {257, 12}, {277, 3}, {278, 16396}, {273, 0}, {279, 1}});
+	try
+	{
+		io::decodeImageBytes(reinterpret_cast<const uint8_t*>(t.data()), t.size(), "strips.tif", cv::IMREAD_UNCHANGED, 1u << 22);
+		ADD_FAILURE() << "a TIFF with 16396-row strips was decoded";
+	}
+	catch (const io::ImageFileError& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("strips of 16396 rows"), std::string::npos) << e.what();
+	}
+}
+
 TEST(ImageFiles, TiffWithADuplicatedSizeTagIsRefused)
 {
 	// Found by fuzz_image: a second ImageWidth entry made this check read a
