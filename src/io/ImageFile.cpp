@@ -267,6 +267,13 @@ TImageFileInfo checkTiff(const Bytes& b, uint64_t maxPixels)
 		if (tag == 277 && (value(e, 0) < 1 || value(e, 0) > 4))
 			b.fail("unsupported TIFF: " + std::to_string(value(e, 0)) + " samples per pixel (1 to 4 are read)");
 		if (tag == 322 || tag == 323) b.fail("unsupported TIFF: tiled images are not read (strips are)");
+		// Camera images: grey or RGB, uncompressed, LZW, Deflate or PackBits
+		// (the codecs with their own buffers, JPEG-in-TIFF among them, are not read).
+		if (tag == 259 && value(e, 0) != 1 && value(e, 0) != 5 && value(e, 0) != 8 && value(e, 0) != 32946 &&
+			value(e, 0) != 32773)
+			b.fail("unsupported TIFF compression " + std::to_string(value(e, 0)) + " (none, LZW, Deflate, PackBits are read)");
+		if (tag == 262 && value(e, 0) > 2)
+			b.fail("unsupported TIFF photometric interpretation " + std::to_string(value(e, 0)) + " (grey or RGB are read)");
 		if (tag == 278) rowsPerStrip = value(e, 0);
 		if (tag == 256) info.width = static_cast<uint32_t>(value(e, 0));
 		if (tag == 257) info.height = static_cast<uint32_t>(value(e, 0));
