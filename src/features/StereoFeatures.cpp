@@ -729,4 +729,72 @@ void StereoFeatureExtractor::process(
 	out.timings.describe_ms = msSince(t0);
 }
 
+
+float patchZncc(const std::array<uint8_t, kPatchSize * kPatchSize>& p, const cv::Mat& img, int x, int y)
+{
+	constexpr int N = kPatchSize, h = N / 2;
+	int sa = 0, sb = 0;
+	int64_t saa = 0, sbb = 0, sab = 0;
+	for (int dy = 0; dy < N; dy++)
+	{
+		const uint8_t* row = img.ptr<uint8_t>(y - h + dy) + x - h;
+		const uint8_t* pr = p.data() + dy * N;
+		for (int dx = 0; dx < N; dx++)
+		{
+			const int a = pr[dx], b = row[dx];
+			sa += a;
+			sb += b;
+			saa += a * a;
+			sbb += b * b;
+			sab += a * b;
+		}
+	}
+	const double n = N * N;
+	const double va = saa - double(sa) * sa / n, vb = sbb - double(sb) * sb / n;
+	if (va < 1e-6 || vb < 1e-6) return -1.f;
+	return static_cast<float>((sab - double(sa) * sb / n) / std::sqrt(va * vb));
+}
+
+bool locatePatch(
+	const std::array<uint8_t, kPatchSize * kPatchSize>& patch, const cv::Mat& img, int x0, int y0, int radius_px,
+	float min_zncc, int iterations, float& xOut, float& yOut)
+{
+	const int ph = kPatchSize / 2;
+	const auto inside = [&](int xx, int yy) {
+		return xx - ph - 1 >= 0 && yy - ph - 1 >= 0 && xx + ph + 1 < img.cols && yy + ph + 1 < img.rows;
+	};
+	int x = x0, y = y0;
+	float c[3][3];
+	bool peak = false;
+	for (int step = 0; step <= radius_px && inside(x, y); step++)
+	{
+		// All nine scores first, then the arg-max: comparing against the
+		// centre before it is computed read an uninitialised value.
+		for (int dy = -1; dy <= 1; dy++)
+			for (int dx = -1; dx <= 1; dx++) c[dy + 1][dx + 1] = patchZncc(patch, img, x + dx, y + dy);
+		int bx = 0, by = 0;
+		for (int dy = -1; dy <= 1; dy++)
+			for (int dx = -1; dx <= 1; dx++)
+				if (c[dy + 1][dx + 1] > c[by + 1][bx + 1]) bx = dx, by = dy;
+		if (bx == 0 && by == 0)
+		{
+			peak = true;
+			break;
+		}
+		if (step == radius_px) break;
+		x += bx;
+		y += by;
+	}
+	if (!peak || c[1][1] < min_zncc) return false;
+	float xs = x + parabolaPeak(c[1][0], c[1][1], c[1][2]);
+	float ys = y + parabolaPeak(c[0][1], c[1][1], c[2][1]);
+	// The parabola locks towards integer pixels; Gauss-Newton on the
+	// interpolated image does not.
+	float xr, yr;
+	if (refinePatch2D(patch.data(), kPatchSize, img, xs, ys, iterations, xr, yr)) xs = xr, ys = yr;
+	xOut = xs;
+	yOut = ys;
+	return true;
+}
+
 }  // namespace shadyloc::features

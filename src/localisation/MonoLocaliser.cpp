@@ -36,32 +36,6 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v)
 	return S;
 }
 
-/** ZNCC of a stored keyframe patch against the image at integer (x, y) (the
- * patch must fit); -1 for a flat patch. */
-float patchZncc(const std::array<uint8_t, features::kPatchSize * features::kPatchSize>& p, const cv::Mat& img, int x, int y)
-{
-	constexpr int N = features::kPatchSize, h = N / 2;
-	int sa = 0, sb = 0;
-	int64_t saa = 0, sbb = 0, sab = 0;
-	for (int dy = 0; dy < N; dy++)
-	{
-		const uint8_t* row = img.ptr<uint8_t>(y - h + dy) + x - h;
-		const uint8_t* pr = p.data() + dy * N;
-		for (int dx = 0; dx < N; dx++)
-		{
-			const int a = pr[dx], b = row[dx];
-			sa += a;
-			sb += b;
-			saa += a * a;
-			sbb += b * b;
-			sab += a * b;
-		}
-	}
-	const double n = N * N;
-	const double va = saa - double(sa) * sa / n, vb = sbb - double(sb) * sb / n;
-	if (va < 1e-6 || vb < 1e-6) return -1.f;
-	return static_cast<float>((sab - double(sa) * sb / n) / std::sqrt(va * vb));
-}
 
 /** Residual of one correspondence at T (= T_curr_ref): r, J = dr/dxi (left
  * perturbation), Sigma = its covariance. False if the point is behind. */
@@ -479,40 +453,16 @@ TMonoLocaliserResult CMonoLocaliser::localise(
 
 	// ---- sub-pixel: the keyframe's patch located in the image
 	std::vector<TImageCorrespondence> corr;
-	const int ph = features::kPatchSize / 2;
-	const auto inside = [&](int x, int y) {
-		return x - ph - 1 >= 0 && y - ph - 1 >= 0 && x + ph + 1 < img.cols && y + ph + 1 < img.rows;
-	};
 	for (size_t j = 0; j < nL; j++)
 	{
 		if (matchOf[j] < 0) continue;
 		r.descriptor_matches++;
 		const auto& ft = f.feats[static_cast<size_t>(matchOf[j])];
-		int x = static_cast<int>(ft.u), y = static_cast<int>(ft.v);
-		float c[3][3];
-		bool peak = false;
-		for (int step = 0; step <= o.refine_radius_px && inside(x, y); step++)
-		{
-			for (int dy = -1; dy <= 1; dy++)
-				for (int dx = -1; dx <= 1; dx++) c[dy + 1][dx + 1] = patchZncc(lms[j].patch, img, x + dx, y + dy);
-			int bx = 0, by = 0;
-			for (int dy = -1; dy <= 1; dy++)
-				for (int dx = -1; dx <= 1; dx++)
-					if (c[dy + 1][dx + 1] > c[by + 1][bx + 1]) bx = dx, by = dy;
-			if (bx == 0 && by == 0)
-			{
-				peak = true;
-				break;
-			}
-			x += bx;
-			y += by;
-		}
-		if (!peak || c[1][1] < o.refine_min_zncc) continue;
-		float xs = x + features::parabolaPeak(c[1][0], c[1][1], c[1][2]);
-		float ys = y + features::parabolaPeak(c[0][1], c[1][1], c[2][1]);
-		float xr, yr;
-		if (features::refinePatch2D(lms[j].patch.data(), features::kPatchSize, img, xs, ys, o.refine_iterations, xr, yr))
-			xs = xr, ys = yr;
+		float xs, ys;
+		if (!features::locatePatch(
+				lms[j].patch, img, static_cast<int>(ft.u), static_cast<int>(ft.v), o.refine_radius_px, o.refine_min_zncc,
+				o.refine_iterations, xs, ys))
+			continue;
 		corr.push_back({lms[j].P, lms[j].cov, Eigen::Vector2d(xs, ys)});
 	}
 	r.matches = static_cast<int>(corr.size());

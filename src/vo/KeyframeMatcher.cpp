@@ -12,31 +12,6 @@ namespace shadyloc::vo
 {
 namespace
 {
-/** ZNCC of a stored kPatchSize^2 patch against the image window at (x, y). */
-float patchZncc(const std::array<uint8_t, features::kPatchSize * features::kPatchSize>& p, const cv::Mat& img, int x, int y)
-{
-	constexpr int N = features::kPatchSize, h = N / 2;
-	int sa = 0, sb = 0;
-	int64_t saa = 0, sbb = 0, sab = 0;
-	for (int dy = 0; dy < N; dy++)
-	{
-		const uint8_t* row = img.ptr<uint8_t>(y - h + dy) + x - h;
-		const uint8_t* pr = p.data() + dy * N;
-		for (int dx = 0; dx < N; dx++)
-		{
-			const int a = pr[dx], b = row[dx];
-			sa += a;
-			sb += b;
-			saa += a * a;
-			sbb += b * b;
-			sab += a * b;
-		}
-	}
-	const double n = N * N;
-	const double va = saa - double(sa) * sa / n, vb = sbb - double(sb) * sb / n;
-	if (va < 1e-6 || vb < 1e-6) return -1.f;
-	return static_cast<float>((sab - double(sa) * sb / n) / std::sqrt(va * vb));
-}
 
 /** Uniform grid over the current measurements for region queries. */
 struct MeasGrid
@@ -238,60 +213,23 @@ void CKeyframeMatcher::match(const TKeyframeMatchInput& in, TKeyframeMatchOutput
 	// Sub-pixel refinement: where is the keyframe's patch in this image?
 	out.corr.reserve(nMatch);
 	const cv::Mat& img = fr.left;
-	const int ph = features::kPatchSize / 2;
 	for (size_t j = 0; j < kfm.size(); j++)
 	{
 		if (matchOf[j] < 0) continue;
 		const auto& m = fr.meas[matchOf[j]];
-		int x = static_cast<int>(m.uL), y = static_cast<int>(m.v);
-		const auto inside = [&](int xx, int yy) {
-			return xx - ph - 1 >= 0 && yy - ph - 1 >= 0 && xx + ph + 1 < img.cols && yy + ph + 1 < img.rows;
-		};
-		float c[3][3];
-		bool peak = false;
-		for (int step = 0; step <= o.refine_radius && inside(x, y); step++)
-		{
-			// All nine scores first, then the arg-max: comparing against the
-			// centre before it is computed read an uninitialised value (the
-			// run-to-run nondeterminism found with valgrind).
-			for (int dy = -1; dy <= 1; dy++)
-				for (int dx = -1; dx <= 1; dx++)
-					c[dy + 1][dx + 1] = patchZncc(kfm[j].patch, img, x + dx, y + dy);
-			int bx = 0, by = 0;
-			for (int dy = -1; dy <= 1; dy++)
-				for (int dx = -1; dx <= 1; dx++)
-					if (c[dy + 1][dx + 1] > c[by + 1][bx + 1]) bx = dx, by = dy;
-			if (bx == 0 && by == 0)
-			{
-				peak = true;
-				break;
-			}
-			if (step == o.refine_radius) break;
-			x += bx;
-			y += by;
-		}
-		if (!peak || c[1][1] < o.refine_min_zncc) continue;
-		float ox = features::parabolaPeak(c[1][0], c[1][1], c[1][2]);
-		float oy = features::parabolaPeak(c[0][1], c[1][1], c[2][1]);
-		{
-			// The parabola locks towards integer pixels; Gauss-Newton on the
-			// interpolated image does not (features::refinePatch2D).
-			float xr, yr;
-			if (features::refinePatch2D(
-					kfm[j].patch.data(), features::kPatchSize, img, x + ox, y + oy, o.refine_iterations, xr, yr))
-			{
-				ox = xr - x;
-				oy = yr - y;
-			}
-		}
+		float xs, ys;
+		if (!features::locatePatch(
+				kfm[j].patch, img, static_cast<int>(m.uL), static_cast<int>(m.v), o.refine_radius, o.refine_min_zncc,
+				o.refine_iterations, xs, ys))
+			continue;
 		geometry::TStereoCorrespondence k;
 		k.P_ref = kfm[j].P;
 		k.cov_ref = kfm[j].cov;
 		k.z_ref = Eigen::Vector3d(kfm[j].uL, kfm[j].v, kfm[j].uR);
 		k.calib_ref = in.calib_kf;
 		// The disparity measured at the corner carries over to the refined position.
-		const double du = x + ox - m.uL;
-		k.z_curr = Eigen::Vector3d(x + ox, y + oy, m.uR + du);
+		const double du = xs - m.uL;
+		k.z_curr = Eigen::Vector3d(xs, ys, m.uR + du);
 		if (!calib.triangulate(k.z_curr.x(), k.z_curr.y(), k.z_curr.z(), k.P_curr)) continue;
 		out.corr.push_back(k);
 		out.landmark.push_back(static_cast<int>(j));

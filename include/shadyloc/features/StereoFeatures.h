@@ -98,6 +98,21 @@ bool refinePatch2D(
 	const uint8_t* tmpl, int size, const cv::Mat& img, float x0, float y0, int iterations, float& x,
 	float& y);
 
+/** ZNCC of a stored kPatchSize^2 patch against the image window centred at
+ * integer (x, y) (the window must fit); -1 for a flat patch or window. */
+float patchZncc(const std::array<uint8_t, kPatchSize * kPatchSize>& patch, const cv::Mat& img, int x, int y);
+
+/** Where is a stored patch in `img`, near the integer pixel (x0, y0)? The
+ * ZNCC hill-climb over the 3x3 neighbourhood for at most `radius_px` steps
+ * to a peak of at least `min_zncc`, a parabola through the peak, then
+ * refinePatch2D for `iterations` steps. Returns false (x, y untouched) when
+ * no such peak lies within reach or inside the image. Shared by the VO's
+ * keyframe matcher and the localisers (the paper's sub-pixel refinement by
+ * patch matching). */
+bool locatePatch(
+	const std::array<uint8_t, kPatchSize * kPatchSize>& patch, const cv::Mat& img, int x0, int y0, int radius_px,
+	float min_zncc, int iterations, float& x, float& y);
+
 /** Options of StereoFeatureExtractor ([features] in config/vo.ini). */
 struct TStereoFeatureOptions : public mrpt::config::CLoadableOptions
 {
