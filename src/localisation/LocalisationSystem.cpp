@@ -82,6 +82,7 @@ void TSystemOptions::load(const mrpt::config::CConfigFileBase& c, const std::str
 		if (localisers.empty()) r.fail("localisers", "names no localiser (mono, invariant, ...)");
 	}
 	r.read("vo_channel", vo_channel);
+	r.read("vo_fallback_channel", vo_fallback_channel);
 	r.read("threads", threads);
 	r.read("vo_cov_scale", vo_cov_scale);
 	r.read("vo_sigma_m_per_m", vo_sigma_m_per_m);
@@ -110,6 +111,9 @@ void TSystemOptions::dump(std::ostream& out) const
 	for (const auto& x : localisers) l += (l.empty() ? "" : " ") + x;
 	w.value("localisers", l, "policy order: the first with an accepted fix is used");
 	w.value("vo_channel", vo_channel, "the live VO that predicts for every localiser");
+	w.value("vo_fallback_channel", vo_fallback_channel,
+			"a second live VO whose step is used where vo_channel's could not be measured (\"\" = none; runs only "
+			"when the channel is a localiser)");
 	w.value("threads", threads);
 	w.value("vo_cov_scale", vo_cov_scale);
 	w.value("vo_sigma_m_per_m", vo_sigma_m_per_m, "[m/m]");
@@ -133,6 +137,7 @@ void TSystemOptions::validate() const
 		for (size_t j = i + 1; j < localisers.size(); j++)
 			need(localisers[i] != localisers[j], "localisers", "a localiser named twice");
 	need(!vo_channel.empty(), "vo_channel", "must name a channel");
+	need(vo_fallback_channel != vo_channel, "vo_fallback_channel", "must differ from vo_channel (or be empty)");
 	need(threads >= 1, "threads", "must be >= 1");
 	need(vo_cov_scale >= 1, "vo_cov_scale", "must be >= 1");
 	need(vo_sigma_m_per_m >= 0, "vo_sigma_m_per_m", "must be >= 0");
@@ -174,7 +179,7 @@ features::TStereoFeatureOptions featuresOf(
 
 CLocalisationSystem::CLocalisationSystem(
 	CKeyframeMap::Ptr map, const std::vector<TChannelSetup>& channels, const vo::TStereoVOOptions& vopt,
-	const TSystemOptions& o)
+	const TSystemOptions& o, const std::optional<vo::TStereoVOOptions>& voFallback)
 	: mrpt::system::COutputLogger("CLocalisationSystem"),
 	  m_map(std::move(map)),
 	  m_opts(o),
@@ -208,7 +213,15 @@ CLocalisationSystem::CLocalisationSystem(
 		}
 		m_pipes.push_back(std::move(p));
 	}
-	m_vo.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+	m_vo.vo.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+	if (voFallback && !m_opts.vo_fallback_channel.empty())
+		for (size_t i = 1; i < m_pipes.size(); i++)
+			if (m_pipes[i].setup.channel.label == m_opts.vo_fallback_channel && m_pipes[i].localiser)
+			{
+				m_voFallback = std::make_unique<TVOTrack>(*voFallback, m_pipes[i].setup.features);
+				m_voFallback->pipe = i;
+				m_voFallback->vo.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+			}
 }
 
 map::TChannelParams CLocalisationSystem::liveParams(const filters::TChannel& ch, const features::TStereoFeatureOptions& fo)
@@ -266,8 +279,14 @@ CLocalisationSystem::TSetup CLocalisationSystem::SetupFromConfig(
 		for (auto& l : so.localisers)
 			if (l == labels[i]) l = chans[i].channel.label;
 		if (so.vo_channel == labels[i]) so.vo_channel = chans[i].channel.label;
+		if (so.vo_fallback_channel == labels[i]) so.vo_fallback_channel = chans[i].channel.label;
 	}
 	r.vo = vo::voOptionsFor(cfg, so.vo_channel);
+	// The fallback VO runs only beside its channel's localiser: the baseline
+	// (`--localisers mono`) stays the paper's baseline alone.
+	if (!so.vo_fallback_channel.empty() &&
+		std::find(so.localisers.begin(), so.localisers.end(), so.vo_fallback_channel) != so.localisers.end())
+		r.voFallback = vo::voOptionsFor(cfg, so.vo_fallback_channel);
 	return r;
 }
 
@@ -276,12 +295,17 @@ std::unique_ptr<CLocalisationSystem> CLocalisationSystem::FromConfig(
 	int threads, const std::string& what)
 {
 	TSetup s = SetupFromConfig(cfg, localisers, threads, what);
-	return std::make_unique<CLocalisationSystem>(std::move(map), s.channels, s.vo, s.system);
+	return std::make_unique<CLocalisationSystem>(std::move(map), s.channels, s.vo, s.system, s.voFallback);
 }
 
 void CLocalisationSystem::reset()
 {
-	m_vo.reset();
+	for (TVOTrack* t : {&m_vo, m_voFallback.get()})
+		if (t)
+		{
+			t->vo.reset();
+			t->havePrev = false;
+		}
 	for (auto& p : m_pipes)
 		if (p.localiser) p.localiser->reset();
 	m_frame = 0;
@@ -289,7 +313,6 @@ void CLocalisationSystem::reset()
 	m_framesSinceFix = 0;
 	m_searchAmong.clear();
 	m_distance = 0;
-	m_havePrevVO = false;
 }
 
 void CLocalisationSystem::setStartKeyframe(uint32_t id, double radius)
@@ -299,34 +322,38 @@ void CLocalisationSystem::setStartKeyframe(uint32_t id, double radius)
 	m_searchAmong = m_map->keyframesAlongChain(id, radius, radius);
 }
 
-TMotion CLocalisationSystem::motionOf(const vo::TFrameResult& r)
+TMotion CLocalisationSystem::motionOf(const vo::TFrameResult& r, TVOTrack& t, bool& measured) const
 {
 	TMotion m;
-	if (!m_havePrevVO) return m;  // the first frame: no motion
+	measured = false;
+	const bool havePrev = t.havePrev;
+	const vo::TFrameResult prevVO = t.prev;
+	t.prev = r;
+	t.havePrev = true;
+	if (!havePrev) return m;  // the first frame: no motion
 	m.valid = true;
-	m.T_prev_curr = m_prevVO.T_world_curr.inverse() * r.T_world_curr;
-	const bool prevTracked = vo::isTracked(m_prevVO.status);
-	if (r.status == vo::FrameStatus::Ok && (m_prevVO.keyframe || m_prevVO.status == vo::FrameStatus::Ok))
+	m.T_prev_curr = prevVO.T_world_curr.inverse() * r.T_world_curr;
+	measured = r.status == vo::FrameStatus::Ok && (prevVO.keyframe || prevVO.status == vo::FrameStatus::Ok);
+	if (measured)
 	{
 		TPoseWithCov cur;
 		cur.T = r.T_kf_curr;
 		cur.cov = r.cov_kf_curr;
-		if (m_prevVO.keyframe)
+		if (prevVO.keyframe)
 			m.cov = cur.cov;  // the previous frame is this frame's reference keyframe
 		else
 		{
 			// Both relative to the same keyframe: T_prev_curr = T_kf_prev^-1 T_kf_curr,
 			// errors taken as independent (conservative: they share the keyframe's).
 			TPoseWithCov prev;
-			prev.T = m_prevVO.T_kf_curr;
-			prev.cov = m_prevVO.cov_kf_curr;
+			prev.T = prevVO.T_kf_curr;
+			prev.cov = prevVO.cov_kf_curr;
 			m.cov = geometry::compose(geometry::inverse(prev), cur).cov;
 		}
 		m.cov *= m_opts.vo_cov_scale;
 	}
 	else
 		m.cov = diagCov(m_opts.vo_lost_sigma_m, m_opts.vo_lost_sigma_deg);
-	(void)prevTracked;
 	const double s = m.T_prev_curr.translation().norm();
 	m.cov += diagCov(m_opts.vo_sigma_m_per_m * s, m_opts.vo_sigma_deg_per_m * s);
 	return m;
@@ -379,17 +406,35 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 	auto voChannel = [&] {
 		extract(0);
 		const auto t0 = Clock::now();
-		m_vo.track(meas[0], calib, timestamp);
-		u.vo = m_vo.commit();
+		m_vo.vo.track(meas[0], calib, timestamp);
+		u.vo = m_vo.vo.commit();
 		msVO = msSince(t0);
 	};
 	auto others = [&] {
-		for (size_t i = 1; i < n; i++) extract(i);
+		for (size_t i = 1; i < n; i++)
+		{
+			extract(i);
+			if (m_voFallback && m_voFallback->pipe == i)
+			{
+				m_voFallback->vo.track(meas[i], calib, timestamp);
+				u.vo_fallback = m_voFallback->vo.commit();
+			}
+		}
 	};
 	both(par, voChannel, others);
-	u.motion = motionOf(u.vo);
-	m_prevVO = u.vo;
-	m_havePrevVO = true;
+	bool measured = false;
+	u.motion = motionOf(u.vo, m_vo, measured);
+	if (u.motion.valid) u.motion_from = m_pipes[0].setup.channel.label;
+	if (m_voFallback)
+	{
+		bool fallbackMeasured = false;
+		TMotion f = motionOf(u.vo_fallback, *m_voFallback, fallbackMeasured);
+		if (!measured && fallbackMeasured)
+		{
+			u.motion = f;
+			u.motion_from = m_pipes[m_voFallback->pipe].setup.channel.label;
+		}
+	}
 	if (u.motion.valid) m_distance += u.motion.T_prev_curr.translation().norm();
 	u.distance_m = m_distance;
 

@@ -229,7 +229,7 @@ void writeFramesCsv(
 	for (const auto& c : perChannel)
 		for (const char* f : {"status", "matches", "gate_px", "sigma_m", "kf_id", "rel_x", "rel_y", "rel_z", "rel_qx", "rel_qy", "rel_qz", "rel_qw"})
 			header += "," + c + "_" + f;
-	header += ",global_search,global_inliers,global_runner_up,frames_since_fix";
+	header += ",global_search,global_inliers,global_runner_up,frames_since_fix,vo_from";
 	if (gt) header += ",gt_distance_m,used_true,used_err_m,used_err_deg";
 	io::CsvWriter csv(path, header);
 	auto& o = csv.out();
@@ -281,7 +281,7 @@ void writeFramesCsv(
 			o << u.place.inliers << ',' << u.place.runner_up_inliers;
 		else
 			o << ',';
-		o << ',' << u.frames_since_fix;
+		o << ',' << u.frames_since_fix << ',' << u.motion_from;
 		if (gt)
 		{
 			o << ',' << std::setprecision(3) << f.distance_m << ','
@@ -316,6 +316,11 @@ std::string summaryJson(
 	   << ",\n  \"in_map_from\": " << jsonString(gt ? "ground truth" : "own estimate") << ",\n  \"fixes\": " << ev.fixes
 	   << ",\n  \"fixes_in_map\": " << ev.fixes_in_map << ",\n  \"coverage_in_map\": " << num(ev.coverage_in_map)
 	   << ",\n  \"coverage_all\": " << num(ev.coverage_all) << ",\n";
+	// Steps the fallback VO measured where the VO channel's could not.
+	size_t fallbackSteps = 0;
+	for (const auto& u : ups) fallbackSteps += !u.motion_from.empty() && u.motion_from != sys.vo_channel;
+	js << "  \"vo\": {\"channel\": " << jsonString(sys.vo_channel) << ", \"fallback_steps\": " << fallbackSteps
+	   << "},\n";
 	js << "  \"localisers\": [";
 	for (size_t c = 0; c < ev.channels.size(); c++)
 	{

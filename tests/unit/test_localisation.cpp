@@ -267,6 +267,47 @@ TEST_F(LocalisationCorridor, StartKeyframeRestrictsTheFirstSearch)
 	EXPECT_LE(run.ups[0].place.pose.kf, 2u);
 }
 
+TEST_F(LocalisationCorridor, FallbackVOCarriesThePredictionWhereTheVOChannelCannotMeasure)
+{
+	// The monochrome VO is made unable to measure any step (it asks for more
+	// matches than a frame has), as low sun in the lens does on the
+	// simulator's evening run; the invariant VO then measures the steps.
+	const std::string blindMonoVO = "[vo.mono]\nmin_matches = 100000\nmin_inliers = 100000\nnear_min_matches = 100000\n";
+	const int frames = 16;
+	double truePath = 0;
+	for (int i = 1; i < frames; i++)
+		truePath += (corridorPose(2.3 + i * kStep, 0.3, 0).translation() -
+					 corridorPose(2.3 + (i - 1) * kStep, 0.3, 0).translation())
+						.norm();
+	auto travelled = [&](const std::string& ini, const std::vector<std::string>& localisers, int& fromInvariant) {
+		mrpt::config::CConfigFileMemory cfg(
+			"[features]\nmax_per_cell = 30\nmax_per_cell_right = 120\n"
+			"[features.invariant]\nfast_threshold = 5\npresmooth_sigma_px = 1.0\nmin_zncc_shifted = -1\n"
+			"[localiser]\nmin_inliers = 15\n" +
+			ini);
+		auto sys = CLocalisationSystem::FromConfig(cfg, s_map, localisers, 2, "test config");
+		const auto run = liveRun(*sys, 1, frames, 0.3);
+		fromInvariant = 0;
+		for (const auto& u : run.ups) fromInvariant += u.motion_from == "invariant";
+		return run.ups.back().distance_m;
+	};
+	int withFallback = 0, without = 0, baseline = 0;
+	const double dWith = travelled(blindMonoVO, {}, withFallback);
+	const double dWithout = travelled(blindMonoVO + "[localise]\nvo_fallback_channel =\n", {}, without);
+	(void)travelled(blindMonoVO, {"mono"}, baseline);
+	// Every step but the first (no previous frame) and at most two where the
+	// invariant VO re-initialises comes from the fallback.
+	EXPECT_GE(withFallback, frames - 3);
+	// The measured steps add up to the path (the VO's own drift on this short
+	// corridor run is well under 5 %).
+	EXPECT_NEAR(dWith, truePath, 0.05 * truePath);
+	// Without the fallback, and in the baseline (the fallback runs only beside
+	// the invariant localiser), the steps are the blind VO's guesses.
+	EXPECT_EQ(without, 0);
+	EXPECT_EQ(baseline, 0);
+	EXPECT_GT(std::abs(dWithout - truePath), 0.2 * truePath) << "the blind VO's guesses happened to add up";
+}
+
 TEST(LocalisationOptions, OverridesUnknownKeysAndRanges)
 {
 	mrpt::config::CConfigFileMemory cfg(

@@ -31,6 +31,7 @@
 #include <mrpt/system/COutputLogger.h>
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,13 @@ struct TSystemOptions
 	/** Localisers, in policy order (the first with an accepted fix is used). */
 	std::vector<std::string> localisers = {"mono", "invariant"};
 	std::string vo_channel = "mono";  //!< the channel of the live VO that predicts for all
+	/** A second live VO on this channel ("" = none) whose step replaces the
+	 * VO channel's where that one could not measure the step (too few
+	 * inliers, re-initialised): low sun in the lens defeats the monochrome VO
+	 * where the invariant image still tracks. Runs only when the channel is
+	 * one of the localisers, so the baseline (`--localisers mono`) stays the
+	 * paper's baseline alone. */
+	std::string vo_fallback_channel = "invariant";
 	int threads = 2;  //!< 1: everything on the calling thread; >= 2: channels in parallel
 	/** VO's covariance is scaled by this (the solver's is optimistic) [-]. */
 	double vo_cov_scale = 4.0;
@@ -91,7 +99,11 @@ struct TLocalisationUpdate
 	int frames_since_fix = 0;
 	std::vector<TLocaliserResult> localisers;  //!< in policy order
 	vo::TFrameResult vo;
+	/** The fallback VO's frame (status First when it does not run). */
+	vo::TFrameResult vo_fallback;
 	TMotion motion;	 //!< VO's increment used for the prediction
+	/** The VO channel whose step `motion` is ("" on the first frame). */
+	std::string motion_from;
 	bool global_search = false;	 //!< the global search ran on this frame
 	TGlobalPlace place;	 //!< its outcome (the one adopted, or the first localiser's)
 	double ms_total = 0;  //!< channel conversion, features, VO, localisers and policy (decoding excluded) [ms]
@@ -119,7 +131,7 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	 * channels and keyframes. */
 	CLocalisationSystem(
 		CKeyframeMap::Ptr map, const std::vector<TChannelSetup>& channels, const vo::TStereoVOOptions& vo,
-		const TSystemOptions& o);
+		const TSystemOptions& o, const std::optional<vo::TStereoVOOptions>& voFallback = std::nullopt);
 
 	/** From a config: [localise], [localiser], [localiser.<channel>], [vo],
 	 * [features] and their channel sections, the channel filter sections.
@@ -135,6 +147,8 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	{
 		std::vector<TChannelSetup> channels;  //!< the VO channel first
 		vo::TStereoVOOptions vo;
+		/** The fallback VO's options (its channel's [vo.<channel>]), when it runs. */
+		std::optional<vo::TStereoVOOptions> voFallback;
 		TSystemOptions system;
 	};
 	static TSetup SetupFromConfig(
@@ -171,21 +185,31 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 		std::unique_ptr<CStereoLocaliser> localiser;  //!< null: the channel only feeds the VO
 		int policyRank = -1;  //!< index in m_opts.localisers
 	};
-	/** VO's increment from the previous frame with its covariance. */
-	TMotion motionOf(const vo::TFrameResult& r);
+	/** One live VO and its previous frame. */
+	struct TVOTrack
+	{
+		vo::StereoVO vo;
+		size_t pipe = 0;  //!< the channel (m_pipes) it runs on
+		bool havePrev = false;
+		vo::TFrameResult prev;
+		TVOTrack(const vo::TStereoVOOptions& o, const features::TStereoFeatureOptions& f) : vo(o, f) {}
+	};
+	/** The VO's increment from the previous frame with its covariance;
+	 * `measured` tells whether the VO measured it (else a constant-velocity
+	 * guess with vo_lost_sigma). Advances the track's previous frame. */
+	TMotion motionOf(const vo::TFrameResult& r, TVOTrack& t, bool& measured) const;
 
 	CKeyframeMap::Ptr m_map;
 	TSystemOptions m_opts;
 	std::vector<TPipe> m_pipes;	 //!< the VO channel first
-	vo::StereoVO m_vo;
+	TVOTrack m_vo;
+	std::unique_ptr<TVOTrack> m_voFallback;	 //!< null: no fallback VO
 	// State.
 	size_t m_frame = 0;
 	TKeyframePose m_est;  //!< the current estimate (valid once a place is known)
 	int m_framesSinceFix = 0;
 	std::vector<uint32_t> m_searchAmong;  //!< keyframes the next global search looks at (empty: all)
 	double m_distance = 0;
-	bool m_havePrevVO = false;
-	vo::TFrameResult m_prevVO;
 };
 
 }  // namespace shadyloc::localisation
