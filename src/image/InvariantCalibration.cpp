@@ -498,9 +498,12 @@ TEdgeSamples edgeSamples(const std::vector<cv::Mat>& images, const TCalibrationI
 	return out;
 }
 
-TAlphaCurve alphaByEdgeDirections(const TEdgeSamples& smp, const TAlphaSearch& s)
+TAlphaCurve alphaByEdgeDirections(const TEdgeSamples& smp, const TAlphaSearch& s, double maxChromaPerBrightness)
 {
 	s.validate();
+	if (!(maxChromaPerBrightness > 0))
+		throw std::invalid_argument("alpha by edges: the chromaticity / brightness step bound must be > 0");
+	const float maxRatio2 = float(std::min(1e6, maxChromaPerBrightness * maxChromaPerBrightness));
 	TAlphaCurve out;
 	out.method = "edges";
 	out.costName = "-(density of edge directions at (1, alpha)), mean over images";
@@ -523,7 +526,13 @@ TAlphaCurve alphaByEdgeDirections(const TEdgeSamples& smp, const TAlphaSearch& s
 		{
 			const float sgn = smp.dl[i] < 0 ? 1.0f : -1.0f;
 			const float dx = sgn * smp.dx[i], dy = sgn * smp.dy[i];
-			if (dx * dx + dy * dy < kMinChromaStep * kMinChromaStep) continue;
+			const float c2 = dx * dx + dy * dy;
+			if (c2 < kMinChromaStep * kMinChromaStep) continue;
+			// Illumination edges are brightness edges first: a sun -> sky
+			// shadow drops log-brightness by ~1-2 and moves the
+			// log-chromaticity by ~0.5 (see header); steps that change colour
+			// more than brightness are material edges.
+			if (c2 > maxRatio2 * smp.dl[i] * smp.dl[i]) continue;
 			const double ang = std::atan2(double(dy), double(dx));	 // (-pi, pi]
 			const int bin = std::clamp(int((ang + M_PI) / (2 * M_PI) * kBins), 0, kBins - 1);
 			const double w = std::abs(smp.dl[i]);

@@ -198,8 +198,19 @@ TEdgeSamples edgeSamples(
  * that density at the direction (1, alpha), averaged over images. Unlike
  * the entropy it does not reward directions along which the scene's colours
  * happen to be concentrated, nor the lattice directions of 8-bit
- * quantisation (see docs/calibration.md for the comparison). */
-TAlphaCurve alphaByEdgeDirections(const TEdgeSamples& samples, const TAlphaSearch& s = {});
+ * quantisation (see docs/calibration.md for the comparison).
+ *
+ * maxChromaPerBrightness: only steps whose log-chromaticity change is at
+ * most this many times their log-brightness change count. A change of
+ * daylight is a brightness change first: full sun to sky light drops the
+ * log-brightness by log(1 + sun/sky) ~ 1.1-2.3, while the chromaticity moves
+ * by the sun-sky colour-temperature difference, ~0.5-0.8 in these units
+ * for Wien's model of a 470/540/620 nm camera (5800 K -> 14000 K). Material
+ * edges often change colour more than brightness, and those were what
+ * biased this criterion on the simulator (docs/calibration.md: without the
+ * bound, pass a huge value, 0.07-0.35 off the reference; with 1, <= 0.056). */
+TAlphaCurve alphaByEdgeDirections(
+	const TEdgeSamples& samples, const TAlphaSearch& s = {}, double maxChromaPerBrightness = 1.0);
 
 // ---- 3. same view, different light ------------------------------------------
 /** Two images of one view (pixel-aligned) under different light. */
