@@ -159,7 +159,7 @@ enum class EntropyQuantiles
 	 * range) gives the quantiles, the spread and Scott's bins. */
 	Histogram,
 	/** Exact quantiles by partial sorts: the reference for tests and the
-	 * benchmark, about 2.5x slower. */
+	 * benchmark, nearly 3x slower (bench_calibration). */
 	Sorted
 };
 
