@@ -74,11 +74,13 @@ double refinedArgmin(const std::vector<double>& a, const std::vector<double>& c,
 	size_t lo = i - 1, hi = i + 1;
 	while (lo > 0 && a[i] - a[lo - 1] <= halfWidth + 1e-12) lo--;
 	while (hi + 1 < c.size() && a[hi + 1] - a[i] <= halfWidth + 1e-12) hi++;
-	// Fit c = p0 + p1 t + p2 t^2 in t = a - a[i] (normal equations, 3x3).
+	// Fit c = p0 + p1 t + p2 t^2 in t = (a - a[i]) / h, scaled to [-1, 1]
+	// for a well-conditioned 3x3 normal system.
+	const double h = std::max(a[hi] - a[i], a[i] - a[lo]);
 	double S[5] = {0, 0, 0, 0, 0}, T[3] = {0, 0, 0};
 	for (size_t k = lo; k <= hi; k++)
 	{
-		const double t = a[k] - a[i];
+		const double t = (a[k] - a[i]) / h;
 		double tp = 1;
 		for (int e = 0; e < 5; e++)
 		{
@@ -90,9 +92,9 @@ double refinedArgmin(const std::vector<double>& a, const std::vector<double>& c,
 	const cv::Matx33d A(S[0], S[1], S[2], S[1], S[2], S[3], S[2], S[3], S[4]);
 	cv::Vec3d sol;
 	if (!cv::solve(A, cv::Vec3d(T[0], T[1], T[2]), sol, cv::DECOMP_CHOLESKY) || !(sol[2] > 0)) return a[i];
-	const double t = -sol[1] / (2 * sol[2]);
-	if (!(a[i] + t >= a[lo] && a[i] + t <= a[hi])) return a[i];
-	return a[i] + t;
+	const double v = a[i] - h * sol[1] / (2 * sol[2]);
+	if (!(v >= a[lo] && v <= a[hi])) return a[i];
+	return v;
 }
 
 // Bootstrap over items for methods whose curve is the mean of per-item curves.

@@ -63,7 +63,8 @@ cv::Mat syntheticScene(
 	std::vector<std::array<double, 3>> rho((w / cell + 1) * (h / cell + 1));
 	for (auto& r : rho) r = {u(rng), u(rng), u(rng)};
 	cv::Mat tex(h, w, CV_64F);
-	cv::randu(tex, 0.85, 1.15);	 // brightness texture (same for every light)
+	cv::RNG(seed).fill(tex, cv::RNG::UNIFORM, 0.85, 1.15);	// brightness texture (same for every light; own seed:
+															// cv::randu would depend on the tests run before)
 	cv::Mat img(h, w, CV_8UC3);
 	for (int y = 0; y < h; y++)
 		for (int x = 0; x < w; x++)
@@ -168,7 +169,7 @@ TEST(InvariantCalibration, UnsupervisedMethodsRecoverTrueAlphaOfExactModel)
 // exact one (partial sorts). The histograms' grids start at a fine-bin edge
 // instead of at the 5 % value, so where a clump of equal values falls
 // (these noise-free scenes have few distinct 8-bit values) can change:
-// measured curve differences 0.016 nats here, <= 0.005 on the simulator and
+// measured curve differences 0.019 nats here, <= 0.005 on the simulator and
 // 0.0075 on the UIUC images, with curves spanning 0.18-0.31 nats (bound 0.03).
 // Both minima stay within 0.015 of the true alpha (half the goal).
 TEST(InvariantCalibration, FastEntropyFollowsExactEntropy)
