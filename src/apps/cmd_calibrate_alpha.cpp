@@ -241,6 +241,9 @@ int run(int argc, char** argv)
 		cli, "", "skip-top", "fraction of top rows to ignore (sky)", 0.0, "f", 0.0, 0.95);
 	shadyloc::apps::NumberArg<int> edgeStep(
 		cli, "", "edge-step", "edges method: pixels between the two sides of an edge (> chroma blur)", 4, "px", 1, 64);
+	shadyloc::apps::NumberArg<double> edgeMaxChroma(
+		cli, "", "edge-max-chroma", "edges method: skip steps whose chromaticity change exceeds this many times their "
+		"brightness change (material edges)", 1.0, "r", 0.05, 1e6);
 	shadyloc::apps::NumberArg<int> stride(
 		cli, "", "stride", "sample every n-th pixel in x and y", 2, "n", 1, 64);
 	shadyloc::apps::NumberArg<double> aMin(
@@ -324,7 +327,7 @@ int run(int argc, char** argv)
 	std::vector<cv::Mat> all = plain;
 	for (const auto& p : shadowPairs) all.push_back(p.free), all.push_back(p.shadow);
 	for (const auto& p : viewPairs) all.push_back(p.a), all.push_back(p.b);
-	curves.push_back(alphaByEdgeDirections(edgeSamples(all, in, edgeStep.getValue()), search));
+	curves.push_back(alphaByEdgeDirections(edgeSamples(all, in, edgeStep.getValue()), search, edgeMaxChroma.getValue()));
 	curves.push_back(alphaByEntropy(chromaSamples(all, in), search));
 	for (const auto& s : skipped) std::cout << "skipped: " << s << "\n";
 

@@ -63,7 +63,8 @@ cv::Mat syntheticScene(
 	std::vector<std::array<double, 3>> rho((w / cell + 1) * (h / cell + 1));
 	for (auto& r : rho) r = {u(rng), u(rng), u(rng)};
 	cv::Mat tex(h, w, CV_64F);
-	cv::randu(tex, 0.85, 1.15);	 // brightness texture (same for every light)
+	cv::RNG(seed).fill(tex, cv::RNG::UNIFORM, 0.85, 1.15);	// brightness texture (same for every light; own seed:
+															// cv::randu would depend on the tests run before)
 	cv::Mat img(h, w, CV_8UC3);
 	for (int y = 0; y < h; y++)
 		for (int x = 0; x < w; x++)
@@ -120,6 +121,14 @@ TEST(InvariantCalibration, PairsRecoverTrueAlphaOfExactModel)
 	EXPECT_NEAR(c.best, trueAlpha(), 0.01);
 	EXPECT_LE(c.ciLow, c.best);
 	EXPECT_GE(c.ciHigh, c.best);
+	// The least-squares refinement makes the estimate independent of the grid.
+	auto fine = quickSearch(), coarse = quickSearch();
+	fine.step = 0.0025, coarse.step = 0.02;
+	const double aFine = alphaFromShadowPairs(pairs, linearInput(), fine).best;
+	const double aCoarse = alphaFromShadowPairs(pairs, linearInput(), coarse).best;
+	std::printf("grid 0.0025: %.4f, grid 0.02: %.4f\n", aFine, aCoarse);
+	EXPECT_NEAR(aFine, c.best, 0.003);
+	EXPECT_NEAR(aCoarse, c.best, 0.003);
 	// The curve has its minimum inside and rises away from it: a real optimum.
 	const auto i = size_t(std::min_element(c.cost.begin(), c.cost.end()) - c.cost.begin());
 	EXPECT_GT(c.cost.front(), 2 * c.cost[i]);
@@ -154,6 +163,30 @@ TEST(InvariantCalibration, UnsupervisedMethodsRecoverTrueAlphaOfExactModel)
 	EXPECT_NEAR(edges.best, trueAlpha(), 0.02);
 	// Finlayson-Drew-Lu entropy works on such scenes (few flat colours, big shadows).
 	EXPECT_NEAR(entropy.best, trueAlpha(), 0.03);
+}
+
+// The fast entropy (quantiles and bins from a fine histogram) follows the
+// exact one (partial sorts). The histograms' grids start at a fine-bin edge
+// instead of at the 5 % value, so where a clump of equal values falls
+// (these noise-free scenes have few distinct 8-bit values) can change:
+// measured curve differences 0.019 nats here, <= 0.005 on the simulator and
+// 0.0075 on the UIUC images, with curves spanning 0.18-0.31 nats (bound 0.03).
+// Both minima stay within 0.015 of the true alpha (half the goal).
+TEST(InvariantCalibration, FastEntropyFollowsExactEntropy)
+{
+	std::vector<cv::Mat> imgs;
+	for (int i = 0; i < 6; i++) imgs.push_back(syntheticScene(30 + i, kSun, kSky, shadowShape(40 + i)));
+	const auto smp = chromaSamples(imgs, linearInput());
+	auto s = quickSearch();
+	s.step = 0.01;
+	const auto fast = alphaByEntropy(smp, s, EntropyQuantiles::Histogram);
+	const auto exact = alphaByEntropy(smp, s, EntropyQuantiles::Sorted);
+	double maxDiff = 0;
+	for (size_t j = 0; j < fast.cost.size(); j++) maxDiff = std::max(maxDiff, std::abs(fast.cost[j] - exact.cost[j]));
+	std::printf("entropy: fast %.4f, exact %.4f, curves differ by <= %.4f nats\n", fast.best, exact.best, maxDiff);
+	EXPECT_LT(maxDiff, 0.03);
+	EXPECT_NEAR(fast.best, trueAlpha(), 0.015);
+	EXPECT_NEAR(exact.best, trueAlpha(), 0.015);
 }
 
 // Saturated sky (clipped white) and black areas are left out: the estimate
@@ -465,9 +498,11 @@ TEST(InvariantCalibrationSim, EstimatesAgainstBlackBodyReference)
 		{{450, 560, 620}, 10, true},  {{490, 540, 600}, 25, true},	{{470, 520, 640}, 40, true},
 	};
 	std::printf(
-		"%-24s %7s %7s %7s | %7s %7s %7s | %7s %7s %7s | %7s %7s | %6s %6s %6s\n", "camera", "ref", "refFlat", "peak",
-		"illumP", "exactP", "pairs", "illumV", "exactV", "sameV", "edges", "entropy", "clipD%", "clipC%", "span");
-	std::vector<double> errPairs, errView, errEdges, errEntropy, errPairsExact, errViewExact, errViewIllum;
+		"%-24s %7s %7s %7s | %7s %7s %7s %7s | %7s %7s %7s | %7s %7s %7s | %6s %6s %6s\n", "camera", "ref", "refFlat",
+		"peak", "illumP", "exactP", "pairs", "pairsG", "illumV", "exactV", "sameV", "edges", "edgesA", "entropy", "clipD%",
+		"clipC%", "span");
+	std::vector<double> errPairs, errPairsGeo, errView, errEdges, errEdgesAll, errEntropy, errPairsExact, errViewExact,
+		errViewIllum;
 	for (const auto& cam : cams)
 	{
 		const auto d = simulate(cam);
@@ -476,21 +511,27 @@ TEST(InvariantCalibrationSim, EstimatesAgainstBlackBodyReference)
 		auto s = quickSearch();
 		s.step = 0.01;	// halves the time; the parabola refines below the grid
 		const auto pairs = alphaFromShadowPairs(d.pairs, in, s);
+		const auto pairsGeo = alphaFromShadowPairs(d.pairs, in, s, 0.01, nullptr, PairAverage::Geometric);
 		const auto views = alphaFromSameView(d.views, in, s);
-		const auto edges = alphaByEdgeDirections(edgeSamples(d.images, in), s);
+		const auto edgeSmp = edgeSamples(d.images, in);
+		const auto edges = alphaByEdgeDirections(edgeSmp, s);
+		const auto edgesAll = alphaByEdgeDirections(edgeSmp, s, 1e6);	 // no bound: every coloured edge
 		const auto entropy = alphaByEntropy(chromaSamples(d.images, in), s);
 		auto pDef = in.params(d.reference);
 		const auto clipDef = mappingStats(d.images, pDef);
 		const auto cal = calibrateMapping(d.images, in.params(d.reference));
 		const auto clipCal = mappingStats(d.images, cal);
 		std::printf(
-			"%-24s %7.4f %7.4f %7.4f | %7.4f %7.4f %7.4f | %7.4f %7.4f %7.4f | %7.4f %7.4f | %6.2f %6.2f %6.1f\n",
+			"%-24s %7.4f %7.4f %7.4f | %7.4f %7.4f %7.4f %7.4f | %7.4f %7.4f %7.4f | %7.4f %7.4f %7.4f | %6.2f %6.2f "
+			"%6.1f\n",
 			cam.name().c_str(), d.reference, d.referenceFlat, d.peakFormula, d.illumPairs, d.exactPairs, pairs.best,
-			d.illumViews, d.exactViews, views.best, edges.best, entropy.best, 100 * clipDef.clipped(),
-			100 * clipCal.clipped(), clipCal.span());
+			pairsGeo.best, d.illumViews, d.exactViews, views.best, edges.best, edgesAll.best, entropy.best,
+			100 * clipDef.clipped(), 100 * clipCal.clipped(), clipCal.span());
 		errPairs.push_back(std::abs(pairs.best - d.reference));
+		errPairsGeo.push_back(std::abs(pairsGeo.best - d.reference));
 		errView.push_back(std::abs(views.best - d.reference));
 		errEdges.push_back(std::abs(edges.best - d.reference));
+		errEdgesAll.push_back(std::abs(edgesAll.best - d.reference));
 		errEntropy.push_back(std::abs(entropy.best - d.reference));
 		errPairsExact.push_back(std::abs(pairs.best - d.exactPairs));
 		errViewExact.push_back(std::abs(views.best - d.exactViews));
@@ -498,11 +539,18 @@ TEST(InvariantCalibrationSim, EstimatesAgainstBlackBodyReference)
 		EXPECT_LE(clipCal.clipped(), 0.005) << cam.name();
 	}
 	auto worst = [](const std::vector<double>& v) { return *std::max_element(v.begin(), v.end()); };
+	auto within = [](const std::vector<double>& v, double tol) {
+		return int(std::count_if(v.begin(), v.end(), [&](double e) { return e <= tol; }));
+	};
 	std::printf(
-		"worst |estimate - black-body reference|: pairs %.4f, same-view %.4f, edges %.4f, entropy %.4f\n"
+		"worst |estimate - black-body reference|: pairs %.4f (geometric mean %.4f), same-view %.4f, edges %.4f "
+		"(unbounded %.4f), entropy %.4f\n"
+		"within 0.03 of it: pairs %d (geometric %d), same-view %d, edges %d (unbounded %d), entropy %d of %zu\n"
 		"worst |estimate - the data's exact direction|: pairs %.4f, same-view %.4f; "
 		"|same-view - the scene lights' reference| %.4f\n",
-		worst(errPairs), worst(errView), worst(errEdges), worst(errEntropy), worst(errPairsExact), worst(errViewExact),
+		worst(errPairs), worst(errPairsGeo), worst(errView), worst(errEdges), worst(errEdgesAll), worst(errEntropy),
+		within(errPairs, 0.03), within(errPairsGeo, 0.03), within(errView, 0.03), within(errEdges, 0.03),
+		within(errEdgesAll, 0.03), within(errEntropy, 0.03), cams.size(), worst(errPairsExact), worst(errViewExact),
 		worst(errViewIllum));
 	// The goal is 0.03 from the black-body reference. The same-view
 	// estimate sits 0.035-0.047 above it on every camera, and the cause is
@@ -518,9 +566,23 @@ TEST(InvariantCalibrationSim, EstimatesAgainstBlackBodyReference)
 	// unsupervised methods miss on the simulator (printed, not asserted).
 	EXPECT_LE(worst(errViewIllum), 0.025);
 	EXPECT_LE(worst(errViewExact), 0.035);
-	EXPECT_LE(worst(errPairsExact), 0.065);
-	EXPECT_LE(worst(errPairs), 0.08);
 	EXPECT_LE(worst(errView), 0.05);
+	// Pairs (arithmetic mean over pairs, the default): within 0.03 of the
+	// black-body reference on 5 of the 6 cameras (the geometric mean: 3). The
+	// sixth, 490/560/640 s40, is the scene: its shadow pixels' own direction
+	// on the noise-free renders (exactPairs) is 0.065 below the reference, and
+	// every estimate is within 0.022 of that direction (bound 0.03, the goal:
+	// noise and 8 bits cost the rest).
+	EXPECT_GE(within(errPairs, 0.03), 5);
+	EXPECT_LE(worst(errPairsExact), 0.03);
+	EXPECT_LE(worst(errPairs), 0.075);
+	// Edges: the bound on chromaticity per brightness step removes the
+	// material edges that pulled the unbounded criterion 0.07-0.35 high; the
+	// bounded one is within 0.056 on every camera (bound 0.07) and within
+	// 0.03 on 3 of 6 (asserted: at least 2, one lies at 0.0298).
+	EXPECT_LE(worst(errEdges), 0.07);
+	EXPECT_LT(worst(errEdges), 0.3 * worst(errEdgesAll));
+	EXPECT_GE(within(errEdges, 0.03), 2);
 }
 
 // ---- real shadow pairs (must-show 2 and 4) ------------------------------------
@@ -556,16 +618,25 @@ TEST(InvariantCalibrationReal, ShadowPairsAndUnsupervisedAgree)
 	s.bootstrapRounds = 100;
 	s.step = 0.01;	// halves the time; the parabola refines below the grid
 	const auto fromPairs = alphaFromShadowPairs(pairs, in, s);
+	const auto fromPairsGeo = alphaFromShadowPairs(pairs, in, s, 0.01, nullptr, PairAverage::Geometric);
 	std::vector<cv::Mat> imgs;
 	for (const auto& p : pairs) imgs.push_back(p.free), imgs.push_back(p.shadow);
-	const auto edges = alphaByEdgeDirections(edgeSamples(imgs, in), s);
+	const auto edgeSmp = edgeSamples(imgs, in);
+	const auto edges = alphaByEdgeDirections(edgeSmp, s);
+	const auto edgesAll = alphaByEdgeDirections(edgeSmp, s, 1e6);
 	const auto entropy = alphaByEntropy(chromaSamples(imgs, in), quickSearch());
 	std::printf(
-		"pairs %.4f [%.4f, %.4f] (%d pairs); edges %.4f [%.4f, %.4f]; entropy (FDL) %.4f\n", fromPairs.best,
-		fromPairs.ciLow, fromPairs.ciHigh, fromPairs.items, edges.best, edges.ciLow, edges.ciHigh, entropy.best);
+		"pairs %.4f [%.4f, %.4f] (%d pairs; geometric mean %.4f [%.4f, %.4f]); edges %.4f [%.4f, %.4f] (unbounded "
+		"%.4f [%.4f, %.4f]); entropy (FDL) %.4f\n",
+		fromPairs.best, fromPairs.ciLow, fromPairs.ciHigh, fromPairs.items, fromPairsGeo.best, fromPairsGeo.ciLow,
+		fromPairsGeo.ciHigh, edges.best, edges.ciLow, edges.ciHigh, edgesAll.best, edgesAll.ciLow, edgesAll.ciHigh,
+		entropy.best);
 	EXPECT_GE(fromPairs.items, 30);
 	// The goal: the unsupervised estimate within 0.05 of the pair-based one.
 	EXPECT_NEAR(edges.best, fromPairs.best, 0.05);
+	// The arithmetic mean's estimate is at least as tight as the geometric
+	// mean's (interval 0.067 wide against 0.099).
+	EXPECT_LE(fromPairs.ciHigh - fromPairs.ciLow, fromPairsGeo.ciHigh - fromPairsGeo.ciLow);
 
 	// Shadow step ratio (invariant / mono), median over pairs, at the
 	// estimate vs the paper's default; both with the calibrated mapping.
@@ -590,19 +661,26 @@ TEST(InvariantCalibrationReal, ShadowPairsAndUnsupervisedAgree)
 	paper.linearisation = Linearisation::SRGB;
 	const auto calibrated = calibrateMapping(imgs, in.params(fromPairs.best));
 	const double rCal = ratioAt(calibrated), rDefault = ratioAt(paper);
+	const double rGeo = ratioAt(calibrateMapping(imgs, in.params(fromPairsGeo.best)));
+	const double rEdges = ratioAt(calibrateMapping(imgs, in.params(edges.best)));
 	const auto clipPaper = mappingStats(imgs, paper), clipCal = mappingStats(imgs, calibrated);
 	std::printf(
-		"median shadow-step ratio invariant/mono: %.3f at the estimate (calibrated mapping), %.3f at the paper's "
-		"alpha/beta and mapping\nclipping: %.2f %% (span %.1f) calibrated vs %.2f %% (span %.1f) default; scale %.2f "
-		"offset %.4f\n",
-		rCal, rDefault, 100 * clipCal.clipped(), clipCal.span(), 100 * clipPaper.clipped(), clipPaper.span(),
-		calibrated.scale, calibrated.offset);
+		"median shadow-step ratio invariant/mono: %.3f at the estimate (calibrated mapping; %.3f at the geometric-mean "
+		"estimate, %.3f at the edges estimate), %.3f at the paper's alpha/beta and mapping\nclipping: %.2f %% (span "
+		"%.1f) calibrated vs %.2f %% (span %.1f) default; scale %.2f offset %.4f\n",
+		rCal, rGeo, rEdges, rDefault, 100 * clipCal.clipped(), clipCal.span(), 100 * clipPaper.clipped(),
+		clipPaper.span(), calibrated.scale, calibrated.offset);
 	EXPECT_LE(clipCal.clipped(), 0.005);
 	EXPECT_LT(clipCal.clipped(), clipPaper.clipped());
 	// The estimate is at least as good as the default on the metric it optimises
 	// (10 % slack: the estimate optimises the geometric mean in float, this is the
 	// median of the 8-bit channel).
 	EXPECT_LT(rCal, 1.1 * rDefault);
+	// Adopting the arithmetic mean did not make the real shadows worse:
+	// 0.207 against 0.213 at the geometric mean's estimate. Slack 0.01: this
+	// median over 40 pairs moves by up to 0.008 between alphas 0.003 apart
+	// (the edges estimate 0.483 gives 0.215).
+	EXPECT_LE(rCal, rGeo + 0.01);
 }
 
 // ---- the command --------------------------------------------------------------

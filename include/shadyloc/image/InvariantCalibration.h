@@ -78,7 +78,7 @@ struct TAlphaCurve
 {
 	std::vector<double> alpha;	//!< grid, increasing
 	std::vector<double> cost;  //!< the method's criterion at each alpha (lower = better)
-	double best = 0;  //!< argmin (refined by a parabola through the grid minimum and its neighbours)
+	double best = 0;  //!< argmin (refined by a least-squares parabola around the grid minimum, TAlphaSearch::refineHalfWidth)
 	double ciLow = 0, ciHigh = 0;  //!< 95 % bootstrap interval of best (percentiles 2.5, 97.5)
 	int items = 0;	//!< images or pairs the estimate used
 	int bootstrapRounds = 0;
@@ -91,6 +91,12 @@ struct TAlphaSearch
 {
 	double alphaMin = 0.05, alphaMax = 0.95;  //!< search range
 	double step = 0.005;  //!< grid spacing
+	/** Half-width (alpha units) of the window around the grid minimum over
+	 * which a parabola is fitted by least squares to refine it; at or below
+	 * step, the three-point parabola through the minimum and its neighbours.
+	 * Wider windows smooth the curves' small-scale roughness, so the
+	 * estimate does not depend on the grid step (docs/calibration.md). */
+	double refineHalfWidth = 0.02;
 	int bootstrapRounds = 200;	//!< 0 = no confidence interval
 	uint32_t seed = 1;	//!< bootstrap resampling seed
 	void validate() const;
@@ -110,13 +116,26 @@ struct TShadowPair
  * under the input's linearisation, plus the input's dark/saturated rule. */
 cv::Mat shadowMask(const TShadowPair& p, const TCalibrationInput& in, double minLogDrop = 0.4, int erodeRadius = 3);
 
-/** alpha minimising the geometric mean over pairs of the relative shadow step
+/** How the pairs' relative shadow steps are combined into one curve. */
+enum class PairAverage
+{
+	/** Arithmetic mean (default): each pair's curve is shallow near the
+	 * common minimum and the mean follows the bulk of the pairs. */
+	Arithmetic,
+	/** Geometric mean (the mean of logs): a pair whose step nearly vanishes
+	 * at its own alpha makes a deep, narrow dip that pulls the minimum
+	 * towards it; kept for comparison (docs/calibration.md). */
+	Geometric
+};
+
+/** alpha minimising the mean over pairs of the relative shadow step
  * (relativeShadowStepOfValues() on I * 255: grey levels of the default
  * scale). Pairs whose mask covers less than minMaskFraction of the image are
  * left out (named in *skipped). Throws if fewer than 1 pair remains. */
 TAlphaCurve alphaFromShadowPairs(
 	const std::vector<TShadowPair>& pairs, const TCalibrationInput& in, const TAlphaSearch& s = {},
-	double minMaskFraction = 0.01, std::vector<std::string>* skipped = nullptr);
+	double minMaskFraction = 0.01, std::vector<std::string>* skipped = nullptr,
+	PairAverage average = PairAverage::Arithmetic);
 
 // ---- 2. unsupervised: entropy minimisation -----------------------------------
 /** Log-chromaticities (x = log(R1/R3), y = log(R2/R3)) of the trusted pixels
@@ -133,11 +152,23 @@ struct TChromaSamples
  * dark, saturated and top rows as in says. Table-driven (one log table). */
 TChromaSamples chromaSamples(const std::vector<cv::Mat>& images, const TCalibrationInput& in);
 
+/** How the entropy finds the middle 90 % of the projected values. */
+enum class EntropyQuantiles
+{
+	/** Default: one pass into a fine histogram (8192 bins over the values
+	 * range) gives the quantiles, the spread and Scott's bins. */
+	Histogram,
+	/** Exact quantiles by partial sorts: the reference for tests and the
+	 * benchmark, nearly 3x slower (bench_calibration). */
+	Sorted
+};
+
 /** Finlayson-Drew-Lu entropy over alpha of the projected values y - alpha x.
  * Bin width by Scott's rule (3.49 sigma N^-1/3) over the middle 90 % of the
  * projected data, as in their paper; the histogram is over that middle 90 %.
  * Bootstrap: images are resampled and the pooled histogram recomputed. */
-TAlphaCurve alphaByEntropy(const TChromaSamples& samples, const TAlphaSearch& s = {});
+TAlphaCurve alphaByEntropy(
+	const TChromaSamples& samples, const TAlphaSearch& s = {}, EntropyQuantiles quantiles = EntropyQuantiles::Histogram);
 
 // ---- 2b. unsupervised: shadow edges are darker and bluer ---------------------
 /** Differences between each sampled pixel (every in.stride-th) and the
@@ -167,8 +198,19 @@ TEdgeSamples edgeSamples(
  * that density at the direction (1, alpha), averaged over images. Unlike
  * the entropy it does not reward directions along which the scene's colours
  * happen to be concentrated, nor the lattice directions of 8-bit
- * quantisation (see docs/calibration.md for the comparison). */
-TAlphaCurve alphaByEdgeDirections(const TEdgeSamples& samples, const TAlphaSearch& s = {});
+ * quantisation (see docs/calibration.md for the comparison).
+ *
+ * maxChromaPerBrightness: only steps whose log-chromaticity change is at
+ * most this many times their log-brightness change count. A change of
+ * daylight is a brightness change first: full sun to sky light drops the
+ * log-brightness by log(1 + sun/sky) ~ 1.1-2.3, while the chromaticity moves
+ * by the sun-sky colour-temperature difference, ~0.5-0.8 in these units
+ * for Wien's model of a 470/540/620 nm camera (5800 K -> 14000 K). Material
+ * edges often change colour more than brightness, and those were what
+ * biased this criterion on the simulator (docs/calibration.md: without the
+ * bound, pass a huge value, 0.07-0.35 off the reference; with 1, <= 0.056). */
+TAlphaCurve alphaByEdgeDirections(
+	const TEdgeSamples& samples, const TAlphaSearch& s = {}, double maxChromaPerBrightness = 1.0);
 
 // ---- 3. same view, different light ------------------------------------------
 /** Two images of one view (pixel-aligned) under different light. */
