@@ -337,16 +337,35 @@ TMergeResult merge(const std::string& outDir, const TEvalInputs& in, const std::
 	sm << "\n## Blind distance (episodes between two fixes, pooled over pairs)\n\n"
 	   << "| system | pairs | episodes | reaching " << jsonNumber(evo.blind_long_m, 0)
 	   << " m | P(episode reaches " << jsonNumber(evo.blind_long_m, 0)
-	   << " m) [%] | 95 % interval [%] | blind m per km | before first fix | at end |\n"
-	   << "|---|---|---|---|---|---|---|---|---|\n";
+	   << " m) [%] | exact 95 % interval [%] | bootstrap 95 % interval [%] | blind m per km | before first fix | at end |\n"
+	   << "|---|---|---|---|---|---|---|---|---|---|\n";
 	for (int s = 0; s < 2; s++)
 	{
 		const auto& P = pooled[s];
 		sm << "| " << sysName[s] << " | " << P.pairs << " | " << bp[s].episodes << " | " << bp[s].reaching << " | "
-		   << pct(bp[s].p, 1) << " | " << pct(bp[s].lo, 1) << " - " << pct(bp[s].hi, 1) << " | "
+		   << pct(bp[s].p, 2) << " | " << pct(bp[s].exact_lo, 2) << " - " << pct(bp[s].exact_hi, 2) << " | "
+		   << pct(bp[s].lo, 1) << " - " << pct(bp[s].hi, 1) << " | "
 		   << jsonNumber(P.totalM > 0 ? 1000 * P.blindM / P.totalM : 0, 1) << " | " << P.beforeFirst << " | "
 		   << P.atEnd << " |\n";
 	}
+	sm << "\n";
+	for (int s = 0; s < 2; s++)
+	{
+		const auto& b = bp[s];
+		sm << "- " << sysName[s] << ": P(" << jsonNumber(evo.blind_long_m, 0) << " m) = " << b.reaching << " of "
+		   << b.episodes << " episodes";
+		if (b.episodes == 0)
+			sm << " (no episode between two fixes: no bound)\n";
+		else if (b.reaching == 0)
+			sm << ", 95 % upper bound " << pct(b.exact_hi, 2) << " %\n";
+		else
+			sm << " (" << pct(b.p, 2) << " %), 95 % interval " << pct(b.exact_lo, 2) << " - " << pct(b.exact_hi, 2)
+			   << " %\n";
+	}
+	sm << "\nThe 95 % intervals are exact binomial (Clopper-Pearson) intervals of the pooled count: they hold "
+		  "whatever the true probability, and with no episode reaching the distance the bound is "
+		  "1 - 0.025^(1/episodes). The bootstrap interval beside them collapses to 0 - 0 in that case "
+		  "(docs/evaluation.md).\n";
 
 	// ---- eval.json
 	std::ostringstream js;
@@ -478,7 +497,8 @@ TMergeResult merge(const std::string& outDir, const TEvalInputs& in, const std::
 		   << ", \"distance_from\": "
 		   << jsonString(P.gtPairs == P.pairs ? "ground truth" : (P.gtPairs == 0 ? "VO" : "ground truth where given, else VO"))
 		   << ", \"episodes_between\": " << bp[s].episodes << ", \"episodes_reaching\": " << bp[s].reaching
-		   << ", \"p_reach\": " << num(bp[s].p) << ", \"p_reach_ci95\": [" << num(bp[s].lo) << ", " << num(bp[s].hi)
+		   << ", \"p_reach\": " << num(bp[s].p) << ", \"p_reach_ci95_exact\": [" << num(bp[s].exact_lo) << ", "
+		   << num(bp[s].exact_hi) << "], \"p_reach_ci95\": [" << num(bp[s].lo) << ", " << num(bp[s].hi)
 		   << "], \"before_first_fix\": " << P.beforeFirst << ", \"at_end\": " << P.atEnd
 		   << ", \"never_localised\": " << P.neverLocalised << ", \"blind_m\": " << num(P.blindM, 3)
 		   << ", \"total_m\": " << num(P.totalM, 3)

@@ -346,8 +346,9 @@ std::string summaryJson(
 	   << num(ev.total_m, 3) << ", \"blind_m\": " << num(ev.blind_m, 3) << ", \"blind_m_per_km\": "
 	   << num(ev.blind_m_per_km, 3) << ", \"episodes_between_fixes\": " << ev.episodes_between
 	   << ", \"episodes_reaching_m\": " << num(TEvalOptions().blind_long_m, 1) << ", \"episodes_long\": "
-	   << ev.episodes_long << ", \"p_long\": " << num(ev.p_long) << ", \"p_long_ci95\": [" << num(ev.p_long_lo) << ", "
-	   << num(ev.p_long_hi) << "], \"first_fix_frame\": " << ev.first_fix_frame << ", \"before_first_fix_m\": "
+	   << ev.episodes_long << ", \"p_long\": " << num(ev.p_long) << ", \"p_long_ci95_exact\": ["
+	   << num(ev.p_long_exact_lo) << ", " << num(ev.p_long_exact_hi) << "], \"p_long_ci95\": [" << num(ev.p_long_lo)
+	   << ", " << num(ev.p_long_hi) << "], \"first_fix_frame\": " << ev.first_fix_frame << ", \"before_first_fix_m\": "
 	   << num(ev.before_first_fix_m, 3) << ", \"episodes\": [";
 	for (size_t i = 0; i < ev.episodes.size(); i++)
 	{

@@ -335,6 +335,9 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 	{
 		const long long f = static_cast<long long>(pred.kf) + o.fault_keyframe_offset;
 		matchKf = static_cast<uint32_t>(std::clamp<long long>(f, 0, static_cast<long long>(m_map.keyframeCount()) - 1));
+		// Clamped at the chain's end onto the chosen keyframe itself: no fault
+		// to inject, and a sound solve here would count as a rejected fault.
+		if (matchKf == pred.kf) return fail(LocaliserStatus::NoKeyframe);
 	}
 
 	// ---- 2. active search --------------------------------------------------------------

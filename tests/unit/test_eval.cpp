@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -157,6 +158,98 @@ TEST(EvalPlan, PooledBlindProbabilityIsTheRunsOwn)
 	EXPECT_GT(p.hi, p.lo);	// five episodes: a wide interval
 	EXPECT_EQ(localisation::blindProbability({}, o).episodes, 0u);
 	EXPECT_EQ(localisation::blindProbability({}, o).p, 0.0);
+}
+
+// ---------------------------------------------------------------- exact interval
+// Reference values: Clopper-Pearson bounds as beta quantiles
+// (lo = B^-1(0.025; k, n-k+1), hi = B^-1(0.975; k+1, n-k)) computed at 50
+// digits with mpmath's regularised incomplete beta, an independent route from
+// the binomial tail sums the code bisects; k = 0, n = 10 and k = 5, n = 10 are
+// also the textbook values (0.3085; 0.1871 - 0.8129). Tolerance 1e-9: the
+// bisection stops at 1e-15 in p, the log-space sums lose a few more digits.
+TEST(LocalisationEvaluation, ClopperPearsonMatchesReferenceValues)
+{
+	struct Case
+	{
+		size_t k, n;
+		double lo, hi;
+	};
+	const Case cases[] = {
+		{0, 10, 0.0, 0.308497107819},
+		{5, 10, 0.187086028447, 0.812913971553},
+		{10, 10, 0.691502892181, 1.0},
+		{1, 1, 0.025, 1.0},
+		{0, 1, 0.0, 0.975},
+		{1, 20, 0.00126508949795, 0.248732762772},
+		{7, 50, 0.0581917003404, 0.267396002497},
+		{4, 400, 0.00273119597124, 0.0254048009073},
+		{3, 895, 0.000691787920688, 0.00976431858186},
+		{0, 895, 0.0, 0.00411317066732},
+		{0, 1101, 0.0, 0.00334487428702},
+		{500, 1000, 0.468549172972, 0.531450827028},
+		{2, 5000, 4.84455271182e-5, 0.00144418279587},
+	};
+	for (const auto& c : cases)
+	{
+		const auto r = localisation::clopperPearson(c.k, c.n);
+		EXPECT_NEAR(r.lo, c.lo, 1e-9) << c.k << " of " << c.n;
+		EXPECT_NEAR(r.hi, c.hi, 1e-9) << c.k << " of " << c.n;
+	}
+	// No trial: no information.
+	EXPECT_EQ(localisation::clopperPearson(0, 0).lo, 0.0);
+	EXPECT_EQ(localisation::clopperPearson(0, 0).hi, 1.0);
+	// Another confidence: k = 0 gives 1 - ((1 - c) / 2)^(1/n) in closed form.
+	EXPECT_NEAR(localisation::clopperPearson(0, 30, 0.90).hi, 1 - std::pow(0.05, 1.0 / 30), 1e-15);
+	EXPECT_THROW(localisation::clopperPearson(3, 2), std::invalid_argument);
+	EXPECT_THROW(localisation::clopperPearson(1, 2, 1.0), std::invalid_argument);
+}
+
+TEST(LocalisationEvaluation, ClopperPearsonBoundsSolveTheBinomialTails)
+{
+	// The defining equations, through the CDF itself, across sizes where the
+	// pmf terms span hundreds of orders of magnitude.
+	for (const size_t n : {1u, 7u, 60u, 895u, 20000u})
+		for (const size_t k : {size_t(0), size_t(1), n / 3, n - 1, n})
+		{
+			if (k > n) continue;
+			const auto r = localisation::clopperPearson(k, n);
+			ASSERT_LE(r.lo, r.hi);
+			if (k < n) { EXPECT_NEAR(localisation::binomialCdf(k, n, r.hi), 0.025, 1e-9) << k << " of " << n; }
+			if (k > 0) { EXPECT_NEAR(1 - localisation::binomialCdf(k - 1, n, r.lo), 0.025, 1e-9) << k << " of " << n; }
+			const double p = static_cast<double>(k) / static_cast<double>(n);
+			EXPECT_LE(r.lo, p);
+			EXPECT_GE(r.hi, p);
+		}
+	// The CDF against exact sums (mpmath, 50 digits).
+	EXPECT_NEAR(localisation::binomialCdf(30, 100, 0.3), 0.54912360076879, 1e-12);
+	EXPECT_NEAR(localisation::binomialCdf(10, 2000, 0.01), 0.010522510740822, 1e-12);
+	EXPECT_EQ(localisation::binomialCdf(5, 5, 0.5), 1.0);
+	EXPECT_EQ(localisation::binomialCdf(0, 5, 0.0), 1.0);
+	EXPECT_EQ(localisation::binomialCdf(4, 5, 1.0), 0.0);
+	EXPECT_THROW(localisation::binomialCdf(1, 5, 1.5), std::invalid_argument);
+}
+
+TEST(LocalisationEvaluation, NoLongEpisodeStillHasAnUpperBound)
+{
+	// 40 short episodes: the bootstrap interval is [0, 0]; the exact one
+	// keeps the doubt a finite count leaves, 1 - 0.025^(1/40) = 8.8 %.
+	const std::vector<double> lengths(40, 12.0);
+	const auto p = localisation::blindProbability(lengths);
+	EXPECT_EQ(p.reaching, 0u);
+	EXPECT_EQ(p.p, 0.0);
+	EXPECT_EQ(p.hi, 0.0);
+	EXPECT_EQ(p.exact_lo, 0.0);
+	EXPECT_NEAR(p.exact_hi, 1 - std::pow(0.025, 1.0 / 40), 1e-12);
+	EXPECT_NEAR(p.exact_hi, 0.0880, 1e-4);
+	// With episodes reaching the distance the exact interval is the pooled
+	// count's, here 2 of 5 (mpmath: 0.0527449505 - 0.8533672004).
+	const auto q = localisation::blindProbability({10, 120, 30, 100, 5});
+	EXPECT_NEAR(q.exact_lo, 0.0527449505, 1e-8);
+	EXPECT_NEAR(q.exact_hi, 0.8533672004, 1e-8);
+	// No episode at all: nothing known.
+	const auto e = localisation::blindProbability({});
+	EXPECT_EQ(e.exact_lo, 0.0);
+	EXPECT_EQ(e.exact_hi, 1.0);
 }
 
 // ---------------------------------------------------------------- the command

@@ -84,21 +84,48 @@ struct TEvaluation
 	std::vector<TBlindEpisode> episodes;
 	size_t episodes_between = 0, episodes_long = 0;	 //!< Between episodes; of which >= blind_long_m
 	double p_long = 0, p_long_lo = 0, p_long_hi = 0;  //!< P(episode >= blind_long_m), 95 % bootstrap interval
+	double p_long_exact_lo = 0, p_long_exact_hi = 1;  //!< its exact 95 % (Clopper-Pearson) interval
 	double blind_m = 0, total_m = 0, blind_m_per_km = 0;  //!< distance without a fix [m], total [m]
 	double before_first_fix_m = -1;	 //!< distance before the first fix (-1: no fix) [m]
 	int first_fix_frame = -1;
 	size_t global_searches = 0;
 };
 
-/** P(a blind episode reaches o.blind_long_m) over episode lengths [m], with
- * a 95 % percentile-bootstrap interval (o.bootstrap_samples resamples of the
- * episodes, seeded by o.bootstrap_seed: repeatable). evaluate() uses it for
- * one run's episodes between fixes; the leave-one-out evaluation for the
- * episodes pooled over pairs. */
+/** The exact (Clopper-Pearson) two-sided interval of a binomial proportion:
+ * k successes in n trials, confidence `confidence` (0.95: 95 %). The bounds
+ * solve P(X >= k | p_lo) = alpha/2 and P(X <= k | p_hi) = alpha/2 with
+ * alpha = 1 - confidence (C. J. Clopper, E. S. Pearson, "The use of confidence
+ * or fiducial limits illustrated in the case of the binomial", Biometrika 26,
+ * 1934); for k = 0 the lower bound is 0 and the upper 1 - (alpha/2)^(1/n), for
+ * k = n the reverse. The interval covers the true p at least `confidence` of
+ * the time for every p (conservative), and unlike a bootstrap it does not
+ * collapse to [0, 0] when no trial succeeds. n = 0 gives [0, 1]. Throws
+ * std::invalid_argument when k > n or confidence is not in (0, 1). */
+struct TProportionInterval
+{
+	double lo = 0, hi = 1;	//!< [0..1]
+};
+TProportionInterval clopperPearson(size_t k, size_t n, double confidence = 0.95);
+
+/** P(X <= k) for X ~ Binomial(n, p), summed in log space over the shorter
+ * tail (accurate to ~1e-15 absolute; p in [0, 1]). */
+double binomialCdf(size_t k, size_t n, double p);
+
+/** P(a blind episode reaches o.blind_long_m) over episode lengths [m]: the
+ * count, the exact 95 % (Clopper-Pearson) interval of the proportion (the
+ * headline), and a 95 % percentile-bootstrap interval beside it
+ * (o.bootstrap_samples resamples of the episodes, seeded by
+ * o.bootstrap_seed: repeatable; it is [0, 0] when no episode reaches the
+ * distance, which claims a certainty that a finite count cannot give).
+ * evaluate() uses it for one run's episodes between fixes; the leave-one-out
+ * evaluation for the episodes pooled over pairs (so the pooled interval comes
+ * from the pooled counts). */
 struct TBlindProbability
 {
 	size_t episodes = 0, reaching = 0;	//!< episodes; of which >= blind_long_m
-	double p = 0, lo = 0, hi = 0;  //!< reaching / episodes, interval [0..1]
+	double p = 0;  //!< reaching / episodes [0..1]
+	double exact_lo = 0, exact_hi = 1;	//!< exact 95 % interval (Clopper-Pearson) [0..1]
+	double lo = 0, hi = 0;	//!< 95 % percentile-bootstrap interval [0..1]
 };
 TBlindProbability blindProbability(const std::vector<double>& lengths, const TEvalOptions& o = {});
 

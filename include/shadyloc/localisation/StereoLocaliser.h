@@ -142,7 +142,9 @@ struct TLocaliserOptions
 	double global_distinct_m = 3.0;	 //!< see global_ambiguity_ratio [m]
 
 	/** Fault injection (evaluation only): match against the keyframe this many
-	 * along the chain from the chosen one, reported as the chosen one. */
+	 * along the chain from the chosen one (clamped to the chain), reported as
+	 * the chosen one; where the clamp lands on the chosen keyframe itself the
+	 * frame has no keyframe (docs/localisation.md, "Injected faults"). */
 	int fault_keyframe_offset = 0;
 
 	/** Reads `section` (keys as above, with their units) through
