@@ -3,6 +3,7 @@
 #include "Command.h"
 #include "CommandLine.h"
 
+#include <shadyloc/core/Settings.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/localisation/LocaliseRun.h>
 
@@ -28,15 +29,6 @@ namespace
 using namespace shadyloc;
 using namespace shadyloc::localisation;
 namespace fs = std::filesystem;
-
-std::string slurp(const std::string& path)
-{
-	std::ifstream f(path, std::ios::binary);
-	if (!f) throw std::runtime_error("cannot read '" + path + "'");
-	std::ostringstream s;
-	s << f.rdbuf();
-	return s.str();
-}
 
 /** A directory filled under a temporary name, renamed into place on commit();
  * removed on destruction otherwise: no partial output. */
@@ -135,12 +127,8 @@ int run(int argc, char** argv)
 	if (!fs::exists(mapPath)) throw std::runtime_error("map '" + mapPath + "' does not exist");
 	if (!fs::exists(livePath)) throw std::runtime_error("live rawlog '" + livePath + "' does not exist");
 	std::string cfgText, cfgWhat;
-	for (const auto& c : cfgArgs.getValue())
-	{
-		if (!fs::exists(c)) throw std::runtime_error("config file '" + c + "' does not exist");
-		cfgText += slurp(c) + "\n";
-		cfgWhat += (cfgWhat.empty() ? "" : " + ") + c;
-	}
+	cfgText = core::layeredConfigText(cfgArgs.getValue());
+	for (const auto& c : cfgArgs.getValue()) cfgWhat += (cfgWhat.empty() ? "" : " + ") + c;
 	if (cfgWhat.empty()) cfgWhat = "(no config)";
 	mrpt::config::CConfigFileMemory cfg(cfgText);
 	std::optional<io::Trajectory> gt;

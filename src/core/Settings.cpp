@@ -288,6 +288,21 @@ void rejectDuplicateKeys(const std::string& path)
 }
 }  // namespace
 
+std::string layeredConfigText(const std::vector<std::string>& paths)
+{
+	std::string text;
+	for (const auto& p : paths)
+	{
+		std::ifstream f(p, std::ios::binary);
+		if (!f) throw SettingsError("config file '" + p + "' does not exist or cannot be read");
+		rejectDuplicateKeys(p);
+		std::ostringstream s;
+		s << f.rdbuf();
+		text += s.str() + "\n";
+	}
+	return text;
+}
+
 void checkSections(
 	const mrpt::config::CConfigFileBase& c, const std::vector<std::string>& known, const std::string& what)
 {

@@ -1,5 +1,6 @@
 /* ShadyLoc — the leave-one-out evaluation: inputs, plan, jobs, the worker
  * pool (docs/evaluation.md). The merge is in EvalMerge.cpp. */
+#include <shadyloc/core/Settings.h>
 #include <shadyloc/eval/LeaveOneOut.h>
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/StereoFrameSource.h>
@@ -38,15 +39,6 @@ std::vector<std::string> localisersOf(EvalSystem s)
 
 namespace
 {
-std::string slurp(const std::string& path)
-{
-	std::ifstream f(path, std::ios::binary);
-	if (!f) throw std::runtime_error("cannot read '" + path + "'");
-	std::ostringstream s;
-	s << f.rdbuf();
-	return s.str();
-}
-
 /** "file:line" of `[section]` (key empty) or of `key = ...` in it, among
  * the config files; "" if not found. */
 std::string locateSetting(const std::vector<std::string>& files, const std::string& section, const std::string& key)
@@ -297,12 +289,11 @@ TEvalInputs TEvalInputs::Load(
 	in.runs = readRunList(runsPath);
 	in.configPaths = configPaths;
 	for (const auto& c : configPaths)
-	{
 		if (!fs::is_regular_file(c)) throw std::runtime_error("config file '" + c + "' does not exist");
-		in.configText += slurp(c) + "\n";
-		// Names, not paths: the provenance does not depend on where it ran.
+	in.configText = core::layeredConfigText(configPaths);
+	// Names, not paths: the provenance does not depend on where it ran.
+	for (const auto& c : configPaths)
 		in.configWhat += (in.configWhat.empty() ? "" : " + ") + fs::path(c).filename().string();
-	}
 	if (in.configWhat.empty()) in.configWhat = "(no config)";
 	in.m_cfg = std::make_shared<mrpt::config::CConfigFileMemory>(in.configText);
 	const std::string cfgNames = [&] {

@@ -642,6 +642,25 @@ TEST(Settings, KeyGivenTwiceInAFileIsAnError)
 	EXPECT_NO_THROW(vo::checkVOConfigSections(ok));
 }
 
+TEST(Settings, LayeredConfigFilesOverrideInOrderAndKeepTheirOwnChecks)
+{
+	// `-c base.ini -c mine.ini`: a later file's key overrides, a section may
+	// continue; within one file a key given twice is still an error.
+	const std::string d = test::tempDir("settings_layered");
+	std::ofstream(d + "/base.ini") << "[localise]\nthreads = 2\nvo_channel = mono\n[vo]\nsigma_px = 0.5\n";
+	std::ofstream(d + "/mine.ini") << "[localise]\nthreads = 1\n";
+	const std::string text = core::layeredConfigText({d + "/base.ini", d + "/mine.ini"});
+	mrpt::config::CConfigFileMemory c(text);
+	EXPECT_EQ(c.read_int("localise", "threads", 0), 1);
+	EXPECT_EQ(c.read_string("localise", "vo_channel", ""), "mono");
+	EXPECT_EQ(c.read_double("vo", "sigma_px", 0), 0.5);
+	std::ofstream(d + "/twice.ini") << "[localise]\nthreads = 1\nthreads = 2\n";
+	expectRefused(
+		[&] { core::layeredConfigText({d + "/base.ini", d + "/twice.ini"}); },
+		{d + "/twice.ini", "threads", "given twice (lines 2 and 3)"}, "twice");
+	expectRefused([&] { core::layeredConfigText({d + "/missing.ini"}); }, {d + "/missing.ini", "does not exist"}, "missing");
+}
+
 TEST(Settings, MapOptionsRoundTripWithEveryFieldChanged)
 {
 	TKeyframeMapOptions o;

@@ -54,6 +54,12 @@ std::string settingsSource(const mrpt::config::CConfigFileBase& c);
 /** "'source': msg", unless msg already starts with that (or source is ""). */
 std::string withSource(const std::string& source, const std::string& msg);
 
+/** Config files given in order (`-c a.ini -c b.ini`) as one text: a section
+ * may continue in a later file and a key given again in a later file
+ * overrides (MRPT keeps the last of two equal keys). Each file must exist
+ * and give no key twice within itself (SettingsError naming file and lines). */
+std::string layeredConfigText(const std::vector<std::string>& paths);
+
 /** A key renamed in an earlier version: the old name is refused naming the new. */
 struct TRenamedKey
 {
