@@ -22,6 +22,7 @@ void TLocaliserOptions::load(const mrpt::config::CConfigFileBase& c, const std::
 	r.read("gate_chi2", gate_chi2);
 	r.read("gate_min_px", gate_min_px);
 	r.read("gate_max_px", gate_max_px);
+	r.read("gate_landmark_max_px", gate_landmark_max_px);
 	r.read("max_overflow_fraction", max_overflow_fraction);
 	r.read("window_px", window_px);
 	r.read("max_hamming", max_hamming);
@@ -77,6 +78,7 @@ void TLocaliserOptions::dump(std::ostream& out) const
 	w.value("gate_chi2", gate_chi2, "chi^2, 3 dof");
 	w.value("gate_min_px", gate_min_px, "[px]");
 	w.value("gate_max_px", gate_max_px, "ceiling: lost rather than clipped [px]");
+	w.value("gate_landmark_max_px", gate_landmark_max_px, "with the landmark's own uncertainty (0 = gate_max_px bounds all) [px]");
 	w.value("max_overflow_fraction", max_overflow_fraction);
 	w.value("window_px", window_px, "[px]");
 	w.value("max_hamming", max_hamming, "[bits of 256]");
@@ -123,6 +125,8 @@ void TLocaliserOptions::validate() const
 	need(gate_chi2 > 0, "gate_chi2", "must be > 0");
 	need(gate_min_px > 0, "gate_min_px", "must be > 0");
 	need(gate_max_px > gate_min_px, "gate_max_px", "must exceed gate_min_px");
+	need(gate_landmark_max_px == 0 || (gate_landmark_max_px >= gate_max_px && gate_landmark_max_px <= 10000),
+		 "gate_landmark_max_px", "must be 0 (off) or in [gate_max_px, 10000]");
 	need(max_overflow_fraction >= 0 && max_overflow_fraction <= 1, "max_overflow_fraction", "must be in [0, 1]");
 	need(window_px > 0, "window_px", "must be > 0");
 	need(max_hamming > 0 && max_hamming <= 256, "max_hamming", "must be in (0, 256]");

@@ -57,6 +57,7 @@ vo::TKeyframeMatcherOptions matcherOptions(const TLocaliserOptions& o, SearchMod
 			m.gate_chi2 = o.gate_chi2;
 			m.gate_min_px = o.gate_min_px;
 			m.gate_max_px = o.gate_max_px;
+			m.gate_landmark_max_px = o.gate_landmark_max_px;
 			m.gate_clamp = false;
 			break;
 		case SearchMode::Window:

@@ -73,7 +73,8 @@ Eigen::Matrix3d CKeyframeMatcher::gateMatrix(const Eigen::Matrix3d& S) const
 	// An axis of {r : r^T G^-1 r <= chi2} has half-length sqrt(chi2 lambda).
 	const double chi2 = m_opts.gate_chi2;
 	const double lo = m_opts.gate_min_px * m_opts.gate_min_px / chi2;
-	const double hi = m_opts.gate_max_px * m_opts.gate_max_px / chi2;
+	const double maxPx = std::max(m_opts.gate_max_px, m_opts.gate_landmark_max_px);
+	const double hi = maxPx * maxPx / chi2;
 	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (S + S.transpose()));
 	const Eigen::Vector3d lam = es.eigenvalues().cwiseMax(lo).cwiseMin(hi);
 	return es.eigenvectors() * lam.asDiagonal() * es.eigenvectors().transpose();
@@ -94,7 +95,12 @@ int CKeyframeMatcher::searchDescriptors(
 	const bool gate = o.region == SearchRegion::Gate;
 	const double r2 = radius * radius;
 	std::vector<double> axes;
-	int overflow = 0;
+	int overflow = 0, tooUncertain = 0;
+	const bool splitCeiling = gate && o.gate_landmark_max_px > 0;
+	auto longestAxis = [&](const Eigen::Matrix3d& S) {
+		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (S + S.transpose()), Eigen::EigenvaluesOnly);
+		return std::sqrt(o.gate_chi2 * std::max(0.0, es.eigenvalues().maxCoeff()));
+	};
 	const double W = in.frame->left.cols, H = in.frame->left.rows;
 	for (size_t j = 0; j < kfm.size(); j++)
 	{
@@ -108,12 +114,22 @@ int CKeyframeMatcher::searchDescriptors(
 			if (pm.z.x() >= 0 && pm.z.x() < W && pm.z.y() >= 0 && pm.z.y() < H)
 			{
 				// The longest axis of the unclamped gate: sqrt(chi2 lambda_max).
-				Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (pm.S + pm.S.transpose()), Eigen::EigenvaluesOnly);
-				const double axis = std::sqrt(o.gate_chi2 * std::max(0.0, es.eigenvalues().maxCoeff()));
+				const double axis = longestAxis(pm.S);
 				axes.push_back(axis);
-				if (axis > o.gate_max_px)
+				// The ceiling on the prediction's part only (see gate_landmark_max_px).
+				const double predAxis = splitCeiling ? longestAxis(predict(
+														   calib, in.T_curr_kf_pred, in.cov_T_curr_kf_pred, kfm[j].P,
+														   Eigen::Matrix3d::Zero(), o.sigma_px)
+															   .S)
+													 : axis;
+				if (predAxis > o.gate_max_px)
 				{
 					overflow++;
+					if (!o.gate_clamp) continue;
+				}
+				else if (splitCeiling && axis > o.gate_landmark_max_px)
+				{
+					tooUncertain++;
 					if (!o.gate_clamp) continue;
 				}
 			}
@@ -178,6 +194,7 @@ int CKeyframeMatcher::searchDescriptors(
 		*gateStats = TGateStats();
 		gateStats->predicted = static_cast<int>(axes.size());
 		gateStats->overflow = overflow;
+		gateStats->too_uncertain = tooUncertain;
 		if (!axes.empty())
 		{
 			std::nth_element(axes.begin(), axes.begin() + axes.size() / 2, axes.end());

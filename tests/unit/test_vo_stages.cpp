@@ -265,6 +265,64 @@ TEST(VoKeyframeMatcher, GateAxesAreClampedToFloorAndCeiling)
 	EXPECT_NEAR(G(2, 2), 4.0, 1e-12);  // inside the bounds: unchanged
 }
 
+TEST(VoKeyframeMatcher, SeenFromASideTheLandmarksOwnUncertaintyIsSearchedNotCountedAsLost)
+{
+	// The current camera 2 m to the side of the keyframe (the other lane is
+	// 3.5 m): a landmark triangulated over the 0.12 m baseline with 0.7 px of
+	// noise per coordinate is uncertain along the epipolar line by about
+	// 2 / 0.12 * 0.7 * sqrt(2) = 16 px (1 sigma) at any depth; its gate's long
+	// axis (x sqrt(11.34)) is ~55 px plus the prediction's, past a 40 px ceiling.
+	auto s = makeScene(pose(2.0, 0.0, 0.3, 0.0), 8.0, 11);
+	for (auto& kf : s.landmarks)
+	{
+		// First-order covariance of the keyframe's triangulation.
+		const double sz = 0.7;
+		Eigen::Matrix3d J;
+		for (int k = 0; k < 3; k++)
+		{
+			Eigen::Vector3d z(kf.uL, kf.v, kf.uR), zp = z, zm = z;
+			zp[k] += 1e-3;
+			zm[k] -= 1e-3;
+			Eigen::Vector3d Pp, Pm;
+			ASSERT_TRUE(s.calib.triangulate(zp.x(), zp.y(), zp.z(), Pp) && s.calib.triangulate(zm.x(), zm.y(), zm.z(), Pm));
+			J.col(k) = (Pp - Pm) / 2e-3;
+		}
+		kf.cov = sz * sz * J * J.transpose();
+	}
+	const size_t n = s.landmarks.size();
+	auto in = inputFor(s, s.T_curr_kf_true);
+	in.cov_T_curr_kf_pred = poseCov(0.05, 0.005);
+	vo::TKeyframeMatcherOptions opt;
+	opt.region = vo::SearchRegion::Gate;
+	opt.gate_max_px = 40;
+	opt.gate_clamp = false;
+	vo::TKeyframeMatchOutput o;
+	// The whole gate under the ceiling (the VO's rule): every landmark overflows.
+	vo::CKeyframeMatcher(opt).match(in, o);
+	EXPECT_EQ(o.gate.predicted, static_cast<int>(n));
+	EXPECT_EQ(o.gate.overflow, static_cast<int>(n));
+	EXPECT_EQ(correctMatches(s, o), 0);
+	EXPECT_GT(o.gate.median_axis_px, 45.0);
+	// The ceiling on the prediction's part: searched, all found, none lost.
+	opt.gate_landmark_max_px = 150;
+	vo::CKeyframeMatcher(opt).match(in, o);
+	EXPECT_EQ(o.gate.overflow, 0);
+	EXPECT_EQ(o.gate.too_uncertain, 0);
+	EXPECT_EQ(correctMatches(s, o), static_cast<int>(n));
+	// ... but a landmark ceiling below the landmarks' gates leaves them out,
+	// counted apart from the overflows.
+	opt.gate_landmark_max_px = 41;
+	vo::CKeyframeMatcher(opt).match(in, o);
+	EXPECT_EQ(o.gate.overflow, 0);
+	EXPECT_EQ(o.gate.too_uncertain, static_cast<int>(n));
+	EXPECT_EQ(correctMatches(s, o), 0);
+	// A prediction too uncertain to search still overflows (the localiser is lost).
+	opt.gate_landmark_max_px = 150;
+	in.cov_T_curr_kf_pred = poseCov(1.0, 0.05);
+	vo::CKeyframeMatcher(opt).match(in, o);
+	EXPECT_EQ(o.gate.overflow, static_cast<int>(n));
+}
+
 TEST(VoKeyframeMatcher, PredictedCovarianceMatchesMonteCarlo)
 {
 	// z = project(exp(xi) T P) + n with xi ~ N(0, C_T), P ~ N(P0, C_P), n ~ N(0, s^2 I).

@@ -86,6 +86,14 @@ struct TLocaliserOptions
 	 * when more than max_overflow_fraction of the visible landmarks overflow,
 	 * the localiser is lost (status lost) [px]. */
 	double gate_max_px = 60.0;
+	/** The ceiling above bounds the prediction's part of the gate (pose
+	 * covariance, pixel noise); with the landmark's own covariance the gate
+	 * may reach this. A map landmark triangulated over the rig's baseline b
+	 * and seen from B metres aside is uncertain along the epipolar line by
+	 * about B / b times its disparity noise at any depth: the prediction is
+	 * not lost, the landmark is uncertain (docs/localisation.md, "The other
+	 * lane"). 0 = gate_max_px bounds the whole gate [px]. */
+	double gate_landmark_max_px = 150.0;
 	double max_overflow_fraction = 0.5;	 //!< see gate_max_px
 	double window_px = 40.0;  //!< Window: circle radius [px]
 	int max_hamming = 80;  //!< largest BRIEF distance of a match [bits of 256]

@@ -56,6 +56,19 @@ struct TKeyframeMatcherOptions
 	 * (false, the localisers: a clipped gate silently excludes the true
 	 * match, so a caller that sees many overflows declares itself lost). */
 	bool gate_clamp = true;
+	/** Gate: when > 0, gate_max_px bounds only the prediction's part of the
+	 * gate (pose covariance and pixel noise: is the pose known well enough to
+	 * search?), and the whole gate, with the landmark's own covariance, may
+	 * reach this length [px]. A landmark triangulated over a short baseline
+	 * and seen from a viewpoint B metres aside is uncertain along one
+	 * direction by about B / baseline times its disparity noise, whatever its
+	 * depth (a thin gate along the epipolar line, not a lost pose): 0.5 m
+	 * aside of the simulator's 0.12 m rig makes it 14 px, 1 m 30 px, 3.5 m
+	 * 92 px (docs/localisation.md, "The other lane"). A landmark whose whole
+	 * gate exceeds it is not searched and is counted in
+	 * TGateStats::too_uncertain, not as an overflow. 0: gate_max_px bounds
+	 * the whole gate (the VO). */
+	double gate_landmark_max_px = 0.0;
 	double sigma_px = 0.5;	//!< Gate: measurement noise per pixel coordinate [px]
 	int max_hamming = 90;  //!< largest BRIEF distance of a match [bits of 256]
 	double match_ratio = 0.95;	//!< best must be < ratio * second best distance in the region
@@ -104,6 +117,9 @@ struct TGateStats
 {
 	int predicted = 0;	//!< landmarks in front of the camera, predicted inside the image
 	int overflow = 0;  //!< ... whose gate exceeded gate_max_px (not searched when !gate_clamp)
+	/** ... whose whole gate exceeded gate_landmark_max_px while the
+	 * prediction's part did not (not searched; gate_landmark_max_px > 0 only). */
+	int too_uncertain = 0;
 	double median_axis_px = 0;	//!< median longest gate axis of the predicted ones (before clamping) [px]
 };
 

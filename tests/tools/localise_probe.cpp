@@ -1,0 +1,318 @@
+/* ShadyLoc — a diagnostic of one localiser on a live run with ground truth
+ * (docs/localisation.md, "The other lane"). For every STEP-th live frame it
+ * takes the map keyframe nearest the live frame by ground truth and the true
+ * pose of the live camera in it, and reports what each stage of the
+ * localiser makes of that keyframe when the prediction is the truth:
+ *   visible  landmarks of the keyframe that project into the live image;
+ *   detected ... with a live measurement within 2 px of the true projection;
+ *   brief_ok ... whose BRIEF distance to that measurement is <= max_hamming;
+ *   gate     BRIEF matches of the active search (gate around the truth,
+ *            prediction sigma 0.1 m, 1 deg), and how many are right (< 3 px);
+ *   refined  correspondences after patch refinement, and how many are right;
+ *   inliers  RANSAC + solve inliers; status of a fresh localiser seeded by
+ *            the truth; the global search's verdict for the frame.
+ * Per bin of the landmarks' scale change s = depth in keyframe / depth in
+ * live frame (s > 1: the live view is closer, the patch looks larger) it
+ * adds up detected, brief_ok and refined-right landmarks.
+ *
+ *   localise_probe MAP LIVE.rawlog LIVE.tum CHANNEL STEP CONFIG.ini...
+ *
+ * Prints CSV (one row per probed frame), then the scale table. A diagnostic
+ * for developers: not part of the test suite. */
+#include <shadyloc/core/Registration.h>
+#include <shadyloc/features/Brief.h>
+#include <shadyloc/io/StereoFrameSource.h>
+#include <shadyloc/io/Tum.h>
+#include <shadyloc/localisation/LocalisationSystem.h>
+#include <shadyloc/localisation/StereoLocaliser.h>
+#include <shadyloc/vo/KeyframeMatcher.h>
+#include <shadyloc/vo/RelativePoseEstimator.h>
+
+#include <mrpt/config/CConfigFileMemory.h>
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <sstream>
+
+using namespace shadyloc;
+
+namespace
+{
+constexpr double kDeg = M_PI / 180.0;
+
+struct TBin
+{
+	int visible = 0, detected = 0, brief_ok = 0, refined_right = 0;
+	long hamming_sum = 0;
+};
+
+int binOf(double s)
+{
+	// log2 bins of width 0.25 around 1: ... [0.71,0.84) [0.84,1) [1,1.19) [1.19,1.41) ...
+	return static_cast<int>(std::floor(std::log2(s) / 0.25));
+}
+}  // namespace
+
+int main(int argc, char** argv)
+{
+	if (argc < 7)
+	{
+		std::cerr << "usage: localise_probe MAP LIVE.rawlog LIVE.tum CHANNEL STEP CONFIG.ini...\n";
+		return 2;
+	}
+	try
+	{
+		registerAllClasses();
+		const std::string mapPath = argv[1], livePath = argv[2], tumPath = argv[3], channel = argv[4];
+		const int step = std::max(1, std::atoi(argv[5]));
+		std::string text;
+		for (int i = 6; i < argc; i++)
+		{
+			std::ifstream f(argv[i]);
+			if (!f) throw std::runtime_error(std::string("cannot read '") + argv[i] + "'");
+			std::stringstream ss;
+			ss << f.rdbuf();
+			text += ss.str() + "\n";
+		}
+		mrpt::config::CConfigFileMemory cfg(text);
+		auto map = CKeyframeMap::LoadFromFile(mapPath);
+		const auto setup = localisation::CLocalisationSystem::SetupFromConfig(cfg, {channel}, 1, "probe");
+		const localisation::CLocalisationSystem::TChannelSetup* cs = nullptr;
+		for (const auto& c : setup.channels)
+			if (c.channel.label == channel) cs = &c;
+		if (!cs) throw std::runtime_error("no channel '" + channel + "' in the config");
+		const auto& lo = cs->localiser;
+		features::StereoFeatureExtractor extractor(cs->features);
+		const size_t ch = map->channelIndex(channel);
+		(void)ch;
+
+		io::Trajectory gt = io::readTum(tumPath);
+		io::sortByTime(gt);
+
+		// The matchers and estimator the localiser uses (gate around the truth).
+		vo::TKeyframeMatcherOptions mo;
+		mo.region = vo::SearchRegion::Gate;
+		mo.gate_chi2 = lo.gate_chi2;
+		mo.gate_min_px = lo.gate_min_px;
+		mo.gate_max_px = lo.gate_max_px;
+		mo.gate_clamp = false;
+		mo.max_hamming = lo.max_hamming;
+		mo.match_ratio = lo.match_ratio;
+		mo.refine_min_zncc = lo.refine_min_zncc;
+		mo.refine_radius = lo.refine_radius_px;
+		mo.refine_iterations = lo.refine_iterations;
+		mo.sigma_px = lo.sigma_px;
+		mo.min_matches = 0;
+		const vo::CKeyframeMatcher matcher(mo);
+		// The same with the gate clamped to a wide ceiling: what BRIEF and the
+		// patch would find if the gate did not overflow.
+		vo::TKeyframeMatcherOptions moWide = mo;
+		moWide.gate_clamp = true;
+		moWide.gate_max_px = 150;
+		const vo::CKeyframeMatcher wideMatcher(moWide);
+		vo::TRelativePoseOptions po;
+		po.ransac_threshold_px = lo.ransac_threshold_px;
+		po.ransac_iterations = lo.ransac_iterations;
+		po.sigma_px = lo.sigma_px;
+		po.huber_k = lo.huber_k;
+		po.two_view_ba = lo.two_view_ba;
+		po.ransac_prediction = false;
+		po.min_inliers = 6;
+		const vo::CRelativePoseEstimator estimator(po);
+		geometry::Matrix6d predCov = geometry::Matrix6d::Zero();
+		predCov.diagonal() << 0.01, 0.01, 0.01, kDeg * kDeg, kDeg * kDeg, kDeg * kDeg;
+
+		io::TStereoFrameSourceOptions so;
+		so.acceptLabel = io::labelWithoutSuffixes({"_mono", "_inv", "_lin"});
+		io::StereoFrameSource source(livePath, so);
+		io::TStereoFrame fr;
+		std::map<int, TBin> bins;
+		std::printf(
+			"frame,kf,dist_m,lateral_m,visible,detected,brief_ok,patch_ok,gate_overflow,gate_median_px,exact_gate_overflow,exact_gate_median_px,gate_matches,"
+			"gate_right,refined,refined_right,inliers,wide_matches,wide_right,wide_refined_right,wide_inliers,status,global\n");
+		while (source.next(fr))
+		{
+			if (static_cast<int>(fr.index) % step) continue;
+			// ground truth of the frame
+			const io::TStampedPose* g = nullptr;
+			for (const auto& p : gt)
+				if (std::abs(p.t - fr.timestamp) <= 0.01) g = &p;
+			if (!g) continue;
+			// nearest keyframe by ground truth, heading within 30 deg
+			int best = -1;
+			double bestD = 1e9;
+			for (const auto& k : map->keyframes())
+			{
+				if (!k.T_gt_kf) continue;
+				const double ang =
+					std::acos(std::clamp(k.T_gt_kf->linear().col(2).dot(g->T.linear().col(2)), -1.0, 1.0)) / kDeg;
+				const double d = (k.T_gt_kf->translation() - g->T.translation()).norm();
+				if (ang < 30 && d < bestD)
+				{
+					bestD = d;
+					best = static_cast<int>(k.id);
+				}
+			}
+			if (best < 0) continue;
+			const auto& kf = map->keyframe(static_cast<uint32_t>(best));
+			const Eigen::Isometry3d T_kf_live = kf.T_gt_kf->inverse() * g->T;
+			const Eigen::Isometry3d T_live_kf = T_kf_live.inverse();
+
+			cv::Mat gl, gr;
+			cs->channel.convertPair(fr.left, fr.right, gl, gr);
+			features::TStereoFrame meas;
+			extractor.process(gl, gr, fr.calib, meas);
+			const auto& lms = map->measurements(kf.id, channel);
+
+			// ---- per landmark, with the truth
+			int visible = 0, detected = 0, briefOk = 0, patchOk = 0;
+			std::vector<Eigen::Vector2d> truthPx(lms.size(), Eigen::Vector2d(-1e9, -1e9));
+			std::vector<double> scale(lms.size(), 0);
+			for (size_t j = 0; j < lms.size(); j++)
+			{
+				const Eigen::Vector3d p = T_live_kf * lms[j].P;
+				if (p.z() < 0.5) continue;
+				const double u = fr.calib.fx * p.x() / p.z() + fr.calib.cx, v = fr.calib.fy * p.y() / p.z() + fr.calib.cy;
+				if (u < 0 || v < 0 || u >= gl.cols || v >= gl.rows) continue;
+				truthPx[j] = Eigen::Vector2d(u, v);
+				scale[j] = lms[j].P.z() / p.z();
+				visible++;
+				TBin& b = bins[binOf(scale[j])];
+				b.visible++;
+				int nearest = -1;
+				double nd = 4.0;
+				for (size_t i = 0; i < meas.meas.size(); i++)
+				{
+					const double d2 = std::pow(meas.meas[i].uL - u, 2) + std::pow(meas.meas[i].v - v, 2);
+					if (d2 < nd)
+					{
+						nd = d2;
+						nearest = static_cast<int>(i);
+					}
+				}
+				if (nearest < 0) continue;
+				detected++;
+				// The stored patch at the true position: does refinement accept it?
+				float xs = 0, ys = 0;
+				const int xi = static_cast<int>(std::lround(u)), yi = static_cast<int>(std::lround(v));
+				if (xi >= features::kPatchSize && yi >= features::kPatchSize && xi < gl.cols - features::kPatchSize &&
+					yi < gl.rows - features::kPatchSize &&
+					features::locatePatch(
+						lms[j].patch, gl, xi, yi, lo.refine_radius_px, lo.refine_min_zncc, lo.refine_iterations, xs, ys) &&
+					std::hypot(xs - u, ys - v) < 3)
+					patchOk++;
+				b.detected++;
+				const int h = features::hamming(lms[j].desc, meas.meas[static_cast<size_t>(nearest)].desc);
+				b.hamming_sum += h;
+				if (h <= lo.max_hamming)
+				{
+					briefOk++;
+					b.brief_ok++;
+				}
+			}
+
+			// ---- the localiser's stages with the truth as prediction
+			vo::TKeyframeMatchInput mi;
+			mi.landmarks = &lms;
+			mi.calib_kf = map->calibration();
+			mi.frame = &meas;
+			mi.calib = fr.calib;
+			mi.T_curr_kf_pred = T_live_kf;
+			mi.cov_T_curr_kf_pred = predCov;
+			std::vector<int> matchOf;
+			matcher.searchDescriptors(mi, 0, matchOf);
+			int gateMatches = 0, gateRight = 0;
+			for (size_t j = 0; j < lms.size(); j++)
+				if (matchOf[j] >= 0)
+				{
+					gateMatches++;
+					const auto& m = meas.meas[static_cast<size_t>(matchOf[j])];
+					gateRight += (Eigen::Vector2d(m.uL, m.v) - truthPx[j]).norm() < 3;
+				}
+			vo::TKeyframeMatchOutput out;
+			matcher.match(mi, out);
+			int refinedRight = 0;
+			for (size_t c = 0; c < out.corr.size(); c++)
+			{
+				const size_t j = static_cast<size_t>(out.landmark[c]);
+				if ((out.corr[c].z_curr.head<2>() - truthPx[j]).norm() < 3)
+				{
+					refinedRight++;
+					bins[binOf(scale[j])].refined_right++;
+				}
+			}
+			auto solveInliers = [&](const vo::TKeyframeMatchOutput& o) {
+				if (o.corr.size() < 6) return 0;
+				vo::TRelativePoseInput pi;
+				pi.corr = &o.corr;
+				pi.calib = fr.calib;
+				pi.seed = static_cast<uint32_t>(fr.index);
+				vo::TRelativePoseOutput pout;
+				estimator.estimate(pi, pout);
+				return pout.ok() ? static_cast<int>(pout.inliers) : 0;
+			};
+			const int inliers = solveInliers(out);
+			std::vector<int> wideOf;
+			wideMatcher.searchDescriptors(mi, 0, wideOf);
+			int wideMatches = 0, wideRight = 0;
+			for (size_t j = 0; j < lms.size(); j++)
+				if (wideOf[j] >= 0)
+				{
+					wideMatches++;
+					const auto& m = meas.meas[static_cast<size_t>(wideOf[j])];
+					wideRight += (Eigen::Vector2d(m.uL, m.v) - truthPx[j]).norm() < 3;
+				}
+			vo::TKeyframeMatchOutput wout;
+			wideMatcher.match(mi, wout);
+			int wideRefinedRight = 0;
+			for (size_t c = 0; c < wout.corr.size(); c++)
+				wideRefinedRight +=
+					(wout.corr[c].z_curr.head<2>() - truthPx[static_cast<size_t>(wout.landmark[c])]).norm() < 3;
+			const int wideInliers = solveInliers(wout);
+			// The gate with an exact prediction: the landmarks' own covariance
+			// (stereo depth from the keyframe's baseline) and the pixel noise.
+			vo::TKeyframeMatchInput miExact = mi;
+			miExact.cov_T_curr_kf_pred = geometry::Matrix6d::Zero();
+			vo::TGateStats exactGate;
+			std::vector<int> exactOf;
+			matcher.searchDescriptors(miExact, 0, exactOf, &exactGate);
+			localisation::CStereoLocaliser loc(*map, channel, lo);
+			localisation::TLocaliserInput in;
+			in.frame = fr.index;
+			in.timestamp = fr.timestamp;
+			in.meas = &meas;
+			in.calib = fr.calib;
+			in.prediction.valid = true;
+			in.prediction.kf = kf.id;
+			in.prediction.T_kf_live = T_kf_live;
+			in.prediction.cov = predCov;
+			const auto res = loc.localise(in);
+			const auto place = loc.globalSearch(meas, fr.calib, static_cast<uint32_t>(fr.index));
+			std::string gs = place.ok ? "ok:kf" + std::to_string(place.pose.kf) + ":" + std::to_string(place.inliers)
+									  : place.why;
+			for (auto& c : gs)
+				if (c == ',') c = ';';
+			std::printf(
+				"%zu,%u,%.2f,%.2f,%d,%d,%d,%d,%d,%.1f,%d,%.1f,%d,%d,%zu,%d,%d,%d,%d,%d,%d,%s,%s\n", fr.index, kf.id, bestD,
+				T_kf_live.translation().x(), visible, detected, briefOk, patchOk, out.gate.overflow, out.gate.median_axis_px, exactGate.overflow,
+				exactGate.median_axis_px,
+				gateMatches, gateRight, out.corr.size(), refinedRight, inliers, wideMatches, wideRight, wideRefinedRight,
+				wideInliers, localisation::toString(res.status).c_str(), gs.c_str());
+			std::fflush(stdout);
+		}
+		std::printf("\nscale_bin_lo,scale_bin_hi,visible,detected,brief_ok,refined_right,mean_hamming\n");
+		for (const auto& [k, b] : bins)
+			std::printf(
+				"%.2f,%.2f,%d,%d,%d,%d,%.1f\n", std::pow(2.0, 0.25 * k), std::pow(2.0, 0.25 * (k + 1)), b.visible,
+				b.detected, b.brief_ok, b.refined_right, b.detected ? double(b.hamming_sum) / b.detected : 0.0);
+		return 0;
+	}
+	catch (const std::exception& e)
+	{
+		std::cerr << "localise_probe: " << e.what() << "\n";
+		return 1;
+	}
+}
