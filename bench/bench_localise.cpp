@@ -112,7 +112,7 @@ void setCounters(benchmark::State& st, const std::vector<double>& ms, const std:
 }
 
 /** The combined system, one frame per iteration. */
-void BM_CombinedFrame(benchmark::State& st, int threads)
+void BM_CombinedFrame(benchmark::State& st, int threads, bool fallbackVO = true)
 {
 	const auto& d = data();
 	if (!d.skip.empty())
@@ -120,7 +120,8 @@ void BM_CombinedFrame(benchmark::State& st, int threads)
 		st.SkipWithError(d.skip.c_str());
 		return;
 	}
-	mrpt::config::CConfigFileMemory cfg(d.cfgText);
+	// Without the fallback VO: its cost is the difference (a later key overrides).
+	mrpt::config::CConfigFileMemory cfg(d.cfgText + (fallbackVO ? "" : "\n[localise]\nvo_fallback_channel =\n"));
 	auto sys = localisation::CLocalisationSystem::FromConfig(cfg, d.map, {}, threads, "vo_sim.ini + localise_sim.ini");
 	std::vector<double> ms, voMs;
 	size_t i = 0, fixes = 0;
@@ -147,6 +148,10 @@ void BM_CombinedFrame(benchmark::State& st, int threads)
 }
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads2, 2)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(600);
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads1, 1)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(600);
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_fallback_vo, 2, false)
+	->Unit(benchmark::kMillisecond)
+	->UseManualTime()
+	->Iterations(600);
 
 /** The monochrome channel's conversion and the stereo VO alone, on the same frames. */
 void BM_VOFrameMono(benchmark::State& st)
