@@ -327,7 +327,7 @@ TMotion CLocalisationSystem::motionOf(const vo::TFrameResult& r, TVOTrack& t, bo
 	TMotion m;
 	measured = false;
 	const bool havePrev = t.havePrev;
-	const vo::TFrameResult prevVO = t.prev;
+	const vo::TFrameResult prevVO = std::move(t.prev);
 	t.prev = r;
 	t.havePrev = true;
 	if (!havePrev) return m;  // the first frame: no motion

@@ -99,7 +99,7 @@ struct TLocalisationUpdate
 	int frames_since_fix = 0;
 	std::vector<TLocaliserResult> localisers;  //!< in policy order
 	vo::TFrameResult vo;
-	/** The fallback VO's frame (status First when it does not run). */
+	/** The fallback VO's frame (default-constructed when no fallback VO runs). */
 	vo::TFrameResult vo_fallback;
 	TMotion motion;	 //!< VO's increment used for the prediction
 	/** The VO channel whose step `motion` is ("" on the first frame). */
