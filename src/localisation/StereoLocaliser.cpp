@@ -40,43 +40,10 @@ double angleBetweenAxesDeg(const Eigen::Isometry3d& A, const Eigen::Isometry3d& 
 	return std::acos(c) / kDeg;
 }
 
-vo::TKeyframeMatcherOptions matcherOptions(const TLocaliserOptions& o, SearchMode mode)
-{
-	vo::TKeyframeMatcherOptions m;
-	m.max_hamming = o.max_hamming;
-	m.match_ratio = o.match_ratio;
-	m.refine_min_zncc = o.refine_min_zncc;
-	m.refine_radius = o.refine_radius_px;
-	m.refine_iterations = o.refine_iterations;
-	m.sigma_px = o.sigma_px;
-	m.min_matches = 0;	// never widen on its own: the localiser decides
-	switch (mode)
-	{
-		case SearchMode::Gate:
-			m.region = vo::SearchRegion::Gate;
-			m.gate_chi2 = o.gate_chi2;
-			m.gate_min_px = o.gate_min_px;
-			m.gate_max_px = o.gate_max_px;
-			m.gate_landmark_max_px = o.gate_landmark_max_px;
-			m.gate_clamp = false;
-			break;
-		case SearchMode::Window:
-			m.region = vo::SearchRegion::Circle;
-			m.search_radius_px = m.search_radius_lost_px = o.window_px;
-			break;
-		case SearchMode::Global:
-			// A circle larger than any image around an identity projection:
-			// every measurement of the frame is a candidate.
-			m.region = vo::SearchRegion::Circle;
-			m.search_radius_px = m.search_radius_lost_px = 1e5;
-			break;
-	}
-	return m;
-}
 
 vo::TKeyframeMatcherOptions placeMatcherOptions(const TLocaliserOptions& o)
 {
-	vo::TKeyframeMatcherOptions m = matcherOptions(o, SearchMode::Window);
+	vo::TKeyframeMatcherOptions m = matcherOptionsFor(o, SearchMode::Window);
 	m.search_radius_px = m.search_radius_lost_px = o.global_window_px;
 	return m;
 }
@@ -169,7 +136,43 @@ Matrix6d covarianceMax(const Matrix6d& A, const Matrix6d& B, int samples)
 	return L * es.eigenvectors() * d.asDiagonal() * es.eigenvectors().transpose() * L.transpose();
 }
 
-vo::TRelativePoseOptions estimatorOptions(const TLocaliserOptions& o)
+}  // namespace
+
+vo::TKeyframeMatcherOptions matcherOptionsFor(const TLocaliserOptions& o, SearchMode mode)
+{
+	vo::TKeyframeMatcherOptions m;
+	m.max_hamming = o.max_hamming;
+	m.match_ratio = o.match_ratio;
+	m.refine_min_zncc = o.refine_min_zncc;
+	m.refine_radius = o.refine_radius_px;
+	m.refine_iterations = o.refine_iterations;
+	m.sigma_px = o.sigma_px;
+	m.min_matches = 0;	// never widen on its own: the localiser decides
+	switch (mode)
+	{
+		case SearchMode::Gate:
+			m.region = vo::SearchRegion::Gate;
+			m.gate_chi2 = o.gate_chi2;
+			m.gate_min_px = o.gate_min_px;
+			m.gate_max_px = o.gate_max_px;
+			m.gate_landmark_max_px = o.gate_landmark_max_px;
+			m.gate_clamp = false;
+			break;
+		case SearchMode::Window:
+			m.region = vo::SearchRegion::Circle;
+			m.search_radius_px = m.search_radius_lost_px = o.window_px;
+			break;
+		case SearchMode::Global:
+			// A circle larger than any image around an identity projection:
+			// every measurement of the frame is a candidate.
+			m.region = vo::SearchRegion::Circle;
+			m.search_radius_px = m.search_radius_lost_px = 1e5;
+			break;
+	}
+	return m;
+}
+
+vo::TRelativePoseOptions estimatorOptionsFor(const TLocaliserOptions& o)
 {
 	vo::TRelativePoseOptions p;
 	p.ransac_threshold_px = o.ransac_threshold_px;
@@ -183,7 +186,6 @@ vo::TRelativePoseOptions estimatorOptions(const TLocaliserOptions& o)
 	p.min_inliers = 6;	// the localiser's own bounds (min_inliers, global_min_inliers) apply after
 	return p;
 }
-}  // namespace
 
 std::string toString(SearchMode m)
 {
@@ -219,10 +221,10 @@ CStereoLocaliser::CStereoLocaliser(const CKeyframeMap& map, const std::string& c
 	: m_map(map),
 	  m_channel(channel),
 	  m_opts(o),
-	  m_matcher(matcherOptions(o, o.search)),
-	  m_gateMatcher(matcherOptions(o, SearchMode::Gate)),
+	  m_matcher(matcherOptionsFor(o, o.search)),
+	  m_gateMatcher(matcherOptionsFor(o, SearchMode::Gate)),
 	  m_placeMatcher(placeMatcherOptions(o)),
-	  m_estimator(estimatorOptions(o))
+	  m_estimator(estimatorOptionsFor(o))
 {
 	m_opts.validate();
 	map.channelIndex(channel);	// throws naming the map's channels

@@ -93,19 +93,10 @@ int main(int argc, char** argv)
 		io::sortByTime(gt);
 
 		// The matchers and estimator the localiser uses (gate around the truth).
-		vo::TKeyframeMatcherOptions mo;
-		mo.region = vo::SearchRegion::Gate;
-		mo.gate_chi2 = lo.gate_chi2;
-		mo.gate_min_px = lo.gate_min_px;
-		mo.gate_max_px = lo.gate_max_px;
-		mo.gate_clamp = false;
-		mo.max_hamming = lo.max_hamming;
-		mo.match_ratio = lo.match_ratio;
-		mo.refine_min_zncc = lo.refine_min_zncc;
-		mo.refine_radius = lo.refine_radius_px;
-		mo.refine_iterations = lo.refine_iterations;
-		mo.sigma_px = lo.sigma_px;
-		mo.min_matches = 0;
+		vo::TKeyframeMatcherOptions mo = localisation::matcherOptionsFor(lo, localisation::SearchMode::Gate);
+		// The ceiling as the localiser applied it before gate_landmark_max_px:
+		// every landmark whose gate exceeds gate_max_px counts as overflowing.
+		mo.gate_landmark_max_px = 0;
 		const vo::CKeyframeMatcher matcher(mo);
 		// The same with the gate clamped to a wide ceiling: what BRIEF and the
 		// patch would find if the gate did not overflow.
@@ -113,15 +104,7 @@ int main(int argc, char** argv)
 		moWide.gate_clamp = true;
 		moWide.gate_max_px = 150;
 		const vo::CKeyframeMatcher wideMatcher(moWide);
-		vo::TRelativePoseOptions po;
-		po.ransac_threshold_px = lo.ransac_threshold_px;
-		po.ransac_iterations = lo.ransac_iterations;
-		po.sigma_px = lo.sigma_px;
-		po.huber_k = lo.huber_k;
-		po.two_view_ba = lo.two_view_ba;
-		po.ransac_prediction = false;
-		po.min_inliers = 6;
-		const vo::CRelativePoseEstimator estimator(po);
+		const vo::CRelativePoseEstimator estimator(localisation::estimatorOptionsFor(lo));
 		geometry::Matrix6d predCov = geometry::Matrix6d::Zero();
 		predCov.diagonal() << 0.01, 0.01, 0.01, kDeg * kDeg, kDeg * kDeg, kDeg * kDeg;
 

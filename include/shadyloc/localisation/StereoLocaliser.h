@@ -166,6 +166,12 @@ struct TLocaliserOptions
 TLocaliserOptions localiserOptionsFor(
 	const mrpt::config::CConfigFileBase& cfg, const std::string& channel, const std::string& section = "localiser");
 
+/** The VO stages a localiser is made of, configured from its options: the
+ * keyframe matcher for a search region, and the pose estimator (solved
+ * without the motion prior). Diagnostic tools build the same stages. */
+vo::TKeyframeMatcherOptions matcherOptionsFor(const TLocaliserOptions& o, SearchMode mode);
+vo::TRelativePoseOptions estimatorOptionsFor(const TLocaliserOptions& o);
+
 /** A pose relative to a map keyframe with its covariance (left perturbation,
  * translation first [m^2, rad^2]). */
 struct TKeyframePose
