@@ -2,6 +2,7 @@
 #include "Command.h"
 #include "CommandLine.h"
 
+#include <shadyloc/core/Errors.h>
 #include <shadyloc/core/Registration.h>
 #include <shadyloc/io/OutputTransaction.h>
 
@@ -24,21 +25,6 @@ static void usage(std::ostream& o)
 	for (const auto& [name, c] : shadyloc::apps::commands())
 		o << "  " << name << std::string(name.size() < 12 ? 12 - name.size() : 1, ' ') << c.summary
 		  << "\n";
-}
-
-/** The reason, without MRPT's call-stack dump: MRPT exceptions carry
- * "Message: <why>" (nested ones several) between "Location:" lines and
- * backtraces; the innermost message says what went wrong. */
-static std::string userMessage(const std::string& what)
-{
-	const auto pos = what.rfind("Message:");
-	if (what.find("==== MRPT exception ====") == std::string::npos || pos == std::string::npos) return what;
-	std::string msg = what.substr(pos + 8);
-	for (const char* stop : {"\nLocation:", "\nCall stack", "\n===="})
-		if (const auto e = msg.find(stop); e != std::string::npos) msg = msg.substr(0, e);
-	const auto b = msg.find_first_not_of(" \t\n");
-	const auto e = msg.find_last_not_of(" \t\n");
-	return b == std::string::npos ? what : msg.substr(b, e - b + 1);
 }
 
 int main(int argc, char** argv)
@@ -74,7 +60,7 @@ int main(int argc, char** argv)
 	catch (const std::exception& e)
 	{
 		// what(), not MRPT's exception_to_str: a user wants the reason, not a trace.
-		std::cerr << "shadyloc " << name << ": error: " << userMessage(e.what()) << "\n";
+		std::cerr << "shadyloc " << name << ": error: " << shadyloc::core::mrptReason(e.what()) << "\n";
 		return 1;
 	}
 }

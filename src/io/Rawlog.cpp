@@ -1,5 +1,6 @@
 /* ShadyLoc — streaming rawlog reading and atomic rawlog writing. */
 #include <shadyloc/io/Rawlog.h>
+#include <shadyloc/core/Errors.h>
 #include <shadyloc/io/AllocationBound.h>
 #include <shadyloc/io/ImageFile.h>
 #include <shadyloc/io/OutputTransaction.h>
@@ -11,7 +12,6 @@
 #include <mrpt/obs/CObservationStereoImages.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
-#include <mrpt/system/string_utils.h>
 
 #include <filesystem>
 #include <system_error>
@@ -107,14 +107,7 @@ mrpt::serialization::CSerializable::Ptr RawlogReader::next()
 			throw RawlogError(where(
 				"corrupt data: a length field asks for " + std::to_string(refused) +
 				" bytes, more than remain in the file"));
-		std::string msg = e.what();
-		// MRPT exceptions nest messages with call traces; the innermost
-		// "Message:" line says what went wrong.
-		if (const auto pos = msg.rfind("Message:"); pos != std::string::npos)
-		{
-			const auto end = msg.find('\n', pos);
-			msg = mrpt::system::trim(msg.substr(pos + 8, end == std::string::npos ? end : end - pos - 8));
-		}
+		std::string msg = core::mrptReason(e.what());
 		if (msg.find("Stored object has class") != std::string::npos)
 			msg += " (unknown class: load the plugin that defines it, or the file is corrupt)";
 		else

@@ -1,6 +1,7 @@
 /* ShadyLoc — the dual-channel keyframe map. */
 #include "ByteBuffer.h"
 
+#include <shadyloc/core/Errors.h>
 #include <shadyloc/core/Settings.h>
 #include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/map/CKeyframeMap.h>
@@ -944,19 +945,8 @@ CKeyframeMap::Ptr CKeyframeMap::LoadFromBytes(const uint8_t* data, size_t size, 
 	}
 	catch (const std::exception& e)
 	{
-		// MRPT wraps the reader's error in its own message with a call trace:
-		// keep the line that says what is wrong.
-		const std::string all = mrpt::exception_to_str(e);
-		const std::string tag = "Original exception:\n";
-		const auto at = all.rfind(tag);
-		std::istringstream lines(at == std::string::npos ? all : all.substr(at + tag.size()));
-		std::string why, line;
-		while (why.empty() && std::getline(lines, line))
-		{
-			if (line.rfind("====", 0) == 0) continue;  // MRPT's banner
-			if (line.rfind("Message:", 0) == 0) line = line.substr(8);
-			why = line.substr(std::min(line.size(), line.find_first_not_of(' ')));
-		}
+		// MRPT wraps the reader's error in its own message with a call trace.
+		const std::string why = core::mrptReason(mrpt::exception_to_str(e));
 		throw std::runtime_error(
 			"keyframe map '" + path + "': cannot be read (damaged, or not a " + kClass + " file): " + why);
 	}

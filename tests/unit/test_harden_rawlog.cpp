@@ -217,3 +217,51 @@ TEST(RawlogIntegrity, ImageByteCountsAreCheckedBeforeMrptReadsThem)
 		EXPECT_NE(std::string(e.what()).find("more than remain"), std::string::npos) << e.what();
 	}
 }
+
+TEST(RawlogIntegrity, CorruptJpegImageIsAnErrorNotAnExit)
+{
+	// MRPT decodes stored JPEG images with libjpeg's standard error manager,
+	// which calls exit() on a fatal error; ours throws instead (JpegErrors.cpp).
+	// Without it this test would end the test program with status 1.
+	const auto dir = test::tempDir("rawlog_jpeg_corrupt");
+	cv::Mat m(24, 32, CV_8UC3);
+	cv::randu(m, 0, 255);
+	mrpt::img::CImage img(m, mrpt::img::DEEP_COPY);
+	mrpt::io::CMemoryStream mem;
+	mrpt::img::CImage::DISABLE_JPEG_COMPRESSION(false);
+	mrpt::serialization::archiveFrom(mem) << img;
+	mrpt::img::CImage::DISABLE_JPEG_COMPRESSION(true);
+	const auto* p = static_cast<const uint8_t*>(mem.getRawBufferData());
+	Bytes b(p, p + mem.getPosition());
+	const size_t jpegAt = 1 + 17 + 1 + 1 + 1 + 4 + 4 + 4;  // after nBytes
+	ASSERT_EQ(b[jpegAt], 0xFF);
+	ASSERT_EQ(b[jpegAt + 1], 0xD8);	 // the JPEG's start-of-image marker
+	b[jpegAt + 1] = 0x00;
+	const std::string path = dir + "/bad_jpeg.rawlog";
+	writeFile(path, b);
+	try
+	{
+		readAll(path);
+		ADD_FAILURE() << "an image with a broken JPEG header read as complete";
+	}
+	catch (const io::RawlogError& e)
+	{
+		const std::string what = e.what();
+		EXPECT_NE(what.find(path), std::string::npos) << what;
+		EXPECT_NE(what.find("object #0"), std::string::npos) << what;
+		EXPECT_NE(what.find("JPEG"), std::string::npos) << what;
+	}
+	// A JPEG whose data is cut (end-of-image marker and the last bytes of the
+	// scan replaced by garbage) still decodes or fails with an error: never exits.
+	Bytes c(p, p + mem.getPosition());
+	for (size_t i = c.size() - 40; i < c.size(); i++) c[i] = 0xFF;
+	writeFile(dir + "/cut_jpeg.rawlog", c);
+	try
+	{
+		readAll(dir + "/cut_jpeg.rawlog");
+	}
+	catch (const io::RawlogError& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("cut_jpeg.rawlog"), std::string::npos) << e.what();
+	}
+}
