@@ -23,7 +23,8 @@
 # the other world's rawlogs and maps are reused when OUTDIR is given again).
 # Environment: SHADYLOC_APP (default build/shadyloc), SHADYLOC_LOCALISE_INI
 # (default config/localise_sim.ini), SIM_INI (default config/sim.ini),
-# OTHER_SEED, OFFSETS (default "3 -3"). Needs about 10 minutes on 2 cores.
+# OTHER_SEED, OFFSETS (default "3 -3"), OTHER_WORLD (default 1; 0 skips part 2,
+# for more keyframe offsets without repeating it). Needs about 10 minutes on 2 cores.
 # Exits 1 on bad input or a failed command, 2 when a fault was accepted
 # (a false fix under the keyframe offset, or any fix in another world).
 set -euo pipefail
@@ -156,6 +157,7 @@ echo "Keyframe offset: $k of $n wrong-keyframe solves accepted as false fixes (9
 [ "$t" -eq 0 ] || echo "localise-faults: $t fixes under the offset were judged true: look at the maps' keyframe spacing" >&2
 
 # ---- 2. a map of another world
+if [ "${OTHER_WORLD:-1}" = 0 ]; then exit "$status"; fi
 seed=$(awk '/^\[/ { s = ($0 ~ /^\[sim\.scene\]/) } s && $1 == "seed" { print $3; exit }' "$sim_ini")
 [[ "$seed" =~ ^[0-9]+$ ]] || die "'$sim_ini': no [sim.scene] seed"
 other_seed="${OTHER_SEED:-$(( seed + 1 ))}"
