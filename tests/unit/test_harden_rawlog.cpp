@@ -69,6 +69,21 @@ Bytes gzip(const Bytes& b, size_t flushAt = 0)
 	return out;
 }
 
+/** A small random colour image serialised as MRPT stores it when
+ * DISABLE_JPEG_COMPRESSION is off: JPEG-compressed. */
+Bytes jpegStoredImage()
+{
+	cv::Mat m(24, 32, CV_8UC3);
+	cv::randu(m, 0, 255);
+	mrpt::img::CImage img(m, mrpt::img::DEEP_COPY);
+	mrpt::io::CMemoryStream mem;
+	mrpt::img::CImage::DISABLE_JPEG_COMPRESSION(false);
+	mrpt::serialization::archiveFrom(mem) << img;
+	mrpt::img::CImage::DISABLE_JPEG_COMPRESSION(true);
+	const auto* p = static_cast<const uint8_t*>(mem.getRawBufferData());
+	return Bytes(p, p + mem.getPosition());
+}
+
 /** Reads the whole rawlog; returns the number of objects, or throws. */
 size_t readAll(const std::string& path)
 {
@@ -192,15 +207,7 @@ TEST(RawlogIntegrity, ImageByteCountsAreCheckedBeforeMrptReadsThem)
 	// DISABLE_JPEG_COMPRESSION is off): MRPT sizes a buffer with realloc()
 	// from its byte count, which no allocation bound sees.
 	const auto dir = test::tempDir("rawlog_jpeg_count");
-	cv::Mat m(24, 32, CV_8UC3);
-	cv::randu(m, 0, 255);
-	mrpt::img::CImage img(m, mrpt::img::DEEP_COPY);
-	mrpt::io::CMemoryStream mem;
-	mrpt::img::CImage::DISABLE_JPEG_COMPRESSION(false);
-	mrpt::serialization::archiveFrom(mem) << img;
-	mrpt::img::CImage::DISABLE_JPEG_COMPRESSION(true);
-	const auto* p = static_cast<const uint8_t*>(mem.getRawBufferData());
-	Bytes b(p, p + mem.getPosition());
+	Bytes b = jpegStoredImage();
 	writeFile(dir + "/ok.rawlog", b);
 	EXPECT_EQ(readAll(dir + "/ok.rawlog"), 1u);
 	// Header: 0x91 "mrpt::img::CImage" version external hasColor w h nBytes.
@@ -224,15 +231,7 @@ TEST(RawlogIntegrity, CorruptJpegImageIsAnErrorNotAnExit)
 	// which calls exit() on a fatal error; ours throws instead (JpegErrors.cpp).
 	// Without it this test would end the test program with status 1.
 	const auto dir = test::tempDir("rawlog_jpeg_corrupt");
-	cv::Mat m(24, 32, CV_8UC3);
-	cv::randu(m, 0, 255);
-	mrpt::img::CImage img(m, mrpt::img::DEEP_COPY);
-	mrpt::io::CMemoryStream mem;
-	mrpt::img::CImage::DISABLE_JPEG_COMPRESSION(false);
-	mrpt::serialization::archiveFrom(mem) << img;
-	mrpt::img::CImage::DISABLE_JPEG_COMPRESSION(true);
-	const auto* p = static_cast<const uint8_t*>(mem.getRawBufferData());
-	Bytes b(p, p + mem.getPosition());
+	Bytes b = jpegStoredImage();
 	const size_t jpegAt = 1 + 17 + 1 + 1 + 1 + 4 + 4 + 4;  // after nBytes
 	ASSERT_EQ(b[jpegAt], 0xFF);
 	ASSERT_EQ(b[jpegAt + 1], 0xD8);	 // the JPEG's start-of-image marker
@@ -253,7 +252,7 @@ TEST(RawlogIntegrity, CorruptJpegImageIsAnErrorNotAnExit)
 	}
 	// A JPEG whose data is cut (end-of-image marker and the last bytes of the
 	// scan replaced by garbage) still decodes or fails with an error: never exits.
-	Bytes c(p, p + mem.getPosition());
+	Bytes c = jpegStoredImage();
 	for (size_t i = c.size() - 40; i < c.size(); i++) c[i] = 0xFF;
 	writeFile(dir + "/cut_jpeg.rawlog", c);
 	try
