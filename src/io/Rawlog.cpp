@@ -6,6 +6,7 @@
 #include <shadyloc/io/OutputTransaction.h>
 
 #include "CheckedInputStream.h"
+#include "JpegCodecs.h"
 
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CObservationImage.h>
@@ -85,6 +86,7 @@ mrpt::serialization::CSerializable::Ptr RawlogReader::next()
 	m_in->clearFailure();
 	try
 	{
+		detail::JpegCodecReaper jpegCodecs;  // MRPT's JPEG decoder leaks on any exception
 #ifndef SHADYLOC_NO_LENGTH_BOUND
 		AllocationBound bound(&withinStream, m_in.get());
 #endif

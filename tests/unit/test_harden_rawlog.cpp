@@ -13,6 +13,8 @@
 
 #include <zlib.h>
 
+#include <malloc.h>
+
 #include <fstream>
 
 using namespace shadyloc;
@@ -263,4 +265,41 @@ TEST(RawlogIntegrity, CorruptJpegImageIsAnErrorNotAnExit)
 	{
 		EXPECT_NE(std::string(e.what()).find("cut_jpeg.rawlog"), std::string::npos) << e.what();
 	}
+}
+
+TEST(RawlogIntegrity, AbandonedJpegDecodersAreFreed)
+{
+	// A JPEG header announcing a large image in a small file: libjpeg sets up
+	// its decoder (megabytes for the row buffers), then the allocation bound
+	// refuses MRPT's image buffer (4.3 MB) and the exception unwinds MRPT's decoder
+	// without its jpeg_destroy_decompress(). The reader frees it (JpegErrors.cpp):
+	// 20 such reads must not grow the heap by their ~2 MB each. (Under ASan,
+	// whose allocator mallinfo2 does not see, LeakSanitizer checks the same.)
+	const auto dir = test::tempDir("rawlog_jpeg_orphan");
+	Bytes b = jpegStoredImage();
+	size_t sof = 0;
+	for (size_t i = 0; i + 9 < b.size() && !sof; i++)
+		if (b[i] == 0xFF && b[i + 1] == 0xC0) sof = i;	// baseline start-of-frame
+	ASSERT_GT(sof, 0u);
+	b[sof + 7] = 0xEA, b[sof + 8] = 0x60;  // width 60000 (height stays 24)
+	const std::string path = dir + "/huge_jpeg.rawlog";
+	writeFile(path, b);
+	const auto heapInUse = [] { return mallinfo2().uordblks; };
+	std::string first;
+	const size_t before = heapInUse();
+	for (int k = 0; k < 20; k++)
+	{
+		try
+		{
+			readAll(path);
+			ADD_FAILURE() << "a 60000x24 JPEG in a " << b.size() << "-byte file read as complete";
+		}
+		catch (const io::RawlogError& e)
+		{
+			if (first.empty()) first = e.what();
+		}
+	}
+	const size_t after = heapInUse();
+	EXPECT_NE(first.find(path), std::string::npos) << first;
+	EXPECT_LT(after, before + 4 * 1024 * 1024) << "heap grew by " << (after - before) << " bytes over 20 reads";
 }
