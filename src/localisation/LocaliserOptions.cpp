@@ -24,6 +24,7 @@ void TLocaliserOptions::load(const mrpt::config::CConfigFileBase& c, const std::
 	r.read("gate_max_px", gate_max_px);
 	r.read("gate_landmark_max_px", gate_landmark_max_px);
 	r.read("max_overflow_fraction", max_overflow_fraction);
+	r.read("retry_gate_scale", retry_gate_scale);
 	r.read("window_px", window_px);
 	r.read("max_hamming", max_hamming);
 	r.read("match_ratio", match_ratio);
@@ -80,6 +81,7 @@ void TLocaliserOptions::dump(std::ostream& out) const
 	w.value("gate_max_px", gate_max_px, "ceiling: lost rather than clipped [px]");
 	w.value("gate_landmark_max_px", gate_landmark_max_px, "with the landmark's own uncertainty (0 = gate_max_px bounds all) [px]");
 	w.value("max_overflow_fraction", max_overflow_fraction);
+	w.value("retry_gate_scale", retry_gate_scale);
 	w.value("window_px", window_px, "[px]");
 	w.value("max_hamming", max_hamming, "[bits of 256]");
 	w.value("match_ratio", match_ratio);
@@ -128,6 +130,7 @@ void TLocaliserOptions::validate() const
 	need(gate_landmark_max_px == 0 || (gate_landmark_max_px >= gate_max_px && gate_landmark_max_px <= 10000),
 		 "gate_landmark_max_px", "must be 0 (off) or in [gate_max_px, 10000]");
 	need(max_overflow_fraction >= 0 && max_overflow_fraction <= 1, "max_overflow_fraction", "must be in [0, 1]");
+	need(retry_gate_scale >= 1, "retry_gate_scale", "must be >= 1");
 	need(window_px > 0, "window_px", "must be > 0");
 	need(max_hamming > 0 && max_hamming <= 256, "max_hamming", "must be in (0, 256]");
 	need(match_ratio > 0 && match_ratio <= 1, "match_ratio", "must be in (0, 1]");

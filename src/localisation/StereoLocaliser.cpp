@@ -356,26 +356,51 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 	mi.T_curr_kf_pred = pinv.T;
 	mi.cov_T_curr_kf_pred = pinv.cov;
 	vo::TKeyframeMatchOutput mo;
-	m_matcher.match(mi, mo);
-	r.gate = mo.gate;
-	r.matches = static_cast<int>(mo.corr.size());
-	if (o.search == SearchMode::Gate && mo.gate.predicted > 0 &&
-		mo.gate.overflow > o.max_overflow_fraction * mo.gate.predicted)
-		return fail(LocaliserStatus::Lost);
-	if (r.matches < o.min_matches) return fail(LocaliserStatus::FewMatches);
-
-	// ---- 3. RANSAC and the robust solve, without the prior ---------------------------
 	vo::TRelativePoseInput pi;
-	pi.corr = &mo.corr;
 	pi.calib = in.calib;
 	pi.T_curr_ref_pred = nullptr;
 	pi.seed = static_cast<uint32_t>(in.frame * 2654435761u + 7);
 	vo::TRelativePoseOutput po;
-	m_estimator.estimate(pi, po);
-	r.inliers = static_cast<int>(po.inliers);
-	r.rms_px = po.rms_px;
-	if (po.status == vo::RelativePoseStatus::SolverFailed) return fail(LocaliserStatus::SolverFailed);
-	if (!po.ok() || r.inliers < o.min_inliers) return fail(LocaliserStatus::FewInliers);
+	// Search and solve; once more with wider gates when the first finds too
+	// few (a prediction whose covariance is too small for its error).
+	LocaliserStatus searchStatus = LocaliserStatus::Ok;
+	for (int attempt = 0; attempt < 2; attempt++)
+	{
+		if (attempt == 1)
+		{
+			if (o.retry_gate_scale <= 1.0 || o.search != SearchMode::Gate) break;
+			mi.cov_T_curr_kf_pred *= o.retry_gate_scale * o.retry_gate_scale;
+		}
+		mo = vo::TKeyframeMatchOutput();
+		m_matcher.match(mi, mo);
+		r.gate = mo.gate;
+		r.matches = static_cast<int>(mo.corr.size());
+		if (o.search == SearchMode::Gate && mo.gate.predicted > 0 &&
+			mo.gate.overflow > o.max_overflow_fraction * mo.gate.predicted)
+		{
+			searchStatus = attempt == 0 ? LocaliserStatus::Lost : searchStatus;
+			break;
+		}
+		if (r.matches < o.min_matches)
+		{
+			searchStatus = LocaliserStatus::FewMatches;
+			continue;
+		}
+		// ---- 3. RANSAC and the robust solve, without the prior -----------------------
+		pi.corr = &mo.corr;
+		po = vo::TRelativePoseOutput();
+		m_estimator.estimate(pi, po);
+		r.inliers = static_cast<int>(po.inliers);
+		r.rms_px = po.rms_px;
+		if (po.status == vo::RelativePoseStatus::SolverFailed)
+		{
+			searchStatus = LocaliserStatus::SolverFailed;
+			break;
+		}
+		searchStatus = (!po.ok() || r.inliers < o.min_inliers) ? LocaliserStatus::FewInliers : LocaliserStatus::Ok;
+		if (searchStatus == LocaliserStatus::Ok) break;
+	}
+	if (searchStatus != LocaliserStatus::Ok) return fail(searchStatus);
 	r.solved = true;
 	r.var_factor = varianceFactor(in.calib, mo.corr, po.inlier, po.T_curr_ref, o.sigma_px);
 	r.T_kf_live = po.T_curr_ref.inverse();

@@ -446,3 +446,56 @@ TEST(LocalisationOptions, DumpLoadsBackIdentically)
 	sb.dump(ds2);
 	EXPECT_EQ(ds2.str(), ds.str());
 }
+
+TEST(LocalisationSecondSearch, WiderGatesRescueARightButOverConfidentPrediction)
+{
+	// One live frame at map keyframe 3 turned by 2 deg, predicted at the
+	// keyframe itself with 1 cm and 0.1 deg of standard deviation: a
+	// prediction 20 sigma off. Its gates (at their 3 px floor) miss the true
+	// matches; the second search, with the prediction's covariance scaled by
+	// 8^2 (0.8 deg), finds them, and the solve lands on the true pose. The failure test still
+	// judges the solve against the unscaled prediction (here: inconsistent),
+	// so the wider search can only win matches, not acceptance.
+	const auto map = surveyCorridor(11, 8);
+	sim::TCorridorOptions co;
+	co.seed = 11;
+	const sim::SyntheticCorridor corridor(co);
+	const uint32_t kf = 3;
+	const Eigen::Isometry3d T_kf = corridorPose(2.0 + kf * kSpacing, 0.0, 2.0 * std::sin(0.7 * kf));
+	const Eigen::Isometry3d T_live = T_kf * Eigen::AngleAxisd(2.0 * kDeg, Eigen::Vector3d::UnitY());
+	cv::Mat l, r, gl, gr;
+	corridor.render(T_live, l, r, 7000);
+	filters::defaultChannel("mono").convertPair(l, r, gl, gr);
+	features::TStereoFrame live;
+	features::StereoFeatureExtractor(featureOptions("mono")).process(gl, gr, corridor.calib(), live);
+
+	TLocaliserInput in;
+	in.frame = 1;
+	in.meas = &live;
+	in.calib = corridor.calib();
+	in.prediction.valid = true;
+	in.prediction.kf = kf;
+	in.prediction.T_kf_live = Eigen::Isometry3d::Identity();
+	in.prediction.cov.diagonal() << 1e-4, 1e-4, 1e-4, std::pow(0.1 * kDeg, 2), std::pow(0.1 * kDeg, 2),
+		std::pow(0.1 * kDeg, 2);
+	const auto run = [&](double scale) {
+		TLocaliserOptions o;
+		o.min_inliers = 15;
+		o.kf_lookahead_m = 0;
+		o.retry_gate_scale = scale;
+		CStereoLocaliser loc(*map, "mono", o);
+		return loc.localise(in);
+	};
+	const auto once = run(1.0);
+	EXPECT_TRUE(once.status == LocaliserStatus::FewMatches || once.status == LocaliserStatus::FewInliers)
+		<< "one search: " << toString(once.status) << ", " << once.matches << " matches";
+	EXPECT_FALSE(once.solved);
+	const auto twice = run(8.0);
+	ASSERT_TRUE(twice.solved) << "second search: " << toString(twice.status) << ", " << twice.matches << " matches";
+	EXPECT_EQ(twice.kf_id, map->keyframe(kf).id);
+	const Eigen::Isometry3d truth = T_kf.inverse() * T_live;
+	EXPECT_LT((twice.T_kf_live.translation() - truth.translation()).norm(), 0.05);
+	EXPECT_LT(Eigen::AngleAxisd(twice.T_kf_live.linear().transpose() * truth.linear()).angle() / kDeg, 0.3);
+	EXPECT_GT(twice.inliers, once.inliers);
+	EXPECT_EQ(twice.status, LocaliserStatus::PredictionInconsistent);
+}

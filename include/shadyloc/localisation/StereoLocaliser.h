@@ -95,6 +95,10 @@ struct TLocaliserOptions
 	 * lane"). 0 = gate_max_px bounds the whole gate [px]. */
 	double gate_landmark_max_px = 150.0;
 	double max_overflow_fraction = 0.5;	 //!< see gate_max_px
+	/** A frame that finds too few matches or inliers in its gates searches
+	 * once more with the prediction's covariance scaled by this squared (its
+	 * part of every gate by this); 1 = no second search [-]. */
+	double retry_gate_scale = 2.0;
 	double window_px = 40.0;  //!< Window: circle radius [px]
 	int max_hamming = 80;  //!< largest BRIEF distance of a match [bits of 256]
 	double match_ratio = 0.9;  //!< best < ratio * second best distance in the region
