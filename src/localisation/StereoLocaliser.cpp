@@ -364,12 +364,25 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 	// Search and solve; once more with wider gates when the first finds too
 	// few (a prediction whose covariance is too small for its error).
 	LocaliserStatus searchStatus = LocaliserStatus::Ok;
+	// A frame that fails both searches reports its first (the gates as predicted).
+	struct
+	{
+		vo::TGateStats gate;
+		int matches = 0, inliers = 0;
+		double rms_px = 0;
+	} first;
+	bool retried = false;
 	for (int attempt = 0; attempt < 2; attempt++)
 	{
 		if (attempt == 1)
 		{
 			if (o.retry_gate_scale <= 1.0 || o.search != SearchMode::Gate) break;
 			mi.cov_T_curr_kf_pred *= o.retry_gate_scale * o.retry_gate_scale;
+			first.gate = r.gate;
+			first.matches = r.matches;
+			first.inliers = r.inliers;
+			first.rms_px = r.rms_px;
+			retried = true;
 		}
 		mo = vo::TKeyframeMatchOutput();
 		m_matcher.match(mi, mo);
@@ -400,7 +413,17 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 		searchStatus = (!po.ok() || r.inliers < o.min_inliers) ? LocaliserStatus::FewInliers : LocaliserStatus::Ok;
 		if (searchStatus == LocaliserStatus::Ok) break;
 	}
-	if (searchStatus != LocaliserStatus::Ok) return fail(searchStatus);
+	if (searchStatus != LocaliserStatus::Ok)
+	{
+		if (retried)
+		{
+			r.gate = first.gate;
+			r.matches = first.matches;
+			r.inliers = first.inliers;
+			r.rms_px = first.rms_px;
+		}
+		return fail(searchStatus);
+	}
 	r.solved = true;
 	r.var_factor = varianceFactor(in.calib, mo.corr, po.inlier, po.T_curr_ref, o.sigma_px);
 	r.T_kf_live = po.T_curr_ref.inverse();
