@@ -81,8 +81,7 @@ jpeg_error_mgr* releaseErrors()
 	static jpeg_error_mgr err = []
 	{
 		jpeg_error_mgr e{};
-		libjpeg<jpeg_error_mgr* (*)(jpeg_error_mgr*)>("jpeg_std_error")(&e);
-		e.error_exit = &throwingErrorExit;
+		jpeg_std_error(&e);	 // ours, below: libjpeg's manager with our error_exit
 		return e;
 	}();
 	return &err;
