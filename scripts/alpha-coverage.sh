@@ -14,6 +14,11 @@
 #
 #   scripts/alpha-coverage.sh [DATADIR] [OUTDIR] [LABEL=ALPHA[:BETA] ...]
 #
+# With MAPPING=calibrated the 8-bit mapping is calibrated for each alpha
+# instead (`shadyloc calibrate-alpha --alpha A` over every 6th frame of every
+# rawlog in DATADIR: 0.4 % clipped), so that alpha no longer changes the
+# invariant image's contrast.
+#
 # DATADIR defaults to rawlogs/generated (scripts/make-default-dataset.sh),
 # OUTDIR to a temporary directory (maps and runs are kept there and reused on
 # a second call). The default alphas are those of docs/calibration.md.
@@ -48,14 +53,23 @@ done
 [ ${#conds[@]} -ge 2 ] || { echo "alpha-coverage: fewer than two rawlogs in $data" >&2; exit 1; }
 
 # vo_sim.ini with its [invariant] section's alpha/beta (or peak wavelengths)
-# replaced by the given ones; every other key stays.
+# replaced by the given ones, and with a calibrated mapping its scale and
+# offset too; every other key stays.
 make_config() {
-  local a="$1" b="$2" dst="$3"
-  awk -v a="$a" -v b="$b" '
+  local a="$1" b="$2" dst="$3" sc="" of=""
+  if [ "${MAPPING:-fixed}" = calibrated ]; then
+    local rl=() r
+    for r in "$data"/*.rawlog; do rl+=(--rawlog "$r"); done
+    "$app" calibrate-alpha --linearise none "${rl[@]}" --every 6 --alpha "$a" --beta "$b" -o "$dst.mapping" > "$dst.mapping.log"
+    sc="$(sed -n 's/^scale = //p' "$dst.mapping.ini")"
+    of="$(sed -n 's/^offset = //p' "$dst.mapping.ini")"
+  fi
+  awk -v a="$a" -v b="$b" -v sc="$sc" -v of="$of" '
     /^\[/ { insec = ($0 == "[invariant]") }
     insec && /^(peak_wavelength_(blue|green|red)_nm|alpha|beta)[ \t]*=/ { next }
+    insec && sc != "" && /^(scale|offset)[ \t]*=/ { next }
     { print }
-    $0 == "[invariant]" { print "alpha = " a; print "beta = " b }
+    $0 == "[invariant]" { print "alpha = " a; print "beta = " b; if (sc != "") { print "scale = " sc; print "offset = " of } }
   ' "$here/config/vo_sim.ini" > "$dst.tmp"
   mv "$dst.tmp" "$dst"
 }
@@ -78,8 +92,8 @@ for spec in "${alphas[@]}"; do
   labels+=("$label")
   d="$out/$label"
   mkdir -p "$d/maps"
-  make_config "$a" "$b" "$d/vo.ini"
-  echo "$label: alpha $a, beta $b" > "$d/alpha.txt"
+  [ -f "$d/vo.ini" ] || make_config "$a" "$b" "$d/vo.ini"
+  echo "$label: alpha $a, beta $b, mapping ${MAPPING:-fixed}" > "$d/alpha.txt"
   for c in "${conds[@]}"; do
     [ -f "$d/maps/$c.kfmap" ] || "$app" survey -q -i "$data/$c.rawlog" -o "$d/maps/$c.kfmap" -c "$d/vo.ini" --gt "$data/$c.tum" >/dev/null
   done

@@ -216,10 +216,11 @@ int run(int argc, char** argv)
 		cmd);
 	TCLAP::MultiArg<std::string> images("", "image", "an ordinary image (repeatable; entropy method)", false, "file", cmd);
 	TCLAP::ValueArg<std::string> imagesDir("", "images", "a directory of ordinary images (entropy method)", false, "", "dir", cmd);
-	TCLAP::ValueArg<std::string> rawlog("", "rawlog", "a rawlog; left/colour images (entropy method)", false, "", "file", cmd);
+	TCLAP::MultiArg<std::string> rawlog(
+		"", "rawlog", "a rawlog; left/colour images (repeatable; entropy and edges methods)", false, "file", cmd);
 	TCLAP::ValueArg<std::string> sensor("", "sensor", "only this sensor label of --rawlog", false, "", "label", cmd);
 	shadyloc::apps::NumberArg<int> maxFrames(
-		cli, "", "max-frames", "at most this many rawlog frames (0 = all)", 200, "n", 0, 1000000000);
+		cli, "", "max-frames", "at most this many frames of each rawlog (0 = all)", 200, "n", 0, 1000000000);
 	shadyloc::apps::NumberArg<int> every(
 		cli, "", "every", "use every n-th rawlog frame", 1, "n", 1, 1000000);
 	std::vector<std::string> methods{"auto", "pairs", "same-view", "edges", "entropy"};
@@ -256,6 +257,11 @@ int run(int argc, char** argv)
 		cli, "", "bootstrap", "bootstrap rounds over images for the interval (0 = none)", 200, "n", 0, 100000);
 	shadyloc::apps::NumberArg<double> tail(
 		cli, "", "tail", "share of pixels clipped at each end of the 8-bit mapping", 0.002, "q", 0.0, 0.1);
+	shadyloc::apps::NumberArg<double> knownAlpha(
+		cli, "", "alpha", "a known alpha (e.g. a datasheet's): no estimate, only the 8-bit mapping is calibrated; no curve",
+		0.5, "a", 0.0, 1.0);
+	shadyloc::apps::NumberArg<double> knownBeta(
+		cli, "", "beta", "with --alpha: beta when alpha + beta != 1 (default 1 - alpha)", 0.5, "b", 0.0, 1.0);
 	TCLAP::SwitchArg noPlot("", "no-plot", "do not draw OUT_curve.png (no gnuplot needed)", cmd);
 	TCLAP::ValueArg<std::string> out("o", "output", "output prefix: OUT.ini, OUT_curve.csv, OUT_curve.png", true, "", "OUT", cmd);
 	if (const auto rc = cli.parse(argc, argv)) return *rc;
@@ -307,8 +313,8 @@ int run(int argc, char** argv)
 		if (files.empty()) throw std::runtime_error("--images '" + imagesDir.getValue() + "': no image files");
 		for (const auto& f : files) plain.push_back(readColour(f.string()));
 	}
-	if (rawlog.isSet())
-		for (auto& m : framesOfRawlog(rawlog.getValue(), sensor.getValue(), maxFrames.getValue(), every.getValue()))
+	for (const auto& r : rawlog.getValue())
+		for (auto& m : framesOfRawlog(r, sensor.getValue(), maxFrames.getValue(), every.getValue()))
 			plain.push_back(std::move(m));
 	if (shadowPairs.empty() && viewPairs.empty() && plain.empty())
 		throw std::invalid_argument("no data: give --pairs/--pair, --same-view, --image/--images or --rawlog");
@@ -318,41 +324,54 @@ int run(int argc, char** argv)
 			  << ", channel order " << toString(in.order) << "; " << shadowPairs.size() << " shadow pair(s), "
 			  << viewPairs.size() << " same-view pair(s), " << plain.size() << " ordinary image(s)\n";
 
-	// ---- estimates
-	std::vector<TAlphaCurve> curves;
-	std::vector<std::string> skipped;
-	if (!shadowPairs.empty()) curves.push_back(alphaFromShadowPairs(shadowPairs, in, search, 0.01, &skipped));
-	if (!viewPairs.empty()) curves.push_back(alphaFromSameView(viewPairs, in, search, 0.03, &skipped));
-	// The entropy method runs on every image given (pairs included: they are images too).
+	if (knownBeta.isSet() && !knownAlpha.isSet()) throw std::invalid_argument("--beta needs --alpha");
+	// The entropy/edges methods and the mapping run on every image given (pairs are images too).
 	std::vector<cv::Mat> all = plain;
 	for (const auto& p : shadowPairs) all.push_back(p.free), all.push_back(p.shadow);
 	for (const auto& p : viewPairs) all.push_back(p.a), all.push_back(p.b);
-	curves.push_back(alphaByEdgeDirections(edgeSamples(all, in, edgeStep.getValue()), search, edgeMaxChroma.getValue()));
-	curves.push_back(alphaByEntropy(chromaSamples(all, in), search));
-	for (const auto& s : skipped) std::cout << "skipped: " << s << "\n";
 
+	// ---- estimates (none with a known alpha)
+	std::vector<TAlphaCurve> curves;
 	const TAlphaCurve* chosen = nullptr;
-	const std::string want = method.getValue();
-	for (const auto& c : curves)
-		if (c.method == want) chosen = &c;
-	if (want == "auto") chosen = &curves.front();
-	if (!chosen)
-		throw std::invalid_argument(
-			"--method " + want + ": that method had no data (pairs: --pairs/--pair; same-view: --same-view)");
+	InvariantParams p;
+	if (knownAlpha.isSet())
+	{
+		p = in.params(knownAlpha.getValue());
+		if (knownBeta.isSet()) p.beta = knownBeta.getValue();
+		std::cout << "\nalpha given: " << fmt(p.alpha) << ", beta " << fmt(p.beta) << " (no estimate)\n";
+	}
+	else
+	{
+		std::vector<std::string> skipped;
+		if (!shadowPairs.empty()) curves.push_back(alphaFromShadowPairs(shadowPairs, in, search, 0.01, &skipped));
+		if (!viewPairs.empty()) curves.push_back(alphaFromSameView(viewPairs, in, search, 0.03, &skipped));
+		curves.push_back(alphaByEdgeDirections(edgeSamples(all, in, edgeStep.getValue()), search, edgeMaxChroma.getValue()));
+		curves.push_back(alphaByEntropy(chromaSamples(all, in), search));
+		for (const auto& s : skipped) std::cout << "skipped: " << s << "\n";
 
-	std::cout << "\nalpha estimates (beta = 1 - alpha; 95 % bootstrap interval over "
-			  << (search.bootstrapRounds > 0 ? std::to_string(search.bootstrapRounds) + " resamplings" : "none")
-			  << "):\n";
-	for (const auto& c : curves)
-		std::cout << "  " << std::left << std::setw(10) << c.method << " alpha " << fmt(c.best) << "  ["
-				  << fmt(c.ciLow) << ", " << fmt(c.ciHigh) << "]  from " << c.items
-				  << (c.method == "entropy" || c.method == "edges" ? " images" : " pairs") << (&c == chosen ? "   <- used" : "") << "\n";
+		const std::string want = method.getValue();
+		for (const auto& c : curves)
+			if (c.method == want) chosen = &c;
+		if (want == "auto") chosen = &curves.front();
+		if (!chosen)
+			throw std::invalid_argument(
+				"--method " + want + ": that method had no data (pairs: --pairs/--pair; same-view: --same-view)");
+
+		std::cout << "\nalpha estimates (beta = 1 - alpha; 95 % bootstrap interval over "
+				  << (search.bootstrapRounds > 0 ? std::to_string(search.bootstrapRounds) + " resamplings" : "none")
+				  << "):\n";
+		for (const auto& c : curves)
+			std::cout << "  " << std::left << std::setw(10) << c.method << " alpha " << fmt(c.best) << "  ["
+					  << fmt(c.ciLow) << ", " << fmt(c.ciHigh) << "]  from " << c.items
+					  << (c.method == "entropy" || c.method == "edges" ? " images" : " pairs") << (&c == chosen ? "   <- used" : "") << "\n";
+
+		p = in.params(chosen->best);
+	}
 
 	// ---- mapping
-	InvariantParams p = in.params(chosen->best);
+	auto pDef = p;	// default mapping at the same alpha and beta
 	p = calibrateMapping(all, p, tail.getValue(), in.stride);
 	const auto stCal = mappingStats(all, p, in.stride);
-	auto pDef = in.params(chosen->best);  // default mapping at the same alpha
 	const auto stDef = mappingStats(all, pDef, in.stride);
 	auto pPaper = InvariantParams::FromAlphaBeta(0.4800, 0.5065);
 	pPaper.order = in.order, pPaper.linearisation = in.linearisation, pPaper.gamma = in.gamma;
@@ -376,36 +395,45 @@ int run(int argc, char** argv)
 	shadyloc::CFilterInvariant filter;
 	filter.setParams(p);
 	std::ostringstream ini;
-	ini << "# Calibrated by shadyloc calibrate-alpha (" << chosen->method << " method, " << chosen->items
-		<< (chosen->method == "entropy" || chosen->method == "edges" ? " images" : " pairs") << ", 95% interval of alpha [" << fmt(chosen->ciLow)
-		<< ", " << fmt(chosen->ciHigh) << "]).\n# Input linearisation: " << toString(in.linearisation)
+	if (chosen)
+		ini << "# Calibrated by shadyloc calibrate-alpha (" << chosen->method << " method, " << chosen->items
+			<< (chosen->method == "entropy" || chosen->method == "edges" ? " images" : " pairs")
+			<< ", 95% interval of alpha [" << fmt(chosen->ciLow) << ", " << fmt(chosen->ciHigh) << "]).\n";
+	else
+		ini << "# alpha and beta given (--alpha); 8-bit mapping calibrated by shadyloc calibrate-alpha from "
+			<< all.size() << " images.\n";
+	ini << "# Input linearisation: " << toString(in.linearisation)
 		<< ". Clipping over the calibration images: " << fmt(100 * stCal.clipped(), 2) << " %.\n"
 		<< "# scale and offset define the descriptors: keep them equal for map and live data.\n"
 		<< "[invariant]\n"
 		<< filter.optionsAsIni();
-	std::ostringstream csv;
-	csv << "alpha";
-	for (const auto& c : curves) csv << "," << c.method;
-	csv << "\n" << std::setprecision(8);
-	// Curves share one grid (one TAlphaSearch).
-	for (size_t j = 0; j < curves.front().alpha.size(); j++)
-	{
-		csv << curves.front().alpha[j];
-		for (const auto& c : curves) csv << "," << c.cost[j];
-		csv << "\n";
-	}
 	OutputSet outputs;
 	const std::string iniPath = out.getValue() + ".ini", csvPath = out.getValue() + "_curve.csv",
 					  pngPath = out.getValue() + "_curve.png";
 	writeText(outputs.stage(iniPath), ini.str());
-	const std::string csvTmp = outputs.stage(csvPath);
-	writeText(csvTmp, csv.str());
-	if (!noPlot.getValue())
-		plotCurves(curves, csvTmp, outputs.stage(pngPath), 0.48,
-			"alpha calibration (linearisation " + toString(in.linearisation) + ")");
+	const bool withCurve = !curves.empty();
+	if (withCurve)
+	{
+		std::ostringstream csv;
+		csv << "alpha";
+		for (const auto& c : curves) csv << "," << c.method;
+		csv << "\n" << std::setprecision(8);
+		// Curves share one grid (one TAlphaSearch).
+		for (size_t j = 0; j < curves.front().alpha.size(); j++)
+		{
+			csv << curves.front().alpha[j];
+			for (const auto& c : curves) csv << "," << c.cost[j];
+			csv << "\n";
+		}
+		const std::string csvTmp = outputs.stage(csvPath);
+		writeText(csvTmp, csv.str());
+		if (!noPlot.getValue())
+			plotCurves(curves, csvTmp, outputs.stage(pngPath), 0.48,
+				"alpha calibration (linearisation " + toString(in.linearisation) + ")");
+	}
 	outputs.commit();
-	std::cout << "\nwrote " << iniPath << ", " << csvPath << (noPlot.getValue() ? "" : ", " + pngPath)
-			  << "\n\n" << ini.str();
+	std::cout << "\nwrote " << iniPath << (withCurve ? ", " + csvPath : "")
+			  << (withCurve && !noPlot.getValue() ? ", " + pngPath : "") << "\n\n" << ini.str();
 	return 0;
 }
 shadyloc::apps::RegisterCommand reg(

@@ -742,3 +742,53 @@ TEST(InvariantCalibrationApp, WritesIniCurveAndPlotThatLoadBack)
 	EXPECT_NE(out.find("missing.png"), std::string::npos) << out;
 	EXPECT_TRUE(fs::is_empty(bad));
 }
+
+// A camera with a datasheet alpha needs only the 8-bit mapping: --alpha (and
+// --beta) are taken as given, no curve is written, and the mapping is
+// calibrated at exactly those values.
+TEST(InvariantCalibrationApp, KnownAlphaCalibratesOnlyTheMapping)
+{
+	const auto dir = shadyloc::test::tempDir("calib_app_known");
+	std::string args;
+	std::vector<cv::Mat> images;
+	for (int i = 0; i < 3; i++)
+	{
+		images.push_back(syntheticScene(80 + i, kSun, kSky, shadowShape(80 + i)));
+		const std::string f = dir + "/im" + std::to_string(i) + ".png";
+		cv::imwrite(f, images.back());
+		args += " --image " + f;
+	}
+	std::string out;
+	ASSERT_EQ(shadyloc::test::runCommand(
+				  shadyloc::test::appPath() + " calibrate-alpha" + args +
+					  " --linearise none --alpha 0.42 --beta 0.5 --tail 0.002 -o " + dir + "/k",
+				  &out),
+		0)
+		<< out;
+	ASSERT_TRUE(fs::exists(dir + "/k.ini"));
+	EXPECT_FALSE(fs::exists(dir + "/k_curve.csv"));	 // no estimate, no curve
+	{
+		std::ifstream f(dir + "/k.ini");
+		std::ofstream g(dir + "/filters.ini");
+		g << "[filters]\npipeline = invariant\n" << f.rdbuf();
+	}
+	const auto pipe = shadyloc::filters::FilterPipeline::FromConfigFile(dir + "/filters.ini");
+	ASSERT_EQ(pipe.filters.size(), 1u);
+	const auto inv = std::dynamic_pointer_cast<shadyloc::CFilterInvariant>(pipe.filters[0]);
+	ASSERT_TRUE(inv);
+	EXPECT_EQ(inv->params().alpha, 0.42);  // the dump writes doubles that read back exactly
+	EXPECT_EQ(inv->params().beta, 0.5);
+	EXPECT_NE(inv->params().scale, 255.0);
+	// The mapping was fitted at the given alpha/beta: 2 x 0.2 % tails clip,
+	// 0.1 point of slack for ties at the quantiles of these 8-bit images.
+	const auto st = mappingStats(images, inv->params(), 2);
+	EXPECT_LE(st.clipped(), 0.005) << st.clipped();
+	EXPECT_GT(st.span(), 100.0);
+
+	EXPECT_NE(shadyloc::test::runCommand(
+				  shadyloc::test::appPath() + " calibrate-alpha" + args + " --linearise none --beta 0.5 -o " + dir + "/b",
+				  &out),
+		0);
+	EXPECT_NE(out.find("--beta needs --alpha"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(dir + "/b.ini"));
+}
