@@ -7,13 +7,15 @@
 #include <cmath>
 #include <iostream>
 
+#include "shadyloc_commit.h"  // SHADYLOC_GIT_COMMIT, written at build time (cmake/WriteCommit.cmake)
+
 #ifndef SHADYLOC_VERSION
 #define SHADYLOC_VERSION "unknown"
 #endif
 
 namespace shadyloc::apps
 {
-const char* version() { return SHADYLOC_VERSION; }
+const char* version() { return SHADYLOC_VERSION " (commit " SHADYLOC_GIT_COMMIT ")"; }
 
 template <typename T>
 T parseNumber(const std::string& text)

@@ -18,9 +18,7 @@
 #include <sstream>
 #include <thread>
 
-#ifndef SHADYLOC_GIT_COMMIT
-#define SHADYLOC_GIT_COMMIT "unknown"
-#endif
+#include "shadyloc_commit.h"  // SHADYLOC_GIT_COMMIT, written at build time (cmake/WriteCommit.cmake)
 
 namespace
 {

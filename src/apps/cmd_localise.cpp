@@ -20,9 +20,7 @@
 #include <iostream>
 #include <sstream>
 
-#ifndef SHADYLOC_GIT_COMMIT
-#define SHADYLOC_GIT_COMMIT "unknown"
-#endif
+#include "shadyloc_commit.h"  // SHADYLOC_GIT_COMMIT, written at build time (cmake/WriteCommit.cmake)
 
 namespace
 {

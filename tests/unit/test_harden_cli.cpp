@@ -115,4 +115,7 @@ TEST(CommandLine, HelpAndVersionExitZero)
 	}
 	std::string out;
 	EXPECT_EQ(test::runCommand(test::appPath() + " --version", &out), 0) << out;
+	// The commit the program was built from (cmake/WriteCommit.cmake): a
+	// hexadecimal hash, or "unknown" outside git.
+	EXPECT_TRUE(std::regex_search(out, std::regex("\\(commit ([0-9a-f]{12}(-dirty)?|unknown)\\)"))) << out;
 }

@@ -77,7 +77,7 @@ class CLocaliseRun
 struct TLocaliseProvenance
 {
 	std::string program = "shadyloc localise";
-	std::string buildCommit = "unknown";  //!< the program's commit (set at configure time)
+	std::string buildCommit = "unknown";  //!< the program's commit (written at build time; "-dirty" when built from modified sources)
 	std::string configWhat, configText;	 //!< config names, their concatenated text (hashed)
 	std::string mapPath, livePath, gtPath;	//!< as given; gtPath "" without ground truth
 	std::string mapHash, liveHash, gtHash;	//!< fnv1a64File of each ("" = computed from the path)
