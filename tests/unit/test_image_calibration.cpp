@@ -684,6 +684,24 @@ TEST(InvariantCalibrationReal, ShadowPairsAndUnsupervisedAgree)
 }
 
 // ---- the command --------------------------------------------------------------
+namespace
+{
+/** The invariant filter of a filters .ini made of calibrate-alpha's OUT.ini
+ * pasted under a one-filter [filters] pipeline (null if it is not one). */
+std::shared_ptr<shadyloc::CFilterInvariant> filterFromCalibration(const std::string& iniPath)
+{
+	const std::string filtersIni = iniPath + ".filters.ini";
+	{
+		std::ifstream f(iniPath);
+		std::ofstream g(filtersIni);
+		g << "[filters]\npipeline = invariant\n" << f.rdbuf();
+	}
+	const auto pipe = shadyloc::filters::FilterPipeline::FromConfigFile(filtersIni);
+	if (pipe.filters.size() != 1) return nullptr;
+	return std::dynamic_pointer_cast<shadyloc::CFilterInvariant>(pipe.filters[0]);
+}
+}  // namespace
+
 TEST(InvariantCalibrationApp, WritesIniCurveAndPlotThatLoadBack)
 {
 	const auto dir = shadyloc::test::tempDir("calib_app");
@@ -714,14 +732,7 @@ TEST(InvariantCalibrationApp, WritesIniCurveAndPlotThatLoadBack)
 	for (const auto& e : fs::directory_iterator(dir))
 		EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << "left over: " << e.path();
 	// The section pastes into a filters .ini and loads back with the estimate.
-	{
-		std::ifstream f(dir + "/cam.ini");
-		std::ofstream g(dir + "/filters.ini");
-		g << "[filters]\npipeline = invariant\n" << f.rdbuf();
-	}
-	const auto pipe = shadyloc::filters::FilterPipeline::FromConfigFile(dir + "/filters.ini");
-	ASSERT_EQ(pipe.filters.size(), 1u);
-	const auto inv = std::dynamic_pointer_cast<shadyloc::CFilterInvariant>(pipe.filters[0]);
+	const auto inv = filterFromCalibration(dir + "/cam.ini");
 	ASSERT_TRUE(inv);
 	// 0.02: three small pairs, shadowed pixels at codes 8-40 (quantisation steps of 2.5-12 %).
 	EXPECT_NEAR(inv->params().alpha, trueAlpha(), 0.02);
@@ -767,14 +778,7 @@ TEST(InvariantCalibrationApp, KnownAlphaCalibratesOnlyTheMapping)
 		<< out;
 	ASSERT_TRUE(fs::exists(dir + "/k.ini"));
 	EXPECT_FALSE(fs::exists(dir + "/k_curve.csv"));	 // no estimate, no curve
-	{
-		std::ifstream f(dir + "/k.ini");
-		std::ofstream g(dir + "/filters.ini");
-		g << "[filters]\npipeline = invariant\n" << f.rdbuf();
-	}
-	const auto pipe = shadyloc::filters::FilterPipeline::FromConfigFile(dir + "/filters.ini");
-	ASSERT_EQ(pipe.filters.size(), 1u);
-	const auto inv = std::dynamic_pointer_cast<shadyloc::CFilterInvariant>(pipe.filters[0]);
+	const auto inv = filterFromCalibration(dir + "/k.ini");
 	ASSERT_TRUE(inv);
 	EXPECT_EQ(inv->params().alpha, 0.42);  // the dump writes doubles that read back exactly
 	EXPECT_EQ(inv->params().beta, 0.5);
