@@ -282,6 +282,9 @@ int run(int argc, char** argv)
 	search.bootstrapRounds = boot.getValue();
 	search.validate();
 	if (every.getValue() < 1) throw std::invalid_argument("--every must be >= 1");
+	if (knownBeta.isSet() && !knownAlpha.isSet()) throw std::invalid_argument("--beta needs --alpha");
+	if (knownAlpha.isSet() && method.isSet())
+		throw std::invalid_argument("--method and --alpha exclude each other: --alpha gives alpha, no method estimates it");
 	const fs::path outDir = fs::path(out.getValue()).parent_path();
 	if (!outDir.empty() && !fs::is_directory(outDir))
 		throw std::runtime_error("-o '" + out.getValue() + "': directory '" + outDir.string() + "' does not exist");
@@ -324,7 +327,6 @@ int run(int argc, char** argv)
 			  << ", channel order " << toString(in.order) << "; " << shadowPairs.size() << " shadow pair(s), "
 			  << viewPairs.size() << " same-view pair(s), " << plain.size() << " ordinary image(s)\n";
 
-	if (knownBeta.isSet() && !knownAlpha.isSet()) throw std::invalid_argument("--beta needs --alpha");
 	// The entropy/edges methods and the mapping run on every image given (pairs are images too).
 	std::vector<cv::Mat> all = plain;
 	for (const auto& p : shadowPairs) all.push_back(p.free), all.push_back(p.shadow);

@@ -794,5 +794,10 @@ TEST(InvariantCalibrationApp, KnownAlphaCalibratesOnlyTheMapping)
 				  &out),
 		0);
 	EXPECT_NE(out.find("--beta needs --alpha"), std::string::npos) << out;
+	EXPECT_NE(shadyloc::test::runCommand(shadyloc::test::appPath() + " calibrate-alpha" + args +
+											 " --linearise none --alpha 0.4 --method edges -o " + dir + "/b",
+				  &out),
+		0);
+	EXPECT_NE(out.find("exclude each other"), std::string::npos) << out;
 	EXPECT_FALSE(fs::exists(dir + "/b.ini"));
 }
