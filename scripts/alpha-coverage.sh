@@ -92,7 +92,14 @@ for spec in "${alphas[@]}"; do
   labels+=("$label")
   d="$out/$label"
   mkdir -p "$d/maps"
-  [ -f "$d/vo.ini" ] || make_config "$a" "$b" "$d/vo.ini"
+  # Maps and runs in OUTDIR are reused only when they were made with this
+  # very config (the mapping's calibration is deterministic).
+  make_config "$a" "$b" "$d/vo.ini.new"
+  if [ -f "$d/vo.ini" ] && ! cmp -s "$d/vo.ini" "$d/vo.ini.new"; then
+    echo "alpha-coverage: $d holds outputs of another config for '$label' (other alpha or MAPPING): use another OUTDIR" >&2
+    exit 1
+  fi
+  mv "$d/vo.ini.new" "$d/vo.ini"
   echo "$label: alpha $a, beta $b, mapping ${MAPPING:-fixed}" > "$d/alpha.txt"
   for c in "${conds[@]}"; do
     [ -f "$d/maps/$c.kfmap" ] || "$app" survey -q -i "$data/$c.rawlog" -o "$d/maps/$c.kfmap" -c "$d/vo.ini" --gt "$data/$c.tum" >/dev/null
