@@ -41,8 +41,10 @@ struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 	double kf_spacing_deg = 15.0;  //!< ... or this change of heading (rotation angle) [deg]
 	/** Landmarks kept per keyframe and channel (0 = all), the best by
 	 * `landmark_selection` per image bucket first, so they stay spread over
-	 * the image (docs/map.md). */
-	int landmarks_per_keyframe = 0;
+	 * the image. 140 with 4-bit patches sits at the knee of the measured
+	 * size-coverage curve, under 5 MB/km per channel (docs/map.md, "Size
+	 * against coverage"); 0 keeps every landmark (3.6x the size). */
+	int landmarks_per_keyframe = 140;
 	/** How a survey ranks a keyframe's landmarks when it thins them. */
 	enum class LandmarkSelection : uint8_t
 	{
@@ -66,8 +68,9 @@ struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 	int selection_grid_rows = 6;  //!< buckets down the image
 	/** Bits kept of each pixel of the stored patches, 1..8: the low bits are
 	 * replaced by the middle of their range (in memory as on disk), so the
-	 * patches compress better (docs/map.md, "Sizes"). */
-	int patch_bits = 8;
+	 * patches compress better. At equal size 4 bits localise best: 3 or 2
+	 * bits buy landmarks but lose more (docs/map.md, "Size against coverage"). */
+	int patch_bits = 4;
 	int compression_level = 9;  //!< zstd level, 1 (fast) .. 22 (small); 19 saves 3 % for 5x the time
 	double index_cell_m = 10.0;	 //!< cell size of the spatial hash grid [m]
 	bool draw_landmarks = false;  //!< getVisualizationInto draws landmarks, coloured by channel
