@@ -10,7 +10,7 @@ set -euo pipefail
 [ $# -ge 2 ] || { echo "usage: $0 OUT.png TABLE.md [TABLE.md ...]" >&2; exit 2; }
 out="$1"; shift
 command -v gnuplot >/dev/null || { echo "plot-map-size-curve: gnuplot not found (apt-get install gnuplot-nox)" >&2; exit 1; }
-tmp="$(mktemp -d)"; trap 'rm -rf "$tmp"' EXIT
+tmp="$(mktemp -d)"; trap 'rm -rf "$tmp" "$out.partial.png"' EXIT
 # Rows: name, mono MB/km, baseline mean, combined mean; "curve" rows are the
 # 1.5 m / 4-bit family (names rNNNp4 and all4), sorted by size.
 python3 - "$tmp" "$@" <<'PY'
@@ -34,6 +34,9 @@ if not rows:
 with open(tmp + "/all.dat", "w") as f:
     for n, (mb, b, c) in sorted(rows.items(), key=lambda kv: kv[1][0]):
         f.write(f"{n} {mb} {b} {c}\n")
+sizes = [v[0] for v in rows.values()]
+with open(tmp + "/xrange", "w") as f:  # every point inside the plot, whatever the settings
+    f.write(f"{min(sizes) / 1.15:.3f}:{max(sizes) * 1.15:.3f}\n")
 with open(tmp + "/curve.dat", "w") as f:
     for n, (mb, b, c) in sorted(rows.items(), key=lambda kv: kv[1][0]):
         if re.match(r"^(r[0-9]+p4|all4)$", n):
@@ -46,7 +49,7 @@ set title "Keyframe map size against localisation coverage (default data, 12 ord
 set xlabel "monochrome channel stored [MB per km of survey] (log scale)"
 set ylabel "mean true coverage over in-map frames [%]"
 set logscale x
-set xrange [3:20]
+set xrange [$(cat "$tmp/xrange")]
 set yrange [0:100]
 set grid
 set key bottom right
