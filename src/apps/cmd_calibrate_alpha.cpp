@@ -256,7 +256,12 @@ int run(int argc, char** argv)
 	shadyloc::apps::NumberArg<int> boot(
 		cli, "", "bootstrap", "bootstrap rounds over images for the interval (0 = none)", 200, "n", 0, 100000);
 	shadyloc::apps::NumberArg<double> tail(
-		cli, "", "tail", "share of pixels clipped at each end of the 8-bit mapping", 0.002, "q", 0.0, 0.1);
+		cli, "", "tail", "share of pixels clipped at each end of the 8-bit mapping", 0.002, "q", 0.0, 0.0099);
+	shadyloc::apps::NumberArg<double> minSpan(
+		cli, "", "min-span",
+		"grey levels the 1st-99th percentiles get at least; where a linear mapping gives fewer, the tails beyond "
+		"them are compressed (0: always linear)",
+		210.0, "levels", 0.0, 240.0);
 	shadyloc::apps::NumberArg<double> knownAlpha(
 		cli, "", "alpha", "a known alpha (e.g. a datasheet's): no estimate, only the 8-bit mapping is calibrated; no curve",
 		0.5, "a", 0.0, 1.0);
@@ -372,7 +377,7 @@ int run(int argc, char** argv)
 
 	// ---- mapping
 	auto pDef = p;	// default mapping at the same alpha and beta
-	p = calibrateMapping(all, p, tail.getValue(), in.stride);
+	p = calibrateMapping(all, p, tail.getValue(), in.stride, minSpan.getValue());
 	const auto stCal = mappingStats(all, p, in.stride);
 	const auto stDef = mappingStats(all, pDef, in.stride);
 	auto pPaper = InvariantParams::FromAlphaBeta(0.4800, 0.5065);
@@ -382,7 +387,13 @@ int run(int argc, char** argv)
 			  << "\n  wavelength form: 1/l2 = alpha/l1 + beta/l3, e.g. green peak "
 			  << fmt(equivalentGreenPeak(p.alpha, 470, 620), 1) << " nm for blue 470 / red 620 nm"
 			  << "\n  8-bit mapping: scale = " << fmt(p.scale, 3) << " grey levels per log unit, offset = "
-			  << fmt(p.offset) << "\n\nclipping over the " << all.size() << " calibration images (share of pixels at 0 or 255; 1st-99th percentile span):\n"
+			  << fmt(p.offset)
+			  << (p.hasCompressedTails()
+					  ? "\n  tails compressed (a linear mapping gave the 1st-99th percentiles fewer than " +
+							fmt(minSpan.getValue(), 0) + " levels): linear between grey levels " + fmt(p.knee_low, 2) +
+							" and " + fmt(p.knee_high, 2) + ", slope " + fmt(p.tail_slope_low, 4) + " beyond"
+					  : std::string("\n  linear mapping (the 1st-99th percentiles get enough levels)"))
+			  << "\n\nclipping over the " << all.size() << " calibration images (share of pixels at 0 or 255; 1st-99th percentile span):\n"
 			  << "  calibrated mapping          " << fmt(100 * stCal.clipped(), 2) << " %  (low " << fmt(100 * stCal.clipLow, 2)
 			  << ", high " << fmt(100 * stCal.clipHigh, 2) << "), span " << fmt(stCal.span(), 1) << " grey levels\n"
 			  << "  default mapping, this alpha " << fmt(100 * stDef.clipped(), 2) << " %, span " << fmt(stDef.span(), 1) << "\n"
@@ -390,8 +401,7 @@ int run(int argc, char** argv)
 			  << fmt(stPaper.span(), 1) << "\n";
 	if (stCal.span() < 200)
 		std::cout << "warning: the 1st-99th percentiles span only " << fmt(stCal.span(), 1)
-				  << " grey levels: the invariant's tails are heavy here (noise in dark pixels?); raise --tail to "
-					 "trade clipping for span\n";
+				  << " grey levels: the invariant's tails are heavy here; raise --min-span (or --tail) for more\n";
 
 	// ---- outputs
 	shadyloc::CFilterInvariant filter;
@@ -406,7 +416,8 @@ int run(int argc, char** argv)
 			<< all.size() << " images.\n";
 	ini << "# Input linearisation: " << toString(in.linearisation)
 		<< ". Clipping over the calibration images: " << fmt(100 * stCal.clipped(), 2) << " %.\n"
-		<< "# scale and offset define the descriptors: keep them equal for map and live data.\n"
+		<< "# The 8-bit mapping (scale, offset, knees, tail slopes) defines the descriptors: keep it equal for map "
+		   "and live data.\n"
 		<< "[invariant]\n"
 		<< filter.optionsAsIni();
 	OutputSet outputs;

@@ -138,22 +138,34 @@ std::string CFilterInvariant::imageOptionsAsIni() const
 	if (m_params.linearisation == image::Linearisation::Gamma) w.value("gamma", m_params.gamma);
 	w.value("scale", m_params.scale);
 	w.value("offset", m_params.offset);
+	// Only when used, so that linear-mapping channels keep the string maps
+	// made before the tails existed recorded.
+	if (m_params.hasCompressedTails())
+	{
+		w.value("knee_low", m_params.knee_low);
+		w.value("knee_high", m_params.knee_high);
+		w.value("tail_slope_low", m_params.tail_slope_low);
+		w.value("tail_slope_high", m_params.tail_slope_high);
+	}
 	return s.str();
 }
 
-uint8_t CFilterInvariant::serializeGetVersion() const { return 0; }
+// 0: no compressed tails; 1: knees and tail slopes after parallel_eyes.
+uint8_t CFilterInvariant::serializeGetVersion() const { return 1; }
 void CFilterInvariant::serializeTo(mrpt::serialization::CArchive& out) const
 {
 	serializeCommon(out);
 	out << m_params.alpha << m_params.beta << static_cast<uint8_t>(m_params.order)
 		<< static_cast<uint8_t>(m_params.linearisation) << m_params.gamma << m_params.scale
-		<< m_params.offset << parallel_eyes;
+		<< m_params.offset << parallel_eyes << m_params.knee_low << m_params.knee_high << m_params.tail_slope_low
+		<< m_params.tail_slope_high;
 }
 void CFilterInvariant::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
 {
 	switch (version)
 	{
 		case 0:
+		case 1:
 		{
 			auto r = boundedReader(in, version);
 			deserializeCommon(r);
@@ -166,6 +178,13 @@ void CFilterInvariant::serializeFrom(mrpt::serialization::CArchive& in, uint8_t 
 			r.read(p.scale, "scale");
 			r.read(p.offset, "offset");
 			r.read(parallel_eyes, "parallel_eyes");
+			if (version >= 1)
+			{
+				r.read(p.knee_low, "knee_low");
+				r.read(p.knee_high, "knee_high");
+				r.read(p.tail_slope_low, "tail_slope_low");
+				r.read(p.tail_slope_high, "tail_slope_high");
+			}
 			try
 			{
 				p.validate();

@@ -101,8 +101,14 @@ void InvariantParams::validate() const
 	};
 	if (!std::isfinite(alpha) || alpha < 0 || alpha > 1) bad("alpha", alpha, "must be in [0,1]");
 	if (!std::isfinite(beta) || beta < 0 || beta > 1.5) bad("beta", beta, "must be in [0,1.5]");
-	if (!std::isfinite(scale) || scale <= 0) bad("scale", scale, "must be > 0");
+	// The upper bound keeps the fixed-point sums of InvariantTransform in 32 bits.
+	if (!std::isfinite(scale) || scale <= 0 || scale > 10000) bad("scale", scale, "must be in (0, 10000]");
 	if (!std::isfinite(offset)) bad("offset", offset, "must be finite");
+	if (!std::isfinite(knee_low) || knee_low < 0 || knee_low > 255) bad("knee_low", knee_low, "must be in [0,255]");
+	if (!std::isfinite(knee_high) || knee_high < 0 || knee_high > 255 || knee_high <= knee_low)
+		bad("knee_high", knee_high, "must be in [0,255] and above knee_low");
+	if (!(tail_slope_low > 0 && tail_slope_low <= 1)) bad("tail_slope_low", tail_slope_low, "must be in (0,1]");
+	if (!(tail_slope_high > 0 && tail_slope_high <= 1)) bad("tail_slope_high", tail_slope_high, "must be in (0,1]");
 	if (linearisation == Linearisation::Gamma && !(gamma > 0 && gamma < 10))
 		bad("gamma", gamma, "must be in (0,10)");
 }
@@ -115,6 +121,9 @@ std::string InvariantParams::asString() const
 	  << " linearisation=" << toString(linearisation);
 	if (linearisation == Linearisation::Gamma) s << " gamma=" << gamma;
 	s << " scale=" << scale << " offset=" << offset;
+	if (hasCompressedTails())
+		s << " knee_low=" << knee_low << " knee_high=" << knee_high << " tail_slope_low=" << tail_slope_low
+		  << " tail_slope_high=" << tail_slope_high;
 	return s.str();
 }
 
@@ -123,7 +132,9 @@ bool InvariantParams::sameImageAs(const InvariantParams& o) const
 	const auto eq = [](double a, double b) { return std::abs(a - b) <= 1e-9; };
 	return eq(alpha, o.alpha) && eq(beta, o.beta) && order == o.order && linearisation == o.linearisation &&
 		   (linearisation != Linearisation::Gamma || eq(gamma, o.gamma)) && eq(scale, o.scale) &&
-		   eq(offset, o.offset);
+		   eq(offset, o.offset) && hasCompressedTails() == o.hasCompressedTails() &&
+		   (!hasCompressedTails() || (eq(knee_low, o.knee_low) && eq(knee_high, o.knee_high) &&
+									  eq(tail_slope_low, o.tail_slope_low) && eq(tail_slope_high, o.tail_slope_high)));
 }
 
 double linearise(int code, Linearisation lin, double gamma)
@@ -169,7 +180,7 @@ cv::Mat invariantReference8(const cv::Mat& colour8, const InvariantParams& p)
 		const auto* in = f.ptr<float>(y);
 		auto* o = out.ptr<uint8_t>(y);
 		for (int x = 0; x < f.cols; x++)
-			o[x] = cv::saturate_cast<uint8_t>(std::lround(p.scale * (double(in[x]) + p.offset)));
+			o[x] = cv::saturate_cast<uint8_t>(std::lround(p.toGrey(double(in[x]))));
 	}
 	return out;
 }
@@ -179,7 +190,7 @@ void invariantNaive8(const cv::Mat& colour8, cv::Mat& out8, const InvariantParam
 	requireColour8(colour8, "invariant (naive)");
 	const auto ci = indices(p.order);
 	out8.create(colour8.size(), CV_8U);
-	const float a = float(p.alpha), b = float(p.beta), s = float(p.scale), off = float(p.offset);
+	const float a = float(p.alpha), b = float(p.beta);
 	const float zero = float(InvariantParams::kZeroCode);
 	for (int y = 0; y < colour8.rows; y++)
 	{
@@ -192,7 +203,7 @@ void invariantNaive8(const cv::Mat& colour8, cv::Mat& out8, const InvariantParam
 			const float r2 = std::max<float>(in[x][ci.g], zero) / 255.f;
 			const float r3 = std::max<float>(in[x][ci.r], zero) / 255.f;
 			const float I = std::log(r2) - a * std::log(r1) - b * std::log(r3);
-			o[x] = cv::saturate_cast<uint8_t>(s * (I + off));
+			o[x] = cv::saturate_cast<uint8_t>(p.toGrey(I));
 		}
 	}
 }
@@ -210,13 +221,30 @@ InvariantTransform::InvariantTransform(const InvariantParams& p) : m_params(p)
 		// shifted right (floor), which equals round-half-up of the true value.
 		m_lutGreen[v] = int32_t(std::lround(unit * (p.scale * (logv + p.offset) + 0.5)));
 	}
+	if (!p.hasCompressedTails()) return;
+	// Every sum the three tables can make, at quarter levels: the sum is
+	// (g + 0.5) in fixed point, so a bin's g is its start minus the half.
+	const auto lo = [](const int32_t* t) { return *std::min_element(t, t + 256); };
+	const auto hi = [](const int32_t* t) { return *std::max_element(t, t + 256); };
+	const int32_t sumMin = lo(m_lutBlue) + lo(m_lutGreen) + lo(m_lutRed);
+	const int32_t sumMax = hi(m_lutBlue) + hi(m_lutGreen) + hi(m_lutRed);
+	m_toneBase = sumMin >> kToneShift;
+	m_tone.resize(size_t((sumMax >> kToneShift) - m_toneBase + 1));
+	const double binLevels = double(1 << kToneShift) / unit;
+	for (size_t i = 0; i < m_tone.size(); i++)
+	{
+		const double g = double(m_toneBase + int32_t(i)) * binLevels - 0.5 + 0.5 * binLevels;	 // bin centre
+		double t = g;
+		if (g < p.knee_low) t = p.knee_low + p.tail_slope_low * (g - p.knee_low);
+		else if (g > p.knee_high) t = p.knee_high + p.tail_slope_high * (g - p.knee_high);
+		m_tone[i] = cv::saturate_cast<uint8_t>(std::lround(t));
+	}
 }
 
-void InvariantTransform::apply(const cv::Mat& colour8, cv::Mat& out8) const
+template <bool CompressedTails>
+void InvariantTransform::applyRows(const cv::Mat& colour8, cv::Mat& out8) const
 {
-	requireColour8(colour8, "invariant");
 	const auto ci = indices(m_params.order);
-	out8.create(colour8.size(), CV_8U);
 	const int cols = colour8.cols;
 	for (int y = 0; y < colour8.rows; y++)
 	{
@@ -226,10 +254,26 @@ void InvariantTransform::apply(const cv::Mat& colour8, cv::Mat& out8) const
 		{
 			const uint8_t* px = in + 3 * x;
 			const int32_t sum = m_lutBlue[px[ci.b]] + m_lutGreen[px[ci.g]] + m_lutRed[px[ci.r]];
-			const int32_t v = sum >> kFracBits;
-			o[x] = uint8_t(v < 0 ? 0 : (v > 255 ? 255 : v));
+			if constexpr (CompressedTails)
+				o[x] = m_tone[size_t((sum >> kToneShift) - m_toneBase)];
+			else
+			{
+				const int32_t v = sum >> kFracBits;
+				o[x] = uint8_t(v < 0 ? 0 : (v > 255 ? 255 : v));
+			}
 		}
 	}
+}
+
+void InvariantTransform::apply(const cv::Mat& colour8, cv::Mat& out8) const
+{
+	requireColour8(colour8, "invariant");
+	out8.create(colour8.size(), CV_8U);
+	// The linear mapping keeps the plain loop (the common case, and the benchmarked one).
+	if (m_params.hasCompressedTails())
+		applyRows<true>(colour8, out8);
+	else
+		applyRows<false>(colour8, out8);
 }
 
 void InvariantTransform::applyPair(

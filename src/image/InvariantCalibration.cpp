@@ -677,7 +677,7 @@ TMappingStats mappingStats(const std::vector<cv::Mat>& images, const InvariantPa
 	size_t lo = 0, hi = 0;
 	for (auto& x : v)
 	{
-		x = float(p.scale * (double(x) + p.offset));
+		x = float(p.toGrey(double(x)));
 		// Rounded to the nearest level: below 0.5 is 0, from 254.5 on is 255.
 		lo += x < 0.5f;
 		hi += x >= 254.5f;
@@ -689,15 +689,36 @@ TMappingStats mappingStats(const std::vector<cv::Mat>& images, const InvariantPa
 	return st;
 }
 
-InvariantParams calibrateMapping(const std::vector<cv::Mat>& images, InvariantParams p, double tailShare, int stride)
+InvariantParams calibrateMapping(
+	const std::vector<cv::Mat>& images, InvariantParams p, double tailShare, int stride, double minSpan)
 {
-	if (!(tailShare > 0 && tailShare < 0.1)) throw std::invalid_argument("mapping: tail share must be in (0, 0.1)");
+	if (!(tailShare > 0 && tailShare < 0.01)) throw std::invalid_argument("mapping: tail share must be in (0, 0.01)");
+	if (!(minSpan >= 0 && minSpan <= 240)) throw std::invalid_argument("mapping: minimum span must be in [0, 240]");
 	auto v = invariantValues(images, p, stride);
 	const double lo = quantile(v, tailShare), hi = quantile(v, 1.0 - tailShare);
+	const double p1 = quantile(v, 0.01), p99 = quantile(v, 0.99);
 	if (!(hi > lo))
 		throw std::invalid_argument("mapping: the invariant is constant over the calibration images (grey scene?)");
+	p.knee_low = 0;
+	p.knee_high = 255;
+	p.tail_slope_low = p.tail_slope_high = 1;
+	// Linear: the tail quantiles to 0.5 and 254.5 (they round to 0 and 255).
 	p.scale = 254.0 / (hi - lo);
 	p.offset = 0.5 / p.scale - lo;
+	if (p.scale * (p99 - p1) < minSpan)
+	{
+		// Heavy tails: the 1st-99th percentiles get minSpan levels, and both
+		// tails share the rest at one slope, in proportion to their lengths
+		// in I. The slope is below 1 since minSpan exceeds the linear span.
+		const double lenLow = p1 - lo, lenHigh = hi - p99;
+		p.scale = minSpan / (p99 - p1);
+		const double tailLevels = 254.0 - minSpan;
+		const double slope = tailLevels / (p.scale * (lenLow + lenHigh));
+		p.knee_low = 0.5 + slope * p.scale * lenLow;
+		p.knee_high = p.knee_low + minSpan;
+		p.offset = p.knee_low / p.scale - p1;
+		p.tail_slope_low = p.tail_slope_high = std::min(1.0, slope);
+	}
 	p.validate();
 	return p;
 }

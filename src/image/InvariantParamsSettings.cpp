@@ -52,6 +52,10 @@ void InvariantParams::readFrom(core::SettingsSection& s)
 	s.read("scale", p.scale);
 	p.offset = p.defaultOffset();
 	s.read("offset", p.offset);
+	s.read("knee_low", p.knee_low);
+	s.read("knee_high", p.knee_high);
+	s.read("tail_slope_low", p.tail_slope_low);
+	s.read("tail_slope_high", p.tail_slope_high);
 	try
 	{
 		p.validate();
@@ -72,6 +76,13 @@ void InvariantParams::writeTo(core::SettingsWriter& w) const
 	w.value("gamma", gamma, "exponent with linearisation = gamma");
 	w.value("scale", scale, "8-bit mapping clamp(round(scale (I + offset))): grey levels per unit log response");
 	w.value("offset", offset, "[log units]");
+	w.value(
+		"knee_low", knee_low,
+		"compressed tails: g = scale (I + offset) is kept between the knees [grey levels], beyond them it runs at "
+		"the tail slopes (1 = linear mapping)");
+	w.value("knee_high", knee_high);
+	w.value("tail_slope_low", tail_slope_low);
+	w.value("tail_slope_high", tail_slope_high);
 }
 
 void InvariantParams::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& section)

@@ -110,6 +110,10 @@ CFilterInvariant::Ptr populatedInvariant()
 	p.gamma = 1.9;
 	p.scale = 203.5;
 	p.offset = 0.37;
+	p.knee_low = 12.5;
+	p.knee_high = 240.25;
+	p.tail_slope_low = 0.375;
+	p.tail_slope_high = 0.625;
 	f->setParams(p);
 	f->parallel_eyes = false;
 	return f;
@@ -144,6 +148,10 @@ void expectSameInvariant(const CFilterInvariant& a, const CFilterInvariant& b)
 	EXPECT_EQ(p.gamma, q.gamma);
 	EXPECT_EQ(p.scale, q.scale);
 	EXPECT_EQ(p.offset, q.offset);
+	EXPECT_EQ(p.knee_low, q.knee_low);
+	EXPECT_EQ(p.knee_high, q.knee_high);
+	EXPECT_EQ(p.tail_slope_low, q.tail_slope_low);
+	EXPECT_EQ(p.tail_slope_high, q.tail_slope_high);
 	EXPECT_EQ(a.parallel_eyes, b.parallel_eyes);
 }
 void expectSameLinearise(const CFilterLinearise& a, const CFilterLinearise& b)
@@ -555,6 +563,23 @@ TEST(FormatsGolden, RegisteredClassesMatchTheirGoldenFiles)
 		ASSERT_TRUE(back);
 		c.expectSame(*obj, *back);
 	}
+}
+
+// CFilterInvariant version 0 (before compressed tails; the golden file as it
+// was) still loads, as the linear mapping it described.
+TEST(FormatsGolden, InvariantFilterVersion0StillLoads)
+{
+	const auto back = deserialise(readFile(kGoldenDir + "/CFilterInvariant_v0.bin"));
+	ASSERT_TRUE(back);
+	const auto* f = dynamic_cast<const CFilterInvariant*>(back.get());
+	ASSERT_NE(f, nullptr);
+	auto expected = populatedInvariant()->params();
+	expected.knee_low = 0;
+	expected.knee_high = 255;
+	expected.tail_slope_low = expected.tail_slope_high = 1;
+	EXPECT_TRUE(f->params().sameImageAs(expected)) << f->params().asString();
+	EXPECT_FALSE(f->params().hasCompressedTails());
+	EXPECT_EQ(f->common.output_suffix, "_inv9");
 }
 
 TEST(FormatsGolden, KeyframeMatchesItsGoldenFile)

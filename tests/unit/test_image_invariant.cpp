@@ -132,6 +132,63 @@ TEST(InvariantTransformTest, FastEqualsReferenceOnAllColoursAllLinearisations)
 		}
 }
 
+// Compressed tails: the fast path's fixed-point tails agree with the
+// reference within one level, the middle is untouched, and the output is
+// monotone in I (a tone curve, not a fold).
+TEST(InvariantTransformTest, CompressedTailsFastEqualsReferenceAndMiddleIsLinear)
+{
+	cv::Mat img(64, 1024, CV_8UC3);
+	std::mt19937 rng(11);
+	std::uniform_int_distribution<int> u(0, 255);
+	for (int y = 0; y < img.rows; y++)
+		for (int x = 0; x < img.cols; x++) img.at<cv::Vec3b>(y, x) = cv::Vec3b(u(rng), u(rng), u(rng));
+	auto lin = InvariantParams::FromAlphaBeta(0.46, 0.54);
+	lin.linearisation = Linearisation::SRGB;
+	lin.scale = 90;
+	auto tone = lin;
+	tone.knee_low = 40.5;
+	tone.knee_high = 200.25;
+	tone.tail_slope_low = 0.3;
+	tone.tail_slope_high = 0.55;
+	ASSERT_TRUE(tone.hasCompressedTails());
+	ASSERT_FALSE(tone.sameImageAs(lin));
+	cv::Mat fast, fastLin;
+	InvariantTransform(tone).apply(img, fast);
+	InvariantTransform(lin).apply(img, fastLin);
+	cv::Mat diff;
+	cv::absdiff(invariantReference8(img, tone), fast, diff);
+	double mx;
+	cv::minMaxLoc(diff, nullptr, &mx);
+	EXPECT_LE(mx, 1.0);
+	const cv::Mat I = invariantReferenceFloat(img, lin);
+	int inMiddle = 0, inTails = 0;
+	for (int y = 0; y < img.rows; y++)
+		for (int x = 0; x < img.cols; x++)
+		{
+			const double g = lin.scale * (I.at<float>(y, x) + lin.offset);
+			if (g > tone.knee_low + 1 && g < tone.knee_high - 1)
+			{
+				inMiddle++;
+				EXPECT_EQ(fast.at<uint8_t>(y, x), fastLin.at<uint8_t>(y, x));
+			}
+			else if (g < tone.knee_low - 10 || g > tone.knee_high + 10)
+			{
+				inTails++;
+				// Pulled towards the knee: the compressed tail clips less.
+				EXPECT_LE(std::abs(tone.toGrey(I.at<float>(y, x)) - 127.0), std::abs(g - 127.0));
+			}
+		}
+	EXPECT_GT(inMiddle, 1000);
+	EXPECT_GT(inTails, 1000);
+	for (double a = -4; a < 4; a += 0.01) EXPECT_LT(tone.toGrey(a), tone.toGrey(a + 0.01));
+	auto bad = tone;
+	bad.tail_slope_low = 0;
+	EXPECT_THROW(bad.validate(), std::invalid_argument);
+	bad = tone;
+	bad.knee_high = bad.knee_low;
+	EXPECT_THROW(bad.validate(), std::invalid_argument);
+}
+
 TEST(InvariantTransformTest, ZeroPixelsAreFiniteAndOrderMatters)
 {
 	cv::Mat img(1, 2, CV_8UC3);

@@ -477,6 +477,10 @@ TEST(Settings, InvariantParamsAndFiltersRoundTrip)
 	p.gamma = 1.9;
 	p.scale = 127.5;
 	p.offset = 0.1 + 0.2;
+	p.knee_low = 20.0 / 3.0;
+	p.knee_high = 241.1;
+	p.tail_slope_low = 0.3;
+	p.tail_slope_high = 1.0 / 7.0;
 	std::ostringstream dump;
 	p.dumpToTextStream(dump);
 	mrpt::config::CConfigFileMemory c("[invariant]\n" + dump.str());
@@ -489,6 +493,10 @@ TEST(Settings, InvariantParamsAndFiltersRoundTrip)
 	EXPECT_EQ(b.gamma, p.gamma);
 	EXPECT_EQ(b.scale, p.scale);
 	EXPECT_EQ(b.offset, p.offset);
+	EXPECT_EQ(b.knee_low, p.knee_low);
+	EXPECT_EQ(b.knee_high, p.knee_high);
+	EXPECT_EQ(b.tail_slope_low, p.tail_slope_low);
+	EXPECT_EQ(b.tail_slope_high, p.tail_slope_high);
 
 	// A pipeline of all three filters, every option changed, through its record text.
 	filters::FilterPipeline pl;
@@ -517,6 +525,7 @@ TEST(Settings, InvariantParamsAndFiltersRoundTrip)
 	EXPECT_EQ(m2->common.sensor_labels, "LEFT, RIGHT");
 	EXPECT_EQ(i2->params().alpha, p.alpha);
 	EXPECT_EQ(i2->params().offset, p.offset);
+	EXPECT_TRUE(i2->params().sameImageAs(p));
 	EXPECT_FALSE(i2->parallel_eyes);
 	EXPECT_EQ(l2->gamma, 2.0 / 3.0);
 	EXPECT_EQ(l2->linearisation, image::Linearisation::Gamma);

@@ -19,8 +19,10 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include <cstdint>
 #include <iosfwd>
 #include <string>
+#include <vector>
 
 namespace mrpt::config
 {
@@ -66,12 +68,23 @@ struct InvariantParams
 	Linearisation linearisation = Linearisation::None;
 	double gamma = 2.2;	 //!< exponent, used when linearisation == Gamma
 
-	/** 8-bit mapping: out = clamp(round(scale * (I + offset)), 0, 255).
+	/** 8-bit mapping: out = clamp(round(scale * (I + offset)), 0, 255),
+	 * tails compressed as below when asked.
 	 * scale in grey levels per unit of natural log; offset in log units. The
 	 * default offset (see defaultOffset()) puts a neutral 18% grey surface at
 	 * 0.5*scale; with scale 255 this is Maddern et al.'s "0.5 + I" mapping. */
 	double scale = 255.0;
 	double offset = 0.5;
+
+	/** Tails of the 8-bit mapping, compressed (toGrey()): with g = scale *
+	 * (I + offset), the output is g between knee_low and knee_high (grey
+	 * levels), and runs at tail_slope_low / tail_slope_high (in (0, 1]) grey
+	 * levels per level of g beyond them. Slopes of 1 (the default) leave the
+	 * mapping linear, whatever the knees. Heavy-tailed scenes (saturated
+	 * colours) need it: a linear mapping cannot both keep clipping under
+	 * 0.5 % and give the bulk 200 grey levels there (docs/calibration.md). */
+	double knee_low = 0.0, knee_high = 255.0;
+	double tail_slope_low = 1.0, tail_slope_high = 1.0;
 
 	/** Linear response given to a zero-valued pixel so logs stay finite:
 	 * half of the smallest non-zero code value (in [0,1] units). */
@@ -86,6 +99,17 @@ struct InvariantParams
 	/** 0.5 - (1 - alpha - beta) * log(0.18): neutral mid-grey at mid-scale. */
 	double defaultOffset() const;
 
+	/** True when a tail is compressed (a slope below 1). */
+	bool hasCompressedTails() const { return tail_slope_low != 1.0 || tail_slope_high != 1.0; }
+	/** The 8-bit mapping of I before rounding and clamping to [0, 255]. */
+	double toGrey(double I) const
+	{
+		const double g = scale * (I + offset);
+		if (g < knee_low) return knee_low + tail_slope_low * (g - knee_low);
+		if (g > knee_high) return knee_high + tail_slope_high * (g - knee_high);
+		return g;
+	}
+
 	/** Throws std::invalid_argument naming the bad field. */
 	void validate() const;
 
@@ -97,7 +121,8 @@ struct InvariantParams
 	/** Reads the keys of a section strictly (src/image/InvariantParamsSettings.cpp):
 	 * alpha and beta, or peak_wavelength_{blue,green,red}_nm (then beta =
 	 * 1 - alpha), channel_order, linearisation, gamma, scale and offset
-	 * (absent: defaultOffset() of the new alpha, beta). Absent keys keep their
+	 * (absent: defaultOffset() of the new alpha, beta), knee_low, knee_high,
+	 * tail_slope_low, tail_slope_high. Absent keys keep their
 	 * values; validates. Declares its keys known in `s`; the caller finishes it. */
 	void readFrom(core::SettingsSection& s);
 	/** Writes every key readFrom() reads back to these exact values. */
@@ -149,6 +174,14 @@ class InvariantTransform
 	// the R2 table also holds scale * offset and the rounding half.
 	static constexpr int kFracBits = 10;
 	int32_t m_lutBlue[256], m_lutGreen[256], m_lutRed[256];
+	// Compressed tails: the output of every possible sum at a quarter of a
+	// grey level (a table look-up instead of per-pixel branches; within one
+	// level of the reference). Index (sum >> kToneShift) - m_toneBase.
+	static constexpr int kToneShift = kFracBits - 2;
+	int32_t m_toneBase = 0;
+	std::vector<uint8_t> m_tone;
+	template <bool CompressedTails>
+	void applyRows(const cv::Mat& colour8, cv::Mat& out8) const;
 };
 
 /** Monochrome (luma, ITU-R BT.601 weights) of an 8-bit colour image, 8-bit

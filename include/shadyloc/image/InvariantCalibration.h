@@ -247,12 +247,18 @@ struct TMappingStats
  * what gets clipped). */
 TMappingStats mappingStats(const std::vector<cv::Mat>& images, const InvariantParams& p, int stride = 2);
 
-/** scale and offset (in p's form out = scale * (I + offset)) mapping the
- * tailShare and 1 - tailShare quantiles of I over the images to grey levels
- * 0.5 and 254.5, so that about 2 * tailShare of the calibration pixels clip.
- * Returns p with scale and offset replaced. */
+/** The 8-bit mapping from robust quantiles of I over the images: the
+ * tailShare and 1 - tailShare quantiles go to grey levels 0.5 and 254.5, so
+ * that about 2 * tailShare of the calibration pixels clip. Linear (scale and
+ * offset, in p's form out = scale * (I + offset)) when that gives the 1st-99th
+ * percentiles at least minSpan grey levels; otherwise those percentiles get
+ * exactly minSpan levels and the tails beyond them are compressed at one
+ * common slope (knee_* and tail_slope_* of InvariantParams). minSpan 210 is
+ * the goal of 200 with a 5 % margin for live frames, which are not the
+ * calibration images. Returns p with the mapping replaced. */
 InvariantParams calibrateMapping(
-	const std::vector<cv::Mat>& images, InvariantParams p, double tailShare = 0.002, int stride = 2);
+	const std::vector<cv::Mat>& images, InvariantParams p, double tailShare = 0.002, int stride = 2,
+	double minSpan = 210.0);
 
 /** The green peak wavelength that gives alpha with blue and red peaks l1, l3
  * (any unit) in 1/l2 = alpha/l1 + (1 - alpha)/l3: the wavelength form of a
