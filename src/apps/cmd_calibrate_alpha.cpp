@@ -392,7 +392,10 @@ int run(int argc, char** argv)
 					  ? "\n  tails compressed (a linear mapping gave the 1st-99th percentiles fewer than " +
 							fmt(minSpan.getValue(), 0) + " levels): linear between grey levels " + fmt(p.knee_low, 2) +
 							" and " + fmt(p.knee_high, 2) + ", slope " + fmt(p.tail_slope_low, 4) + " beyond"
-					  : std::string("\n  linear mapping (the 1st-99th percentiles get enough levels)"))
+					  : minSpan.getValue() > 0
+							? "\n  linear mapping (it gives the 1st-99th percentiles at least " + fmt(minSpan.getValue(), 0) +
+								  " levels)"
+							: std::string("\n  linear mapping (--min-span 0)"))
 			  << "\n\nclipping over the " << all.size() << " calibration images (share of pixels at 0 or 255; 1st-99th percentile span):\n"
 			  << "  calibrated mapping          " << fmt(100 * stCal.clipped(), 2) << " %  (low " << fmt(100 * stCal.clipLow, 2)
 			  << ", high " << fmt(100 * stCal.clipHigh, 2) << "), span " << fmt(stCal.span(), 1) << " grey levels\n"

@@ -2,10 +2,12 @@
 #include "Command.h"
 #include "CommandLine.h"
 
+#include <shadyloc/filters/Filters.h>
 #include <shadyloc/image/ColourTransforms.h>
 #include <shadyloc/io/ImageFile.h>
 #include <shadyloc/io/OutputTransaction.h>
 
+#include <mrpt/config/CConfigFile.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include <array>
@@ -37,7 +39,18 @@ int run(int argc, char** argv)
 	TCLAP::ValueArg<std::string> lin("", "linearise", "none|srgb|gamma (before the logs)", false, "none", &linC, cmd);
 	shadyloc::apps::NumberArg<double> gamma(cli, "", "gamma", "exponent for --linearise gamma, in (0,10)", 2.2, "g", 1e-6, 10.0);
 	shadyloc::apps::NumberArg<double> scale(cli, "", "scale", "grey levels per unit log response (> 0)", 255.0, "s", 1e-9);
+	TCLAP::ValueArg<std::string> config(
+		"c", "config",
+		"the invariant transform of a CFilterInvariant section of this .ini (e.g. calibrate-alpha's OUT.ini, with "
+		"its calibrated mapping) instead of --alpha/--beta/--wavelengths/--linearise/--gamma/--scale",
+		false, "", "ini", cmd);
+	TCLAP::ValueArg<std::string> section("", "section", "the section of --config", false, "invariant", "name", cmd);
 	if (const auto rc = cli.parse(argc, argv)) return *rc;
+	if (config.isSet() &&
+		(alpha.isSet() || beta.isSet() || wl.isSet() || lin.isSet() || gamma.isSet() || scale.isSet()))
+		return cli.usageError(
+			"--config gives the whole transform: drop --alpha/--beta/--wavelengths/--linearise/--gamma/--scale");
+	if (section.isSet() && !config.isSet()) return cli.usageError("--section needs --config");
 	if (wl.isSet() && (alpha.isSet() || beta.isSet()))
 		return cli.usageError("--wavelengths sets alpha and beta: give either --wavelengths or --alpha/--beta");
 	if (gamma.isSet() && lin.getValue() != "gamma")
@@ -95,7 +108,19 @@ int run(int argc, char** argv)
 				"'" + in.getValue() + "': the invariant channel needs a colour image, this one has " +
 				std::to_string(img.channels()) + " channel(s)");
 		InvariantParams p;
-		if (peaks)
+		if (config.isSet())
+		{
+			if (!std::filesystem::is_regular_file(config.getValue()))
+				throw std::runtime_error("--config '" + config.getValue() + "': no such file");
+			const mrpt::config::CConfigFile cfg(config.getValue());
+			if (!cfg.sectionExists(section.getValue()))
+				throw std::runtime_error(
+					"--config '" + config.getValue() + "': no section [" + section.getValue() + "]");
+			shadyloc::CFilterInvariant f;
+			f.loadFromConfig(cfg, section.getValue());	// strict: unknown keys name file, section and key
+			p = f.params();
+		}
+		else if (peaks)
 		{
 			try
 			{
@@ -108,9 +133,12 @@ int run(int argc, char** argv)
 		}
 		else
 			p = InvariantParams::FromAlphaBeta(alpha.getValue(), beta.getValue());
-		p.linearisation = parseLinearisation(lin.getValue());
-		p.gamma = gamma.getValue();
-		p.scale = scale.getValue();
+		if (!config.isSet())
+		{
+			p.linearisation = parseLinearisation(lin.getValue());
+			p.gamma = gamma.getValue();
+			p.scale = scale.getValue();
+		}
 		p.validate();
 		std::cout << "invariant: " << p.asString() << "\n";
 		InvariantTransform(p).apply(img, result);

@@ -44,6 +44,50 @@ TEST(AppImage, InvariantAndMonoMatchTheLibrary)
 	EXPECT_NE(out.find("alpha=0.4641975"), std::string::npos) << out;
 }
 
+// --config takes the whole transform from a filter section, e.g. the
+// [invariant] that calibrate-alpha writes, compressed tails included.
+TEST(AppImage, ConfigSectionGivesTheCalibratedTransform)
+{
+	const auto dir = tempDir("app_image_config");
+	cv::Mat img(60, 80, CV_8UC3);
+	cv::randu(img, 0, 255);
+	ASSERT_TRUE(cv::imwrite(dir + "/in.png", img));
+	{
+		std::ofstream f(dir + "/cam.ini");
+		f << "[invariant]\nclass = shadyloc::CFilterInvariant\nalpha = 0.43\nbeta = 0.57\nlinearisation = srgb\n"
+			 "scale = 171.4\noffset = 0.8\nknee_low = 34\nknee_high = 244\ntail_slope_low = 0.27\n"
+			 "tail_slope_high = 0.5\n[typo]\nalpha = 0.4\nscael = 2\n";
+	}
+	std::string out;
+	ASSERT_EQ(runCommand(appPath() + " image " + dir + "/in.png " + dir + "/inv.png -c " + dir + "/cam.ini", &out), 0)
+		<< out;
+	auto p = shadyloc::image::InvariantParams::FromAlphaBeta(0.43, 0.57);
+	p.linearisation = shadyloc::image::Linearisation::SRGB;
+	p.scale = 171.4, p.offset = 0.8, p.knee_low = 34, p.knee_high = 244, p.tail_slope_low = 0.27,
+	p.tail_slope_high = 0.5;
+	cv::Mat expect;
+	shadyloc::image::InvariantTransform(p).apply(img, expect);
+	EXPECT_EQ(cv::norm(cv::imread(dir + "/inv.png", cv::IMREAD_UNCHANGED), expect, cv::NORM_INF), 0);
+	EXPECT_NE(out.find("tail_slope_low=0.27"), std::string::npos) << out;
+
+	struct Case
+	{
+		std::string args, expect;
+	};
+	for (const auto& c : std::vector<Case>{
+			 {"-c " + dir + "/cam.ini --alpha 0.4", "--config gives the whole transform"},
+			 {"-c " + dir + "/none.ini", "no such file"},
+			 {"-c " + dir + "/cam.ini --section other", "no section [other]"},
+			 {"-c " + dir + "/cam.ini --section typo", "scael"},
+			 {"--section invariant", "--section needs --config"}})
+	{
+		const int rc = runCommand(appPath() + " image " + dir + "/in.png " + dir + "/o.png " + c.args, &out);
+		EXPECT_NE(rc, 0) << c.args;
+		EXPECT_NE(out.find(c.expect), std::string::npos) << c.args << ": " << out;
+		EXPECT_FALSE(fs::exists(dir + "/o.png")) << c.args;
+	}
+}
+
 TEST(AppImage, BadInputClearErrorNoOutput)
 {
 	const auto dir = tempDir("app_image_bad");
