@@ -103,7 +103,8 @@ void InvariantParams::validate() const
 	if (!std::isfinite(beta) || beta < 0 || beta > 1.5) bad("beta", beta, "must be in [0,1.5]");
 	// The upper bound keeps the fixed-point sums of InvariantTransform in 32 bits.
 	if (!std::isfinite(scale) || scale <= 0 || scale > 10000) bad("scale", scale, "must be in (0, 10000]");
-	if (!std::isfinite(offset)) bad("offset", offset, "must be finite");
+	// |I| stays under ~20 log units for 8-bit input; the bound keeps the sums in 32 bits too.
+	if (!std::isfinite(offset) || std::abs(offset) > 100) bad("offset", offset, "must be in [-100, 100]");
 	if (!std::isfinite(knee_low) || knee_low < 0 || knee_low > 255) bad("knee_low", knee_low, "must be in [0,255]");
 	if (!std::isfinite(knee_high) || knee_high < 0 || knee_high > 255 || knee_high <= knee_low)
 		bad("knee_high", knee_high, "must be in [0,255] and above knee_low");
@@ -234,10 +235,7 @@ InvariantTransform::InvariantTransform(const InvariantParams& p) : m_params(p)
 	for (size_t i = 0; i < m_tone.size(); i++)
 	{
 		const double g = double(m_toneBase + int32_t(i)) * binLevels - 0.5 + 0.5 * binLevels;	 // bin centre
-		double t = g;
-		if (g < p.knee_low) t = p.knee_low + p.tail_slope_low * (g - p.knee_low);
-		else if (g > p.knee_high) t = p.knee_high + p.tail_slope_high * (g - p.knee_high);
-		m_tone[i] = cv::saturate_cast<uint8_t>(std::lround(t));
+		m_tone[i] = cv::saturate_cast<uint8_t>(std::lround(p.compressTails(g)));
 	}
 }
 

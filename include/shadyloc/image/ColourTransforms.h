@@ -101,14 +101,15 @@ struct InvariantParams
 
 	/** True when a tail is compressed (a slope below 1). */
 	bool hasCompressedTails() const { return tail_slope_low != 1.0 || tail_slope_high != 1.0; }
-	/** The 8-bit mapping of I before rounding and clamping to [0, 255]. */
-	double toGrey(double I) const
+	/** The tails applied to g = scale * (I + offset). */
+	double compressTails(double g) const
 	{
-		const double g = scale * (I + offset);
 		if (g < knee_low) return knee_low + tail_slope_low * (g - knee_low);
 		if (g > knee_high) return knee_high + tail_slope_high * (g - knee_high);
 		return g;
 	}
+	/** The 8-bit mapping of I before rounding and clamping to [0, 255]. */
+	double toGrey(double I) const { return compressTails(scale * (I + offset)); }
 
 	/** Throws std::invalid_argument naming the bad field. */
 	void validate() const;
