@@ -113,6 +113,14 @@ std::vector<cv::Mat> framesOfRawlog(const std::string& path, const std::string& 
 	return out;
 }
 
+/** What a method's items are, for messages. */
+const char* itemsOf(const std::string& method)
+{
+	if (method == "entropy" || method == "edges") return " images";
+	if (method == "runs") return " matched frame pairs";
+	return " pairs";
+}
+
 std::string fmt(double v, int prec = 4)
 {
 	std::ostringstream s;
@@ -177,7 +185,7 @@ void plotCurves(
 		  << "set ylabel \"" << c.method << "\"\n"
 		  << "set title \"" << c.method << ": " << c.costName << "; alpha = " << fmt(c.best, 3);
 		if (c.bootstrapRounds > 0) g << ", 95% interval [" << fmt(c.ciLow, 3) << ", " << fmt(c.ciHigh, 3) << "]";
-		g << " (" << c.items << (c.method == "entropy" || c.method == "edges" ? " images" : " pairs") << ")\"\n";
+		g << " (" << c.items << itemsOf(c.method) << ")\"\n";
 		if (c.bootstrapRounds > 0 && c.ciHigh > c.ciLow)
 			g << "set object 1 rect from " << c.ciLow << ", graph 0 to " << c.ciHigh
 			  << ", graph 1 fc rgb '#cce0ff' fs solid 0.6 noborder behind\n";
@@ -204,7 +212,8 @@ int run(int argc, char** argv)
 {
 	shadyloc::apps::CommandLine cli(
 		"Calibrates the illumination-invariant transform of a camera from data: alpha (with beta = 1 - alpha), "
-		"from shadow/no-shadow pairs, from same-view pairs under different light, or unsupervised from ordinary "
+		"from shadow/no-shadow pairs, from same-view pairs under different light, from two runs of one route under "
+		"different light, or unsupervised from ordinary "
 		"images/a rawlog (entropy minimisation); then the 8-bit mapping (scale, offset). Writes OUT.ini (an "
 		"[invariant] section for config/filters.ini), OUT_curve.csv and OUT_curve.png.");
 	auto& cmd = cli.cmd();
@@ -214,6 +223,11 @@ int run(int argc, char** argv)
 	TCLAP::MultiArg<std::string> sameView(
 		"", "same-view", "two pixel-aligned images of one view under different light A,B (repeatable)", false, "a,b",
 		cmd);
+	TCLAP::MultiArg<std::string> runs(
+		"", "runs",
+		"two rawlogs of the same places under different light A,B (repeatable): every --every-th frame of A is "
+		"matched to the frame of B that shares the most features, no poses needed",
+		false, "a,b", cmd);
 	TCLAP::MultiArg<std::string> images("", "image", "an ordinary image (repeatable; entropy method)", false, "file", cmd);
 	TCLAP::ValueArg<std::string> imagesDir("", "images", "a directory of ordinary images (entropy method)", false, "", "dir", cmd);
 	TCLAP::MultiArg<std::string> rawlog(
@@ -223,10 +237,10 @@ int run(int argc, char** argv)
 		cli, "", "max-frames", "at most this many frames of each rawlog (0 = all)", 200, "n", 0, 1000000000);
 	shadyloc::apps::NumberArg<int> every(
 		cli, "", "every", "use every n-th rawlog frame", 1, "n", 1, 1000000);
-	std::vector<std::string> methods{"auto", "pairs", "same-view", "edges", "entropy"};
+	std::vector<std::string> methods{"auto", "pairs", "same-view", "runs", "edges", "entropy"};
 	TCLAP::ValuesConstraint<std::string> methodC(methods);
 	TCLAP::ValueArg<std::string> method(
-		"", "method", "which estimate goes into OUT.ini (auto: pairs, else same-view, else edges)", false, "auto",
+		"", "method", "which estimate goes into OUT.ini (auto: pairs, else same-view, else runs, else edges)", false, "auto",
 		&methodC, cmd);
 	TCLAP::ValueArg<std::string> lin(
 		"", "linearise", "REQUIRED: the camera's transfer curve, none|srgb|gamma (an input, not estimated)", true, "",
@@ -324,8 +338,26 @@ int run(int argc, char** argv)
 	for (const auto& r : rawlog.getValue())
 		for (auto& m : framesOfRawlog(r, sensor.getValue(), maxFrames.getValue(), every.getValue()))
 			plain.push_back(std::move(m));
-	if (shadowPairs.empty() && viewPairs.empty() && plain.empty())
-		throw std::invalid_argument("no data: give --pairs/--pair, --same-view, --image/--images or --rawlog");
+	// Two runs: A's frames (every --every-th) against all of B's, both limited by --max-frames.
+	std::vector<TChromaChanges> runChanges;
+	std::vector<cv::Mat> runFrames;
+	for (const auto& s : runs.getValue())
+	{
+		const auto [a, b] = splitComma(s, "--runs");
+		auto fa = framesOfRawlog(a, sensor.getValue(), maxFrames.getValue(), every.getValue());
+		auto fb = framesOfRawlog(b, sensor.getValue(), maxFrames.getValue(), 1);
+		std::vector<std::string> log;
+		auto items = correspondencesAcrossRuns(fa, fb, in, {}, &log);
+		std::cout << "--runs " << s << ": " << items.size() << " of " << fa.size() << " frames of '" << a
+				  << "' matched in '" << b << "' (" << fb.size() << " frames)\n";
+		for (const auto& l : log) std::cout << "  " << l << "\n";
+		const std::string prefix = fs::path(a).stem().string() + "/" + fs::path(b).stem().string() + " ";
+		for (auto& it : items) it.name = prefix + it.name, runChanges.push_back(std::move(it));
+		for (auto* f : {&fa, &fb})
+			for (auto& m : *f) runFrames.push_back(std::move(m));
+	}
+	if (shadowPairs.empty() && viewPairs.empty() && plain.empty() && runFrames.empty())
+		throw std::invalid_argument("no data: give --pairs/--pair, --same-view, --runs, --image/--images or --rawlog");
 
 	std::cout << "input: linearisation " << toString(in.linearisation)
 			  << (in.linearisation == Linearisation::Gamma ? " (gamma " + fmt(in.gamma, 2) + ")" : "")
@@ -336,6 +368,7 @@ int run(int argc, char** argv)
 	std::vector<cv::Mat> all = plain;
 	for (const auto& p : shadowPairs) all.push_back(p.free), all.push_back(p.shadow);
 	for (const auto& p : viewPairs) all.push_back(p.a), all.push_back(p.b);
+	all.insert(all.end(), runFrames.begin(), runFrames.end());
 
 	// ---- estimates (none with a known alpha)
 	std::vector<TAlphaCurve> curves;
@@ -352,6 +385,9 @@ int run(int argc, char** argv)
 		std::vector<std::string> skipped;
 		if (!shadowPairs.empty()) curves.push_back(alphaFromShadowPairs(shadowPairs, in, search, 0.01, &skipped));
 		if (!viewPairs.empty()) curves.push_back(alphaFromSameView(viewPairs, in, search, 0.03, &skipped));
+		// Matched points, not whole images: a smaller minimum per frame pair.
+		if (!runs.getValue().empty())
+			curves.push_back(alphaFromChromaChanges(runChanges, search, 0.03, 50, "runs", &skipped));
 		curves.push_back(alphaByEdgeDirections(edgeSamples(all, in, edgeStep.getValue()), search, edgeMaxChroma.getValue()));
 		curves.push_back(alphaByEntropy(chromaSamples(all, in), search));
 		for (const auto& s : skipped) std::cout << "skipped: " << s << "\n";
@@ -362,7 +398,7 @@ int run(int argc, char** argv)
 		if (want == "auto") chosen = &curves.front();
 		if (!chosen)
 			throw std::invalid_argument(
-				"--method " + want + ": that method had no data (pairs: --pairs/--pair; same-view: --same-view)");
+				"--method " + want + ": that method had no data (pairs: --pairs/--pair; same-view: --same-view; runs: --runs)");
 
 		std::cout << "\nalpha estimates (beta = 1 - alpha; 95 % bootstrap interval over "
 				  << (search.bootstrapRounds > 0 ? std::to_string(search.bootstrapRounds) + " resamplings" : "none")
@@ -370,7 +406,7 @@ int run(int argc, char** argv)
 		for (const auto& c : curves)
 			std::cout << "  " << std::left << std::setw(10) << c.method << " alpha " << fmt(c.best) << "  ["
 					  << fmt(c.ciLow) << ", " << fmt(c.ciHigh) << "]  from " << c.items
-					  << (c.method == "entropy" || c.method == "edges" ? " images" : " pairs") << (&c == chosen ? "   <- used" : "") << "\n";
+					  << itemsOf(c.method) << (&c == chosen ? "   <- used" : "") << "\n";
 
 		p = in.params(chosen->best);
 	}
@@ -412,7 +448,7 @@ int run(int argc, char** argv)
 	std::ostringstream ini;
 	if (chosen)
 		ini << "# Calibrated by shadyloc calibrate-alpha (" << chosen->method << " method, " << chosen->items
-			<< (chosen->method == "entropy" || chosen->method == "edges" ? " images" : " pairs")
+			<< itemsOf(chosen->method)
 			<< ", 95% interval of alpha [" << fmt(chosen->ciLow) << ", " << fmt(chosen->ciHigh) << "]).\n";
 	else
 		ini << "# alpha and beta given (--alpha); 8-bit mapping calibrated by shadyloc calibrate-alpha from "

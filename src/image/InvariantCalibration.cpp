@@ -3,10 +3,13 @@
 #include <shadyloc/image/InvariantCalibration.h>
 #include <shadyloc/image/ShadowMetrics.h>
 
+#include <opencv2/calib3d.hpp>
 #include <opencv2/core.hpp>
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <functional>
 #include <array>
 #include <cmath>
 #include <numeric>
@@ -570,27 +573,76 @@ TAlphaCurve alphaByEdgeDirections(const TEdgeSamples& smp, const TAlphaSearch& s
 }
 
 // ---- 3. same view, different light ----------------------------------------------
+TAlphaCurve alphaFromChromaChanges(
+	const std::vector<TChromaChanges>& items, const TAlphaSearch& s, double minChromaChange, size_t minSamples,
+	const std::string& method, std::vector<std::string>* skipped)
+{
+	s.validate();
+	TAlphaCurve out;
+	out.method = method;
+	out.costName = "median change of the unit-norm invariant between the lights (geometric mean over items)";
+	out.alpha = s.grid();
+	const float minChange2 = float(minChromaChange * minChromaChange);
+	std::vector<std::vector<double>> perItem;
+	for (const auto& it : items)
+	{
+		// Points whose light did not change carry no information.
+		std::vector<float> dx, dy;
+		for (size_t i = 0; i < it.size(); i++)
+		{
+			const float ddx = it.xb[i] - it.xa[i], ddy = it.yb[i] - it.ya[i];
+			if (ddx * ddx + ddy * ddy < minChange2) continue;
+			dx.push_back(ddx), dy.push_back(ddy);
+		}
+		if (dx.size() < minSamples)
+		{
+			if (skipped)
+				skipped->push_back(
+					it.name + " (" + std::to_string(dx.size()) + " trusted points changed colour; need " +
+					std::to_string(minSamples) + ")");
+			continue;
+		}
+		// Distance of each change (dx, dy) from the line through the origin
+		// along (1, alpha): |dy - alpha dx| / sqrt(1 + alpha^2), the change of
+		// the unit-norm invariant. Its median over the points is a robust
+		// line fit. Unlike a step relative to texture it is not biased
+		// towards alphas that happen to show more texture, and isotropic
+		// noise weighs the same at every alpha.
+		std::vector<float> d(dx.size());
+		std::vector<double> curve(out.alpha.size());
+		for (size_t j = 0; j < out.alpha.size(); j++)
+		{
+			const float al = float(out.alpha[j]), norm = 1.0f / std::sqrt(1.0f + al * al);
+			for (size_t i = 0; i < dx.size(); i++) d[i] = std::abs(dy[i] - al * dx[i]) * norm;
+			curve[j] = std::log(std::max(1e-9, quantile(d, 0.5)));
+		}
+		perItem.push_back(std::move(curve));
+	}
+	if (perItem.empty())
+		throw std::invalid_argument(
+			"alpha from " + method + ": no item has enough trusted points whose colour changed between the two lights");
+	out.items = int(perItem.size());
+	bootstrapMeanCurve(perItem, s, out);
+	for (auto& c : out.cost) c = std::exp(c);
+	return out;
+}
+
 TAlphaCurve alphaFromSameView(
 	const std::vector<TSameViewPair>& pairs, const TCalibrationInput& in, const TAlphaSearch& s,
 	double minChromaChange, std::vector<std::string>* skipped)
 {
 	in.validate();
-	s.validate();
-	TAlphaCurve out;
-	out.method = "same-view";
-	out.costName = "median change of the unit-norm invariant between the lights (geometric mean over pairs)";
-	out.alpha = s.grid();
 	const auto L = logTable(in);
 	const auto ci = indices(in.order);
-	const float minChange2 = float(minChromaChange * minChromaChange);
-	std::vector<std::vector<double>> perPair;
+	std::vector<TChromaChanges> items;
 	for (const auto& p : pairs)
 	{
 		requireColour(p.a, "same-view pair '" + p.name + "' (first image)");
 		requireColour(p.b, "same-view pair '" + p.name + "' (second image)");
 		if (p.a.size() != p.b.size())
 			throw std::invalid_argument("same-view pair '" + p.name + "': the two images differ in size");
-		std::vector<float> xa, ya, xb, yb;
+		TChromaChanges it;
+		it.name = p.name;
 		const int top = int(in.skipTopFraction * p.a.rows);
 		for (int y = top; y < p.a.rows; y += in.stride)
 		{
@@ -601,43 +653,174 @@ TAlphaCurve alphaFromSameView(
 				const uint8_t* a = ra + 3 * x;
 				const uint8_t* b = rb + 3 * x;
 				if (!trusted(a, in) || !trusted(b, in)) continue;
-				const float x1 = L[a[ci.b]] - L[a[ci.r]], y1 = L[a[ci.g]] - L[a[ci.r]];
-				const float x2 = L[b[ci.b]] - L[b[ci.r]], y2 = L[b[ci.g]] - L[b[ci.r]];
-				if ((x2 - x1) * (x2 - x1) + (y2 - y1) * (y2 - y1) < minChange2) continue;
-				xa.push_back(x1), ya.push_back(y1), xb.push_back(x2), yb.push_back(y2);
+				it.xa.push_back(L[a[ci.b]] - L[a[ci.r]]), it.ya.push_back(L[a[ci.g]] - L[a[ci.r]]);
+				it.xb.push_back(L[b[ci.b]] - L[b[ci.r]]), it.yb.push_back(L[b[ci.g]] - L[b[ci.r]]);
 			}
 		}
-		if (xa.size() < 500)
+		items.push_back(std::move(it));
+	}
+	return alphaFromChromaChanges(items, s, minChromaChange, 500, "same-view", skipped);
+}
+
+// ---- 3b. two runs of one route ----------------------------------------------------
+void TCrossRunMatching::validate() const
+{
+	if (features < 50) throw std::invalid_argument("cross-run matching: features must be >= 50");
+	if (coarseFeatures < 50) throw std::invalid_argument("cross-run matching: coarseFeatures must be >= 50");
+	if (candidates < 1) throw std::invalid_argument("cross-run matching: candidates must be >= 1");
+	if (!(ratio > 0 && ratio <= 1)) throw std::invalid_argument("cross-run matching: ratio must be in (0, 1]");
+	if (!(ransacPx > 0)) throw std::invalid_argument("cross-run matching: ransacPx must be > 0");
+	if (minInliers < 8) throw std::invalid_argument("cross-run matching: minInliers must be >= 8");
+	if (window < 0 || window > 10) throw std::invalid_argument("cross-run matching: window must be in [0, 10]");
+	if (!(maxRoughness > 0)) throw std::invalid_argument("cross-run matching: maxRoughness must be > 0");
+}
+
+namespace
+{
+struct OrbFrame
+{
+	std::vector<cv::KeyPoint> kp;
+	cv::Mat desc;
+};
+
+OrbFrame orbOf(const cv::Mat& colour, const TCalibrationInput& in, cv::ORB& orb)
+{
+	cv::Mat grey;
+	cv::cvtColor(colour, grey, in.order == ChannelOrder::BGR ? cv::COLOR_BGR2GRAY : cv::COLOR_RGB2GRAY);
+	OrbFrame f;
+	orb.detectAndCompute(grey, cv::noArray(), f.kp, f.desc);
+	return f;
+}
+
+/** A's features matched in B that pass the ratio test. */
+void ratioMatches(
+	const OrbFrame& a, const OrbFrame& b, double ratio, std::vector<cv::Point2f>& pa, std::vector<cv::Point2f>& pb)
+{
+	pa.clear(), pb.clear();
+	if (a.desc.rows < 2 || b.desc.rows < 2) return;
+	cv::BFMatcher matcher(cv::NORM_HAMMING);
+	std::vector<std::vector<cv::DMatch>> knn;
+	matcher.knnMatch(a.desc, b.desc, knn, 2);
+	for (const auto& k : knn)
+		if (k.size() == 2 && k[0].distance < ratio * k[1].distance)
+			pa.push_back(a.kp[size_t(k[0].queryIdx)].pt), pb.push_back(b.kp[size_t(k[0].trainIdx)].pt);
+}
+
+/** RANSAC inliers (point pairs) of A's features matched in B. */
+std::vector<std::pair<cv::Point2f, cv::Point2f>> matchedInliers(
+	const OrbFrame& a, const OrbFrame& b, const TCrossRunMatching& m)
+{
+	std::vector<std::pair<cv::Point2f, cv::Point2f>> out;
+	std::vector<cv::Point2f> pa, pb;
+	ratioMatches(a, b, m.ratio, pa, pb);
+	if (int(pa.size()) < m.minInliers) return out;
+	std::vector<uchar> mask;
+	const cv::Mat F = cv::findFundamentalMat(pa, pb, cv::FM_RANSAC, m.ransacPx, 0.999, mask);
+	if (F.empty()) return out;
+	for (size_t i = 0; i < mask.size(); i++)
+		if (mask[i]) out.emplace_back(pa[i], pb[i]);
+	return out;
+}
+
+/** The largest log step to a 4-neighbour over the three channels at (x, y):
+ * small where the colour is locally flat, so that a pixel of misregistration
+ * between the two runs samples the same surface. */
+float logRoughness(const cv::Mat& img, int x, int y, const std::array<float, 256>& L)
+{
+	const uint8_t* c = img.ptr<uint8_t>(y) + 3 * x;
+	float r = 0;
+	for (const auto& [dx, dy] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}})
+	{
+		const uint8_t* n = img.ptr<uint8_t>(y + dy) + 3 * (x + dx);
+		for (int k = 0; k < 3; k++) r = std::max(r, std::abs(L[c[k]] - L[n[k]]));
+	}
+	return r;
+}
+}  // namespace
+
+std::vector<TChromaChanges> correspondencesAcrossRuns(
+	const std::vector<cv::Mat>& runA, const std::vector<cv::Mat>& runB, const TCalibrationInput& in,
+	const TCrossRunMatching& m, std::vector<std::string>* log)
+{
+	in.validate();
+	m.validate();
+	if (runA.empty() || runB.empty()) throw std::invalid_argument("cross-run matching: a run has no frames");
+	auto orb = cv::ORB::create(m.features), coarseOrb = cv::ORB::create(m.coarseFeatures);
+	std::vector<OrbFrame> fb, cb;
+	for (size_t j = 0; j < runB.size(); j++)
+	{
+		requireColour(runB[j], "second run, frame " + std::to_string(j));
+		fb.push_back(orbOf(runB[j], in, *orb));
+		cb.push_back(orbOf(runB[j], in, *coarseOrb));
+	}
+	const auto L = logTable(in);
+	const auto ci = indices(in.order);
+	std::vector<TChromaChanges> items;
+	for (size_t i = 0; i < runA.size(); i++)
+	{
+		requireColour(runA[i], "first run, frame " + std::to_string(i));
+		const OrbFrame fa = orbOf(runA[i], in, *orb), ca = orbOf(runA[i], in, *coarseOrb);
+		// Candidates by ratio-test matches alone: RANSAC on every frame of B
+		// would cost most of the time, mostly on frames that share nothing.
+		std::vector<std::pair<size_t, size_t>> ranked;	// (coarse matches, B frame)
+		std::vector<cv::Point2f> pa, pb;
+		for (size_t j = 0; j < cb.size(); j++)
 		{
-			if (skipped)
-				skipped->push_back(
-					p.name + " (" + std::to_string(xa.size()) + " trusted pixels changed colour; need 500)");
+			ratioMatches(ca, cb[j], m.ratio, pa, pb);
+			ranked.emplace_back(pa.size(), j);
+		}
+		const size_t keep = std::min(ranked.size(), size_t(m.candidates));
+		std::partial_sort(ranked.begin(), ranked.begin() + long(keep), ranked.end(), std::greater<>());
+		size_t best = 0;
+		std::vector<std::pair<cv::Point2f, cv::Point2f>> bestInliers;
+		for (size_t k = 0; k < keep; k++)
+		{
+			auto inl = matchedInliers(fa, fb[ranked[k].second], m);
+			if (inl.size() > bestInliers.size()) bestInliers = std::move(inl), best = ranked[k].second;
+		}
+		const std::string name = "frame " + std::to_string(i) + " ~ " + std::to_string(best);
+		if (int(bestInliers.size()) < m.minInliers)
+		{
+			if (log)
+				log->push_back(
+					"frame " + std::to_string(i) + ": no frame of the second run matches (best " +
+					std::to_string(bestInliers.size()) + " inliers, need " + std::to_string(m.minInliers) + ")");
 			continue;
 		}
-		// Distance of each change (dx, dy) from the line through the origin
-		// along (1, alpha): |dy - alpha dx| / sqrt(1 + alpha^2), the change of
-		// the unit-norm invariant. Its median over the pixels is a robust
-		// line fit. Unlike a step relative to texture it is not biased
-		// towards alphas that happen to show more texture, and isotropic
-		// noise weighs the same at every alpha.
-		std::vector<float> d(xa.size());
-		std::vector<double> curve(out.alpha.size());
-		for (size_t j = 0; j < out.alpha.size(); j++)
+		TChromaChanges it;
+		it.name = name;
+		const int topA = int(in.skipTopFraction * runA[i].rows), topB = int(in.skipTopFraction * runB[best].rows);
+		const cv::Mat &A = runA[i], &B = runB[best];
+		const int w = m.window;
+		for (const auto& [pa, pb] : bestInliers)
 		{
-			const float al = float(out.alpha[j]), norm = 1.0f / std::sqrt(1.0f + al * al);
-			for (size_t i = 0; i < xa.size(); i++)
-				d[i] = std::abs((yb[i] - ya[i]) - al * (xb[i] - xa[i])) * norm;
-			curve[j] = std::log(std::max(1e-9, quantile(d, 0.5)));
+			const int ax = int(std::lround(pa.x)), ay = int(std::lround(pa.y));
+			const int bx = int(std::lround(pb.x)), by = int(std::lround(pb.y));
+			// The window around the match, pixel for pixel (nearby frames:
+			// scale and rotation barely differ over a few pixels), where
+			// both images are locally flat.
+			for (int dy = -w; dy <= w; dy++)
+				for (int dx = -w; dx <= w; dx++)
+				{
+					const int xa = ax + dx, ya = ay + dy, xb = bx + dx, yb = by + dy;
+					if (xa < 1 || ya < std::max(1, topA) || xa >= A.cols - 1 || ya >= A.rows - 1) continue;
+					if (xb < 1 || yb < std::max(1, topB) || xb >= B.cols - 1 || yb >= B.rows - 1) continue;
+					const uint8_t* a = A.ptr<uint8_t>(ya) + 3 * xa;
+					const uint8_t* b = B.ptr<uint8_t>(yb) + 3 * xb;
+					if (!trusted(a, in) || !trusted(b, in)) continue;
+					if (logRoughness(A, xa, ya, L) > m.maxRoughness || logRoughness(B, xb, yb, L) > m.maxRoughness)
+						continue;
+					it.xa.push_back(L[a[ci.b]] - L[a[ci.r]]), it.ya.push_back(L[a[ci.g]] - L[a[ci.r]]);
+					it.xb.push_back(L[b[ci.b]] - L[b[ci.r]]), it.yb.push_back(L[b[ci.g]] - L[b[ci.r]]);
+				}
 		}
-		perPair.push_back(std::move(curve));
+		if (log)
+			log->push_back(
+				name + ": " + std::to_string(bestInliers.size()) + " inliers, " + std::to_string(it.size()) +
+				" trusted colour samples");
+		items.push_back(std::move(it));
 	}
-	if (perPair.empty())
-		throw std::invalid_argument(
-			"alpha from same-view pairs: no pair has enough trusted pixels whose colour changed between the two lights");
-	out.items = int(perPair.size());
-	bootstrapMeanCurve(perPair, s, out);
-	for (auto& c : out.cost) c = std::exp(c);
-	return out;
+	return items;
 }
 
 // ---- 4. mapping -------------------------------------------------------------------

@@ -653,6 +653,62 @@ TEST(InvariantCalibrationSim, InvariantTextureOverNoiseFallsWithAlpha)
 	EXPECT_NEAR(noise.back() / noise.front(), 1.0, 0.1);
 }
 
+// Two runs of one route under different light (noon, morning), no poses:
+// frames of the first are matched to frames of the second by features, and
+// the pixels around the matches give the same-view data. Its estimate is
+// compared with the same-view estimate on pixel-aligned renders of the first
+// run's poses under the second run's light (the same lights, exact
+// correspondences).
+TEST(InvariantCalibrationSim, TwoRunsWithoutPosesAgreeWithAlignedSameView)
+{
+	using namespace shadyloc::sim;
+	const auto opts = TSimOptions::FromFile(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
+	CStereoSimulator sim(opts);
+	const TTraversal noon = opts.traversal("noon"), morning = opts.traversal("morning_low_sun");
+	uint64_t seed = 500;
+	const auto shoot = [&](const TTraversal& t, const mrpt::poses::CPose3D& pose) {
+		sim.setTraversal(t);
+		cv::Mat lin, right, out;
+		sim.renderLinear(pose, lin, right);
+		sim.expose(lin, sim.exposureGain(lin), seed++, out);
+		return out;
+	};
+	std::vector<cv::Mat> runA, runB;
+	std::vector<TSameViewPair> aligned;
+	for (int frame = 20; frame <= 380; frame += 30)
+	{
+		sim.setTraversal(noon);
+		const auto pose = sim.T_world_left(frame);
+		runA.push_back(shoot(noon, pose));
+		aligned.push_back({std::to_string(frame), runA.back(), shoot(morning, pose)});
+	}
+	for (int frame = 5; frame <= 395; frame += 6)  // the second run: its own poses
+	{
+		sim.setTraversal(morning);
+		runB.push_back(shoot(morning, sim.T_world_left(frame)));
+	}
+	TCalibrationInput in;  // the simulator's camera is linear
+	auto s = quickSearch();
+	s.step = 0.01;
+	s.bootstrapRounds = 100;
+	std::vector<std::string> log;
+	const auto items = correspondencesAcrossRuns(runA, runB, in, {}, &log);
+	for (const auto& l : log) std::printf("  %s\n", l.c_str());
+	const auto runs = alphaFromChromaChanges(items, s, 0.03, 50, "runs");
+	const auto same = alphaFromSameView(aligned, in, s);
+	std::printf(
+		"two runs: alpha %.4f [%.4f, %.4f] from %d of %zu frames; aligned same view %.4f [%.4f, %.4f]\n", runs.best,
+		runs.ciLow, runs.ciHigh, runs.items, runA.size(), same.best, same.ciLow, same.ciHigh);
+	EXPECT_GE(runs.items, int(runA.size()) * 2 / 3);  // most frames find their place in the other run
+	EXPECT_EQ(runs.method, "runs");
+	// Matched pixels are noisier than aligned ones (misregistration, other
+	// viewpoints): within 0.05 of the aligned estimate, and the aligned one
+	// inside the interval.
+	EXPECT_NEAR(runs.best, same.best, 0.05);
+	EXPECT_LE(runs.ciLow, same.best);
+	EXPECT_GE(runs.ciHigh, same.best);
+}
+
 TEST(InvariantCalibrationSim, EstimatesAgainstBlackBodyReference)
 {
 	const std::vector<CameraModel> cams{
@@ -936,6 +992,18 @@ TEST(InvariantCalibrationApp, WritesIniCurveAndPlotThatLoadBack)
 				  &out),
 			  0);
 	EXPECT_NE(out.find("missing.png"), std::string::npos) << out;
+	EXPECT_NE(shadyloc::test::runCommand(
+				  shadyloc::test::appPath() + " calibrate-alpha --runs " + bad + "/a.rawlog --linearise none -o " +
+					  bad + "/x",
+				  &out),
+			  0);
+	EXPECT_NE(out.find("--runs: expected two paths"), std::string::npos) << out;
+	EXPECT_NE(shadyloc::test::runCommand(
+				  shadyloc::test::appPath() + " calibrate-alpha --runs " + bad + "/a.rawlog," + bad +
+					  "/b.rawlog --linearise none -o " + bad + "/x",
+				  &out),
+			  0);
+	EXPECT_NE(out.find("a.rawlog"), std::string::npos) << out;
 	EXPECT_TRUE(fs::is_empty(bad));
 }
 

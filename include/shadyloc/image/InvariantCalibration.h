@@ -82,7 +82,7 @@ struct TAlphaCurve
 	double ciLow = 0, ciHigh = 0;  //!< 95 % bootstrap interval of best (percentiles 2.5, 97.5)
 	int items = 0;	//!< images or pairs the estimate used
 	int bootstrapRounds = 0;
-	std::string method;	 //!< "pairs", "entropy", "same-view"
+	std::string method;	 //!< "pairs", "same-view", "runs", "edges", "entropy"
 	std::string costName;  //!< what cost means, for plots and reports
 };
 
@@ -231,6 +231,53 @@ struct TSameViewPair
 TAlphaCurve alphaFromSameView(
 	const std::vector<TSameViewPair>& pairs, const TCalibrationInput& in, const TAlphaSearch& s = {},
 	double minChromaChange = 0.03, std::vector<std::string>* skipped = nullptr);
+
+/** Log-chromaticities x = log(R1/R3), y = log(R2/R3) of the same surface
+ * points under two lights (a, b): what the same-view criterion reads. */
+struct TChromaChanges
+{
+	std::string name;  //!< for messages (a pair, a matched frame pair)
+	std::vector<float> xa, ya, xb, yb;
+	size_t size() const { return xa.size(); }
+};
+
+/** The same-view criterion (alphaFromSameView()) on given changes, one
+ * curve per item; items with fewer than minSamples points whose
+ * chromaticity moved by more than minChromaChange are skipped (named in
+ * *skipped). The curve is named `method`. */
+TAlphaCurve alphaFromChromaChanges(
+	const std::vector<TChromaChanges>& items, const TAlphaSearch& s, double minChromaChange, size_t minSamples,
+	const std::string& method, std::vector<std::string>* skipped = nullptr);
+
+// ---- 3b. two runs of one route under different light -------------------------
+/** How frames of two runs are put in correspondence (correspondencesAcrossRuns()). */
+struct TCrossRunMatching
+{
+	int features = 3000;  //!< ORB keypoints per frame (on the monochrome image)
+	/** The search: every B frame is first matched with this many keypoints
+	 * (cheap), and only the `candidates` best are matched with all. */
+	int coarseFeatures = 500, candidates = 3;
+	double ratio = 0.9;	 //!< Lowe's ratio test on the two nearest Hamming distances
+	double ransacPx = 1.0;	//!< fundamental-matrix RANSAC threshold [px]
+	int minInliers = 20;  //!< a frame pair with fewer RANSAC inliers is not used
+	int window = 4;	 //!< colours sampled pixel for pixel over the (2 window + 1)^2 px around each inlier
+	double maxRoughness = 0.1;	//!< ... where no channel steps by more than this (log) to a 4-neighbour
+	void validate() const;
+};
+
+/** Same-view data from two recordings of the same places under different
+ * light, with no poses needed: every frame of run A is matched (ORB,
+ * ratio test, fundamental-matrix RANSAC; OpenCV) against every frame of run
+ * B (coarsely, then the best candidates in full), and the B frame with the
+ * most inliers, if at least minInliers, gives
+ * one item: the colours of the pixels around each inlier, taken pixel for
+ * pixel in both images where both are locally flat (so that a pixel of
+ * misregistration samples the same surface; ORB finds corners, whose own
+ * pixels are not flat), trusted in both and below the skipped top rows.
+ * A line per A frame goes to *log (its match and inlier count, or why not). */
+std::vector<TChromaChanges> correspondencesAcrossRuns(
+	const std::vector<cv::Mat>& runA, const std::vector<cv::Mat>& runB, const TCalibrationInput& in,
+	const TCrossRunMatching& m = {}, std::vector<std::string>* log = nullptr);
 
 // ---- 4. the 8-bit mapping ---------------------------------------------------
 /** Mapping statistics of I over a set of images at given parameters. */
