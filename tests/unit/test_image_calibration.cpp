@@ -982,28 +982,19 @@ TEST(InvariantCalibrationApp, WritesIniCurveAndPlotThatLoadBack)
 
 	// Bad input: clear message, non-zero exit, no output.
 	const auto bad = shadyloc::test::tempDir("calib_app_bad");
-	EXPECT_NE(shadyloc::test::runCommand(
-				  shadyloc::test::appPath() + " calibrate-alpha --pairs " + bad + " --linearise none -o " + bad + "/x", &out),
-			  0);
-	EXPECT_NE(out.find("no <name>_free"), std::string::npos) << out;
-	EXPECT_NE(shadyloc::test::runCommand(
-				  shadyloc::test::appPath() + " calibrate-alpha --image " + bad + "/missing.png --linearise none -o " +
-					  bad + "/x",
-				  &out),
-			  0);
-	EXPECT_NE(out.find("missing.png"), std::string::npos) << out;
-	EXPECT_NE(shadyloc::test::runCommand(
-				  shadyloc::test::appPath() + " calibrate-alpha --runs " + bad + "/a.rawlog --linearise none -o " +
-					  bad + "/x",
-				  &out),
-			  0);
-	EXPECT_NE(out.find("--runs: expected two paths"), std::string::npos) << out;
-	EXPECT_NE(shadyloc::test::runCommand(
-				  shadyloc::test::appPath() + " calibrate-alpha --runs " + bad + "/a.rawlog," + bad +
-					  "/b.rawlog --linearise none -o " + bad + "/x",
-				  &out),
-			  0);
-	EXPECT_NE(out.find("a.rawlog"), std::string::npos) << out;
+	for (const auto& [args, expect] : std::vector<std::pair<std::string, std::string>>{
+			 {"--pairs " + bad, "no <name>_free"},
+			 {"--image " + bad + "/missing.png", "missing.png"},
+			 {"--runs " + bad + "/a.rawlog", "--runs: expected two paths"},
+			 {"--runs " + bad + "/a.rawlog," + bad + "/b.rawlog", "a.rawlog"}})
+	{
+		EXPECT_NE(
+			shadyloc::test::runCommand(
+				shadyloc::test::appPath() + " calibrate-alpha " + args + " --linearise none -o " + bad + "/x", &out),
+			0)
+			<< args;
+		EXPECT_NE(out.find(expect), std::string::npos) << args << ": " << out;
+	}
 	EXPECT_TRUE(fs::is_empty(bad));
 }
 
