@@ -346,11 +346,13 @@ int run(int argc, char** argv)
 		const auto [a, b] = splitComma(s, "--runs");
 		auto fa = framesOfRawlog(a, sensor.getValue(), maxFrames.getValue(), every.getValue());
 		auto fb = framesOfRawlog(b, sensor.getValue(), maxFrames.getValue(), 1);
-		std::vector<std::string> log;
-		auto items = correspondencesAcrossRuns(fa, fb, in, {}, &log);
-		std::cout << "--runs " << s << ": " << items.size() << " of " << fa.size() << " frames of '" << a
-				  << "' matched in '" << b << "' (" << fb.size() << " frames)\n";
-		for (const auto& l : log) std::cout << "  " << l << "\n";
+		std::cout << "--runs " << s << ": matching " << fa.size() << " frames of '" << a << "' in the " << fb.size()
+				  << " of '" << b << "'\n";
+		size_t done = 0;
+		auto items = correspondencesAcrossRuns(fa, fb, in, {}, [&](const std::string& line) {
+			std::cout << "  [" << ++done << "/" << fa.size() << "] " << line << std::endl;
+		});
+		std::cout << "  " << items.size() << " of " << fa.size() << " frames matched\n";
 		const std::string prefix = fs::path(a).stem().string() + "/" + fs::path(b).stem().string() + " ";
 		for (auto& it : items) it.name = prefix + it.name, runChanges.push_back(std::move(it));
 		for (auto* f : {&fa, &fb})

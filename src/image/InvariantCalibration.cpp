@@ -740,7 +740,7 @@ float logRoughness(const cv::Mat& img, int x, int y, const std::array<float, 256
 
 std::vector<TChromaChanges> correspondencesAcrossRuns(
 	const std::vector<cv::Mat>& runA, const std::vector<cv::Mat>& runB, const TCalibrationInput& in,
-	const TCrossRunMatching& m, std::vector<std::string>* log)
+	const TCrossRunMatching& m, const std::function<void(const std::string&)>& progress)
 {
 	in.validate();
 	m.validate();
@@ -781,8 +781,8 @@ std::vector<TChromaChanges> correspondencesAcrossRuns(
 		const std::string name = "frame " + std::to_string(i) + " ~ " + std::to_string(best);
 		if (int(bestInliers.size()) < m.minInliers)
 		{
-			if (log)
-				log->push_back(
+			if (progress)
+				progress(
 					"frame " + std::to_string(i) + ": no frame of the second run matches (best " +
 					std::to_string(bestInliers.size()) + " inliers, need " + std::to_string(m.minInliers) + ")");
 			continue;
@@ -814,8 +814,8 @@ std::vector<TChromaChanges> correspondencesAcrossRuns(
 					it.xb.push_back(L[b[ci.b]] - L[b[ci.r]]), it.yb.push_back(L[b[ci.g]] - L[b[ci.r]]);
 				}
 		}
-		if (log)
-			log->push_back(
+		if (progress)
+			progress(
 				name + ": " + std::to_string(bestInliers.size()) + " inliers, " + std::to_string(it.size()) +
 				" trusted colour samples");
 		items.push_back(std::move(it));

@@ -691,9 +691,12 @@ TEST(InvariantCalibrationSim, TwoRunsWithoutPosesAgreeWithAlignedSameView)
 	auto s = quickSearch();
 	s.step = 0.01;
 	s.bootstrapRounds = 100;
-	std::vector<std::string> log;
-	const auto items = correspondencesAcrossRuns(runA, runB, in, {}, &log);
-	for (const auto& l : log) std::printf("  %s\n", l.c_str());
+	size_t lines = 0;
+	const auto items = correspondencesAcrossRuns(runA, runB, in, {}, [&](const std::string& l) {
+		std::printf("  %s\n", l.c_str());
+		lines++;
+	});
+	EXPECT_EQ(lines, runA.size());	// one progress line per frame of the first run
 	const auto runs = alphaFromChromaChanges(items, s, 0.03, 50, "runs");
 	const auto same = alphaFromSameView(aligned, in, s);
 	std::printf(

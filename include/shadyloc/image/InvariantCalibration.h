@@ -41,6 +41,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -274,10 +275,11 @@ struct TCrossRunMatching
  * pixel in both images where both are locally flat (so that a pixel of
  * misregistration samples the same surface; ORB finds corners, whose own
  * pixels are not flat), trusted in both and below the skipped top rows.
- * A line per A frame goes to *log (its match and inlier count, or why not). */
+ * A line per A frame (its match and inlier count, or why not) goes to
+ * `progress` as soon as that frame is done, e.g. for a long run's output. */
 std::vector<TChromaChanges> correspondencesAcrossRuns(
 	const std::vector<cv::Mat>& runA, const std::vector<cv::Mat>& runB, const TCalibrationInput& in,
-	const TCrossRunMatching& m = {}, std::vector<std::string>* log = nullptr);
+	const TCrossRunMatching& m = {}, const std::function<void(const std::string&)>& progress = {});
 
 // ---- 4. the 8-bit mapping ---------------------------------------------------
 /** Mapping statistics of I over a set of images at given parameters. */
