@@ -792,6 +792,7 @@ std::vector<TChromaChanges> correspondencesAcrossRuns(
 		const int topA = int(in.skipTopFraction * runA[i].rows), topB = int(in.skipTopFraction * runB[best].rows);
 		const cv::Mat &A = runA[i], &B = runB[best];
 		const int w = m.window;
+		cv::Mat taken(A.size(), CV_8U, cv::Scalar(0));	// windows of nearby inliers overlap: each pixel once
 		for (const auto& [pa, pb] : bestInliers)
 		{
 			const int ax = int(std::lround(pa.x)), ay = int(std::lround(pa.y));
@@ -805,6 +806,8 @@ std::vector<TChromaChanges> correspondencesAcrossRuns(
 					const int xa = ax + dx, ya = ay + dy, xb = bx + dx, yb = by + dy;
 					if (xa < 1 || ya < std::max(1, topA) || xa >= A.cols - 1 || ya >= A.rows - 1) continue;
 					if (xb < 1 || yb < std::max(1, topB) || xb >= B.cols - 1 || yb >= B.rows - 1) continue;
+					if (taken.at<uint8_t>(ya, xa)) continue;
+					taken.at<uint8_t>(ya, xa) = 1;
 					const uint8_t* a = A.ptr<uint8_t>(ya) + 3 * xa;
 					const uint8_t* b = B.ptr<uint8_t>(yb) + 3 * xb;
 					if (!trusted(a, in) || !trusted(b, in)) continue;
