@@ -9,9 +9,9 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
-#include <functional>
 #include <array>
 #include <cmath>
+#include <functional>
 #include <numeric>
 #include <random>
 #include <sstream>
@@ -53,6 +53,14 @@ bool trusted(const uint8_t* px, const TCalibrationInput& in)
 	for (int c = 0; c < 3; c++)
 		if (px[c] < in.minCode || px[c] >= in.maxCode) return false;
 	return true;
+}
+
+/** One point's log-chromaticities under both lights: pixel a, then pixel b. */
+void addChange(
+	TChromaChanges& it, const uint8_t* a, const uint8_t* b, const std::array<float, 256>& L, const Idx& ci)
+{
+	it.xa.push_back(L[a[ci.b]] - L[a[ci.r]]), it.ya.push_back(L[a[ci.g]] - L[a[ci.r]]);
+	it.xb.push_back(L[b[ci.b]] - L[b[ci.r]]), it.yb.push_back(L[b[ci.g]] - L[b[ci.r]]);
 }
 
 // Quantile q in [0,1] of v (v is reordered).
@@ -653,8 +661,7 @@ TAlphaCurve alphaFromSameView(
 				const uint8_t* a = ra + 3 * x;
 				const uint8_t* b = rb + 3 * x;
 				if (!trusted(a, in) || !trusted(b, in)) continue;
-				it.xa.push_back(L[a[ci.b]] - L[a[ci.r]]), it.ya.push_back(L[a[ci.g]] - L[a[ci.r]]);
-				it.xb.push_back(L[b[ci.b]] - L[b[ci.r]]), it.yb.push_back(L[b[ci.g]] - L[b[ci.r]]);
+				addChange(it, a, b, L, ci);
 			}
 		}
 		items.push_back(std::move(it));
@@ -683,13 +690,20 @@ struct OrbFrame
 	cv::Mat desc;
 };
 
-OrbFrame orbOf(const cv::Mat& colour, const TCalibrationInput& in, cv::ORB& orb)
+OrbFrame orbOf(const cv::Mat& grey, cv::ORB& orb)
 {
-	cv::Mat grey;
-	cv::cvtColor(colour, grey, in.order == ChannelOrder::BGR ? cv::COLOR_BGR2GRAY : cv::COLOR_RGB2GRAY);
 	OrbFrame f;
 	orb.detectAndCompute(grey, cv::noArray(), f.kp, f.desc);
 	return f;
+}
+
+/** The monochrome image features are found on (the baseline channel's conversion). */
+cv::Mat greyOf(const cv::Mat& colour, const TCalibrationInput& in, const std::string& what)
+{
+	requireColour(colour, what);
+	cv::Mat grey;
+	toMonochrome(colour, grey, in.order);
+	return grey;
 }
 
 /** A's features matched in B that pass the ratio test. */
@@ -749,17 +763,17 @@ std::vector<TChromaChanges> correspondencesAcrossRuns(
 	std::vector<OrbFrame> fb, cb;
 	for (size_t j = 0; j < runB.size(); j++)
 	{
-		requireColour(runB[j], "second run, frame " + std::to_string(j));
-		fb.push_back(orbOf(runB[j], in, *orb));
-		cb.push_back(orbOf(runB[j], in, *coarseOrb));
+		const cv::Mat grey = greyOf(runB[j], in, "second run, frame " + std::to_string(j));
+		fb.push_back(orbOf(grey, *orb));
+		cb.push_back(orbOf(grey, *coarseOrb));
 	}
 	const auto L = logTable(in);
 	const auto ci = indices(in.order);
 	std::vector<TChromaChanges> items;
 	for (size_t i = 0; i < runA.size(); i++)
 	{
-		requireColour(runA[i], "first run, frame " + std::to_string(i));
-		const OrbFrame fa = orbOf(runA[i], in, *orb), ca = orbOf(runA[i], in, *coarseOrb);
+		const cv::Mat grey = greyOf(runA[i], in, "first run, frame " + std::to_string(i));
+		const OrbFrame fa = orbOf(grey, *orb), ca = orbOf(grey, *coarseOrb);
 		// Candidates by ratio-test matches alone: RANSAC on every frame of B
 		// would cost most of the time, mostly on frames that share nothing.
 		std::vector<std::pair<size_t, size_t>> ranked;	// (coarse matches, B frame)
@@ -813,8 +827,7 @@ std::vector<TChromaChanges> correspondencesAcrossRuns(
 					if (!trusted(a, in) || !trusted(b, in)) continue;
 					if (logRoughness(A, xa, ya, L) > m.maxRoughness || logRoughness(B, xb, yb, L) > m.maxRoughness)
 						continue;
-					it.xa.push_back(L[a[ci.b]] - L[a[ci.r]]), it.ya.push_back(L[a[ci.g]] - L[a[ci.r]]);
-					it.xb.push_back(L[b[ci.b]] - L[b[ci.r]]), it.yb.push_back(L[b[ci.g]] - L[b[ci.r]]);
+					addChange(it, a, b, L, ci);
 				}
 		}
 		if (progress)
