@@ -253,6 +253,7 @@ double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJ
 	const std::string dir = tx.addDirectory(jobDir(outDir, job), "output of " + what);
 	const auto file = [&](const char* n) { return (fs::path(dir) / n).string(); };
 	localisation::writeFramesCsv(file("frames.csv"), ups, ev, *map);
+	localisation::writeSolvesCsv(file("solves.csv"), ups, ev);
 	localisation::writeTrajectory(file("trajectory.tum"), ups);
 	localisation::TLocaliseProvenance prov;
 	prov.program = "shadyloc eval";

@@ -74,6 +74,18 @@ FixTruth judge(
 	if (errDeg) *errDeg = ed;
 	return em <= o.true_max_m && ed <= o.true_max_deg ? FixTruth::True : FixTruth::False;
 }
+/** The solve log's figures of localiser c's solve: error and NEES against the truth. */
+void solveError(
+	const CKeyframeMap& map, const TLocaliserResult& r, const Eigen::Isometry3d& T_gt_live, const TEvalOptions& o,
+	TFrameEval& f, size_t c)
+{
+	const auto& k = map.keyframe(r.kf_id);
+	if (!k.T_gt_kf) return;
+	judge(map, r.kf_id, r.T_kf_live, T_gt_live, o, &f.solve_err_m[c], &f.solve_err_deg[c]);
+	const Eigen::Isometry3d truth = k.T_gt_kf->inverse() * T_gt_live;
+	f.solve_nees[c] = mahalanobis2(geometry::localLeft(r.T_kf_live, truth), r.cov);
+}
+
 /** log P(X = i), X ~ Binomial(n, p), 0 < p < 1. */
 double logBinomialPmf(size_t i, size_t n, double p)
 {
@@ -237,12 +249,16 @@ TEvaluation evaluate(
 		{
 			auto& f = ev.frames[i];
 			f.channel.assign(nCh, FixTruth::None);
+			f.solve_err_m.assign(nCh, -1);
+			f.solve_err_deg.assign(nCh, -1);
+			f.solve_nees.assign(nCh, -1);
 			if (gtOf[i] < 0) continue;
 			const auto& T = g[gtOf[i]].T;
 			for (size_t c = 0; c < nCh; c++)
 			{
 				const auto& r = ups[i].localisers[c];
 				if (r.accepted()) f.channel[c] = judge(map, r.kf_id, r.T_kf_live, T, o);
+				if (r.solved) solveError(map, r, T, o, f, c);
 			}
 			if (ups[i].localised()) f.used = judge(map, ups[i].kf_id, ups[i].T_kf_live, T, o, &f.used_err_m, &f.used_err_deg);
 		}

@@ -85,14 +85,17 @@ void TSystemOptions::load(const mrpt::config::CConfigFileBase& c, const std::str
 	r.read("vo_fallback_channel", vo_fallback_channel);
 	r.read("threads", threads);
 	r.read("vo_cov_scale", vo_cov_scale);
-	r.read("vo_sigma_m_per_m", vo_sigma_m_per_m);
-	r.read("vo_sigma_deg_per_m", vo_sigma_deg_per_m);
 	r.read("vo_lost_sigma_m", vo_lost_sigma_m);
 	r.read("vo_lost_sigma_deg", vo_lost_sigma_deg);
-	r.read("relocalise_after_frames", relocalise_after_frames);
-	r.read("seed_with_unconfirmed", seed_with_unconfirmed);
-	r.read("global_sigma_m", global_sigma_m);
-	r.read("global_sigma_deg", global_sigma_deg);
+	r.read("vo_sigma_m_per_m", track.drift_m_per_m);
+	r.read("vo_sigma_deg_per_m", track.drift_deg_per_m);
+	r.read("confirmed_max_sigma_m", track.confirmed_max_sigma_m);
+	r.read("relocalise_after_frames", track.relocalise_after_frames);
+	r.read("relocalise_window_m", track.relocalise_window_m);
+	r.read("global_search_after_frames", track.global_search_after_frames);
+	r.read("seed_with_unconfirmed", track.seed_with_unconfirmed);
+	r.read("global_sigma_m", track.global_sigma_m);
+	r.read("global_sigma_deg", track.global_sigma_deg);
 	r.finish();
 	try
 	{
@@ -116,15 +119,18 @@ void TSystemOptions::dump(std::ostream& out) const
 			"when the channel is a localiser)");
 	w.value("threads", threads);
 	w.value("vo_cov_scale", vo_cov_scale);
-	w.value("vo_sigma_m_per_m", vo_sigma_m_per_m, "[m/m]");
-	w.value("vo_sigma_deg_per_m", vo_sigma_deg_per_m, "[deg/m]");
 	w.value("vo_lost_sigma_m", vo_lost_sigma_m, "[m]");
 	w.value("vo_lost_sigma_deg", vo_lost_sigma_deg, "[deg]");
-	w.value("relocalise_after_frames", relocalise_after_frames, "[frames]");
-	w.value("seed_with_unconfirmed", seed_with_unconfirmed,
-			"a consistent but unconfirmed solve predicts the next frame (never a fix)");
-	w.value("global_sigma_m", global_sigma_m, "[m]");
-	w.value("global_sigma_deg", global_sigma_deg, "[deg]");
+	w.value("vo_sigma_m_per_m", track.drift_m_per_m, "drift: sigma per metre since the last fix [m/m]");
+	w.value("vo_sigma_deg_per_m", track.drift_deg_per_m, "[deg/m]");
+	w.value("confirmed_max_sigma_m", track.confirmed_max_sigma_m, "the track is a confirmed place while sigma is below [m]");
+	w.value("relocalise_after_frames", track.relocalise_after_frames, "without a fix this long, search around dead reckoning [frames]");
+	w.value("relocalise_window_m", track.relocalise_window_m, "... this far along the chain on both sides [m]");
+	w.value("global_search_after_frames", track.global_search_after_frames, "... and the whole map after this [frames]");
+	w.value("seed_with_unconfirmed", track.seed_with_unconfirmed,
+			"a consistent but unconfirmed solve narrows the next search (never a fix, never validates)");
+	w.value("global_sigma_m", track.global_sigma_m, "[m]");
+	w.value("global_sigma_deg", track.global_sigma_deg, "[deg]");
 }
 
 void TSystemOptions::validate() const
@@ -140,13 +146,17 @@ void TSystemOptions::validate() const
 	need(vo_fallback_channel != vo_channel, "vo_fallback_channel", "must differ from vo_channel (or be empty)");
 	need(threads >= 1, "threads", "must be >= 1");
 	need(vo_cov_scale >= 1, "vo_cov_scale", "must be >= 1");
-	need(vo_sigma_m_per_m >= 0, "vo_sigma_m_per_m", "must be >= 0");
-	need(vo_sigma_deg_per_m >= 0, "vo_sigma_deg_per_m", "must be >= 0");
 	need(vo_lost_sigma_m > 0, "vo_lost_sigma_m", "must be > 0");
 	need(vo_lost_sigma_deg > 0, "vo_lost_sigma_deg", "must be > 0");
-	need(relocalise_after_frames >= 1, "relocalise_after_frames", "must be >= 1");
-	need(global_sigma_m >= 0, "global_sigma_m", "must be >= 0");
-	need(global_sigma_deg >= 0, "global_sigma_deg", "must be >= 0");
+	need(track.drift_m_per_m >= 0, "vo_sigma_m_per_m", "must be >= 0");
+	need(track.drift_deg_per_m >= 0, "vo_sigma_deg_per_m", "must be >= 0");
+	need(track.confirmed_max_sigma_m > 0, "confirmed_max_sigma_m", "must be > 0");
+	need(track.relocalise_after_frames >= 1, "relocalise_after_frames", "must be >= 1");
+	need(track.relocalise_window_m > 0, "relocalise_window_m", "must be > 0");
+	need(track.global_search_after_frames >= track.relocalise_after_frames, "global_search_after_frames",
+		 "must be >= relocalise_after_frames");
+	need(track.global_sigma_m >= 0, "global_sigma_m", "must be >= 0");
+	need(track.global_sigma_deg >= 0, "global_sigma_deg", "must be >= 0");
 }
 
 // ---- the update ------------------------------------------------------------------------
@@ -185,7 +195,8 @@ CLocalisationSystem::CLocalisationSystem(
 	  m_opts(o),
 	  // The VO runs on the VO channel's shared measurements (track() with a
 	  // measured frame): its own extractor only holds the options.
-	  m_vo(vopt, featuresOf(channels, o.vo_channel))
+	  m_vo(vopt, featuresOf(channels, o.vo_channel)),
+	  m_track(o.track)
 {
 	m_opts.validate();
 	if (!m_map) throw std::invalid_argument("CLocalisationSystem: no map");
@@ -309,8 +320,7 @@ void CLocalisationSystem::reset()
 	for (auto& p : m_pipes)
 		if (p.localiser) p.localiser->reset();
 	m_frame = 0;
-	m_est = TKeyframePose();
-	m_framesSinceFix = 0;
+	m_track.reset();
 	m_searchAmong.clear();
 	m_distance = 0;
 }
@@ -318,7 +328,7 @@ void CLocalisationSystem::reset()
 void CLocalisationSystem::setStartKeyframe(uint32_t id, double radius)
 {
 	m_map->keyframe(id);  // throws naming the id
-	m_est = TKeyframePose();
+	m_track.reset();
 	m_searchAmong = m_map->keyframesAlongChain(id, radius, radius);
 }
 
@@ -354,9 +364,7 @@ TMotion CLocalisationSystem::motionOf(const vo::TFrameResult& r, TVOTrack& t, bo
 	}
 	else
 		m.cov = diagCov(m_opts.vo_lost_sigma_m, m_opts.vo_lost_sigma_deg);
-	const double s = m.T_prev_curr.translation().norm();
-	m.cov += diagCov(m_opts.vo_sigma_m_per_m * s, m_opts.vo_sigma_deg_per_m * s);
-	return m;
+	return m;  // drift since the last fix: CTrack::predict
 }
 
 TLocalisationUpdate CLocalisationSystem::processObservation(const mrpt::obs::CObservationStereoImages& obs)
@@ -368,18 +376,15 @@ TLocalisationUpdate CLocalisationSystem::processObservation(const mrpt::obs::COb
 	return processFrame(l, r, geometry::TStereoCalib::FromObservation(obs), mrpt::Clock::toDouble(obs.timestamp));
 }
 
-TLocalisationUpdate CLocalisationSystem::processFrame(
-	const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib, double timestamp)
+void CLocalisationSystem::frontEnd(
+	const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib, double timestamp,
+	std::vector<features::TStereoFrame>& meas, TLocalisationUpdate& u)
 {
 	const bool par = m_opts.threads >= 2 && m_pipes.size() >= 2;
-	TLocalisationUpdate u;
-	u.frame = m_frame++;
-	u.timestamp = timestamp;
 	const size_t n = m_pipes.size();
-
-	// ---- each channel's images and measurements, once (shared by VO and localiser)
-	std::vector<features::TStereoFrame> meas(n);
-	std::vector<double> msConv(n, 0), msOther(n, 0);
+	meas.assign(n, features::TStereoFrame());
+	std::vector<double> msConv(n, 0);
+	// Each channel's images and measurements, once (shared by VO and localiser).
 	auto extract = [&](size_t i) {
 		const auto t0 = Clock::now();
 		cv::Mat gl, gr;
@@ -397,18 +402,12 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 				"frame " + std::to_string(u.frame) + ": channel '" + m_pipes[i].setup.channel.label +
 				"' does not give grey images");
 		msConv[i] = msSince(t0);
-		const auto t1 = Clock::now();
 		m_pipes[i].extractor.process(gl, gr, calib, meas[i]);
-		msOther[i] = msSince(t1);
 	};
-	const auto tAll = Clock::now();
-	double msVO = 0;
 	auto voChannel = [&] {
 		extract(0);
-		const auto t0 = Clock::now();
 		m_vo.vo.track(meas[0], calib, timestamp);
 		u.vo = m_vo.vo.commit();
-		msVO = msSince(t0);
 	};
 	auto others = [&] {
 		for (size_t i = 1; i < n; i++)
@@ -422,6 +421,9 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 		}
 	};
 	both(par, voChannel, others);
+	for (const double c : msConv) u.ms_convert += c;
+
+	// The motion source: the VO channel's step, the fallback's where that one could not measure.
 	bool measured = false;
 	u.motion = motionOf(u.vo, m_vo, measured);
 	if (u.motion.valid) u.motion_from = m_pipes[0].setup.channel.label;
@@ -437,166 +439,137 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 	}
 	if (u.motion.valid) m_distance += u.motion.T_prev_curr.translation().norm();
 	u.distance_m = m_distance;
+}
 
-	// ---- the prediction: the estimate composed with VO's increment
-	TKeyframePose pred;
-	if (m_est.valid)
+template <typename F>
+void CLocalisationSystem::forLocalisers(F&& fn)
+{
+	const bool par = m_opts.threads >= 2 && m_pipes.size() >= 2;
+	auto runFirst = [&] {
+		if (m_pipes[0].localiser) fn(size_t(0));
+	};
+	auto runRest = [&] {
+		for (size_t i = 1; i < m_pipes.size(); i++)
+			if (m_pipes[i].localiser) fn(i);
+	};
+	both(par, runFirst, runRest);
+}
+
+void CLocalisationSystem::searchPlace(
+	SearchScope scope, const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib,
+	const std::vector<size_t>& order, TLocalisationUpdate& u)
+{
+	std::vector<uint32_t> among = m_searchAmong;
+	if (scope == SearchScope::Window && m_track.estimate().valid)
 	{
-		pred = m_est;
-		if (u.motion.valid)
-		{
-			TPoseWithCov a, b;
-			a.T = m_est.T_kf_live;
-			a.cov = m_est.cov;
-			b.T = u.motion.T_prev_curr;
-			b.cov = u.motion.cov;
-			const TPoseWithCov c = geometry::compose(a, b);
-			pred.T_kf_live = c.T;
-			pred.cov = c.cov;
-		}
+		const double w = m_opts.track.relocalise_window_m;
+		among = m_map->keyframesAlongChain(m_track.estimate().kf, w, w);
 	}
-
-	// ---- the localisers, in parallel
-	std::vector<TLocaliserResult> res(n);
-	std::vector<TGlobalPlace> places(n);
-	const bool search = !pred.valid;
-	auto runOne = [&](size_t i) {
-		auto& p = m_pipes[i];
-		if (!p.localiser) return;
-		if (search)
+	const auto seed = static_cast<uint32_t>(u.frame * 7919u + 3);
+	std::vector<TGlobalPlace> places(m_pipes.size());
+	std::vector<double> ms(m_pipes.size(), 0);
+	forLocalisers([&](size_t i) {
+		const auto t0 = Clock::now();
+		const auto& L = *m_pipes[i].localiser;
+		places[i] = among.empty() ? L.globalSearch(meas[i], calib, seed) : L.globalSearch(meas[i], calib, seed, among);
+		ms[i] = msSince(t0);
+	});
+	u.global_search = true;
+	u.search_scope = scope;
+	u.place = places[order.front()];
+	for (size_t k = 0; k < order.size(); k++) u.localisers[k].ms += ms[order[k]];
+	for (const size_t i : order)
+		if (places[i].ok)
 		{
-			const auto t0 = Clock::now();
-			const auto seed = static_cast<uint32_t>(u.frame * 7919u + 3);
-			places[i] = m_searchAmong.empty() ? p.localiser->globalSearch(meas[i], calib, seed)
-											  : p.localiser->globalSearch(meas[i], calib, seed, m_searchAmong);
-			TLocaliserInput in;	 // no prediction: records the failure state
-			in.frame = u.frame;
-			in.timestamp = timestamp;
-			in.meas = &meas[i];
-			in.calib = calib;
-			in.motion = u.motion;
-			res[i] = p.localiser->localise(in);
-			res[i].ms = msSince(t0);
+			u.place = places[i];
+			m_track.adoptPlace(places[i].pose);
+			// The verified place is each localiser's first consistent frame.
+			for (const size_t j : order) m_pipes[j].localiser->startFrom(u.frame, m_track.estimate());
+			m_searchAmong.clear();
+			MRPT_LOG_DEBUG_FMT(
+				"frame %zu: place found by %s at keyframe %u (%d inliers)", u.frame, m_pipes[i].setup.channel.label.c_str(),
+				places[i].pose.kf, places[i].inliers);
 			return;
 		}
+}
+
+TLocalisationUpdate CLocalisationSystem::processFrame(
+	const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib, double timestamp)
+{
+	TLocalisationUpdate u;
+	u.frame = m_frame++;
+	u.timestamp = timestamp;
+	const size_t n = m_pipes.size();
+	const auto tAll = Clock::now();
+	std::vector<features::TStereoFrame> meas;
+	frontEnd(left, right, calib, timestamp, meas, u);
+
+	// ---- the predictor: the track composed with VO's step
+	const TKeyframePose pred = m_track.predict(u.motion);
+	u.track_confirmed = m_track.confirmed();
+
+	// ---- the localisers, in parallel (no prediction: each records a failure)
+	std::vector<TLocaliserResult> res(n);
+	forLocalisers([&](size_t i) {
 		TLocaliserInput in;
 		in.frame = u.frame;
 		in.timestamp = timestamp;
 		in.meas = &meas[i];
 		in.calib = calib;
 		in.prediction = pred;
+		in.search = m_track.searchSeed();
+		in.track_confirmed = u.track_confirmed;
 		in.motion = u.motion;
-		res[i] = p.localiser->localise(in);
-	};
-	auto runFirst = [&] { runOne(0); };
-	auto runRest = [&] {
-		for (size_t i = 1; i < n; i++) runOne(i);
-	};
-	both(par, runFirst, runRest);
-
-	if (getMinLoggingLevel() <= mrpt::system::LVL_DEBUG)
-		for (size_t i = 0; i < n; i++)
-		{
-			const auto& r = res[i];
-			if (!m_pipes[i].localiser || search) continue;
-			// Where the prediction puts the live camera in the keyframe's
-			// frame: the distance that decides how much of it is re-found.
-			const Eigen::Vector3d t =
-				r.kf_id < m_map->keyframeCount()
-					? Eigen::Vector3d((m_map->keyframe(r.kf_id).T_map_kf.inverse() * m_map->keyframe(pred.kf).T_map_kf *
-									   pred.T_kf_live).translation())
-					: Eigen::Vector3d::Zero();
-			MRPT_LOG_DEBUG_FMT(
-				"frame %zu %s: kf %u, predicted at (%.2f %.2f %.2f) m from it, %d matches, %d inliers, gate median "
-				"%.1f px (%d of %d overflow), sigma %.3f m, rms %.2f px, var factor %.2f, %s",
-				u.frame, r.channel.c_str(), r.kf_id, t.x(), t.y(), t.z(), r.matches, r.inliers, r.gate.median_axis_px,
-				r.gate.overflow, r.gate.predicted, r.sigma_m, r.rms_px, r.var_factor, toString(r.status).c_str());
-		}
-
-	// ---- the policy
-	std::vector<size_t> order;
+		res[i] = m_pipes[i].localiser->localise(in);
+	});
+	std::vector<size_t> order;	// the localisers in policy order
 	for (size_t i = 0; i < n; i++)
 		if (m_pipes[i].localiser) order.push_back(i);
 	std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return m_pipes[a].policyRank < m_pipes[b].policyRank; });
 	for (const size_t i : order) u.localisers.push_back(res[i]);
-	if (search)
+
+	// ---- the policy: the first accepted fix in policy order, else dead reckoning
+	const TLocaliserResult* fix = nullptr;
+	for (const size_t i : order)
+		if (res[i].accepted())
+		{
+			fix = &res[i];
+			break;
+		}
+	if (fix)
 	{
-		u.global_search = true;
-		u.place = places[order.front()];
-		for (const size_t i : order)
-			if (places[i].ok)
-			{
-				u.place = places[i];
-				m_est = places[i].pose;
-				m_est.cov += diagCov(m_opts.global_sigma_m, m_opts.global_sigma_deg);
-				m_framesSinceFix = 0;
-				m_searchAmong.clear();
-				break;
-			}
-		// The place is a prediction for the next frame, not a fix.
+		u.used = fix->channel;
+		TKeyframePose f;
+		f.valid = true;
+		f.kf = fix->kf_id;
+		f.T_kf_live = fix->T_kf_live;
+		f.cov = fix->cov;
+		m_track.fix(f);
 	}
 	else
 	{
-		const TLocaliserResult* fix = nullptr;
+		std::vector<TKeyframePose> seeds;
+		bool allLost = true;
 		for (const size_t i : order)
-			if (res[i].accepted())
-			{
-				fix = &res[i];
-				break;
-			}
-		if (fix)
 		{
-			u.used = fix->channel;
-			m_est.valid = true;
-			m_est.kf = fix->kf_id;
-			m_est.T_kf_live = fix->T_kf_live;
-			m_est.cov = fix->cov;
-			m_framesSinceFix = 0;
-		}
-		else
-		{
-			// A solve that passed its own failure tests but is not yet confirmed
-			// (fewer than K consistent frames) is no fix, yet it is a far better
-			// prediction for the next frame than dead reckoning: keeping the
-			// gates tight is what lets the localiser reach K consistent frames
-			// after a global search or a failure.
-			// Of the unconfirmed solves and the dead-reckoned prediction, the
-			// most certain (translational variance) predicts: the invariant
-			// solve, noisier, does not displace a tighter prediction.
-			const TLocaliserResult* seed = nullptr;
-			if (m_opts.seed_with_unconfirmed)
+			allLost &= res[i].status == LocaliserStatus::Lost;
+			if (res[i].status == LocaliserStatus::Unconfirmed)
 			{
-				double best = pred.valid ? pred.cov.topLeftCorner<3, 3>().trace() : std::numeric_limits<double>::infinity();
-				for (const size_t i : order)
-					if (res[i].status == LocaliserStatus::Unconfirmed && res[i].cov.topLeftCorner<3, 3>().trace() < best)
-					{
-						seed = &res[i];
-						best = res[i].cov.topLeftCorner<3, 3>().trace();
-					}
-			}
-			if (seed)
-			{
-				m_est.valid = true;
-				m_est.kf = seed->kf_id;
-				m_est.T_kf_live = seed->T_kf_live;
-				m_est.cov = seed->cov;
-			}
-			else
-				m_est = pred;  // dead reckoning
-			m_framesSinceFix++;
-			bool allLost = true;
-			for (const size_t i : order) allLost &= res[i].status == LocaliserStatus::Lost;
-			if (allLost || m_framesSinceFix > m_opts.relocalise_after_frames)
-			{
-				MRPT_LOG_DEBUG_FMT(
-					"frame %zu: %s: searching for the place anew", u.frame,
-					allLost ? "the prediction is too uncertain to search" : "too long without a fix");
-				m_est.valid = false;
+				TKeyframePose s;
+				s.valid = true;
+				s.kf = res[i].kf_id;
+				s.T_kf_live = res[i].T_kf_live;
+				s.cov = res[i].cov;
+				seeds.push_back(s);
 			}
 		}
+		m_track.noFix(seeds);
+		// ---- relocalisation, on this frame
+		const SearchScope scope = m_track.searchNeeded(allLost);
+		if (scope != SearchScope::None) searchPlace(scope, meas, calib, order, u);
 	}
-	u.frames_since_fix = m_framesSinceFix;
-	const TKeyframePose& shown = m_est.valid ? m_est : pred;
+	u.frames_since_fix = m_track.framesSinceFix();
+	const TKeyframePose& shown = m_track.estimate();
 	if (shown.valid)
 	{
 		const auto& kf = m_map->keyframe(shown.kf);
@@ -609,12 +582,14 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 		u.cov = shown.cov;
 		u.T_map_live = kf.T_map_kf * shown.T_kf_live;
 	}
-	double conv = 0;
-	for (const double c : msConv) conv += c;
-	u.ms_convert = conv;
+	if (getMinLoggingLevel() <= mrpt::system::LVL_DEBUG)
+		for (const auto& r : u.localisers)
+			MRPT_LOG_DEBUG_FMT(
+				"frame %zu %s: kf %u, %d matches, %d inliers, gate median %.1f px (%d of %d overflow), sigma %.3f m, "
+				"rms %.2f px, var factor %.2f, %s",
+				u.frame, r.channel.c_str(), r.kf_id, r.matches, r.inliers, r.gate.median_axis_px, r.gate.overflow,
+				r.gate.predicted, r.sigma_m, r.rms_px, r.var_factor, toString(r.status).c_str());
 	u.ms_total = msSince(tAll);
-	(void)msVO;
-	(void)msOther;
 	return u;
 }
 

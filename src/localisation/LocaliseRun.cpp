@@ -296,6 +296,37 @@ void writeFramesCsv(
 	csv.commit();
 }
 
+void writeSolvesCsv(const std::string& path, const std::vector<TLocalisationUpdate>& ups, const TEvaluation& ev)
+{
+	io::CsvWriter csv(
+		path,
+		"frame,channel,status,kf_id,matches,inliers,rms_px,var_factor,sigma_m,sigma_deg,prediction_d2,motion_d2,"
+		"consistent,track_confirmed,used,err_m,err_deg,nees");
+	auto& o = csv.out();
+	o << std::fixed;
+	for (size_t i = 0; i < ups.size(); i++)
+	{
+		const auto& u = ups[i];
+		const auto& f = ev.frames[i];
+		for (size_t c = 0; c < u.localisers.size(); c++)
+		{
+			const auto& r = u.localisers[c];
+			if (!r.solved) continue;
+			o << u.frame << ',' << r.channel << ',' << toString(r.status) << ',' << r.kf_id << ',' << r.matches << ','
+			  << r.inliers << ',' << std::setprecision(3) << r.rms_px << ',' << r.var_factor << ',' << std::setprecision(5)
+			  << r.sigma_m << ',' << r.sigma_deg << ',' << std::setprecision(3) << r.prediction_d2 << ',' << r.motion_d2
+			  << ',' << r.consistent << ',' << int(u.track_confirmed) << ',' << int(u.used == r.channel) << ',';
+			if (c < f.solve_err_m.size() && f.solve_err_m[c] >= 0)
+				o << std::setprecision(4) << f.solve_err_m[c] << ',' << f.solve_err_deg[c] << ',' << std::setprecision(3)
+				  << f.solve_nees[c];
+			else
+				o << ",,";
+			o << '\n';
+		}
+	}
+	csv.commit();
+}
+
 void writeTrajectory(const std::string& path, const std::vector<TLocalisationUpdate>& ups)
 {
 	io::Trajectory traj;

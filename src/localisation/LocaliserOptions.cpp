@@ -13,6 +13,8 @@ void TLocaliserOptions::load(const mrpt::config::CConfigFileBase& c, const std::
 	r.read("kf_ahead_m", kf_ahead_m);
 	r.read("kf_lookahead_m", kf_lookahead_m);
 	r.read("kf_max_distance_m", kf_max_distance_m);
+	r.read("kf_window_m", kf_window_m);
+	r.read("kf_window_max", kf_window_max);
 	r.read("kf_max_angle_deg", kf_max_angle_deg);
 	r.read("kf_angle_weight_m_per_deg", kf_angle_weight_m_per_deg);
 	r.read("cross_segment_sigma_m", cross_segment_sigma_m);
@@ -71,6 +73,8 @@ void TLocaliserOptions::dump(std::ostream& out) const
 	w.value("kf_ahead_m", kf_ahead_m, "... and ahead of it [m]");
 	w.value("kf_lookahead_m", kf_lookahead_m, "the keyframe nearest this point in front of the camera [m]");
 	w.value("kf_max_distance_m", kf_max_distance_m, "[m]");
+	w.value("kf_window_m", kf_window_m, "local map: keyframes along the chain within this of the chosen one (0 = it alone) [m]");
+	w.value("kf_window_max", kf_window_max, "... at most this many");
 	w.value("kf_max_angle_deg", kf_max_angle_deg, "optical axes within this [deg]");
 	w.value("kf_angle_weight_m_per_deg", kf_angle_weight_m_per_deg, "[m/deg]");
 	w.value("cross_segment_sigma_m", cross_segment_sigma_m, "[m]");
@@ -97,8 +101,8 @@ void TLocaliserOptions::dump(std::ostream& out) const
 	w.value("min_inliers", min_inliers);
 	w.value("cov_scale", cov_scale, "the solver's covariance is scaled by this");
 	w.value("bootstrap_samples", bootstrap_samples, "resamples of the inliers for the bootstrap covariance (0 = off)");
-	w.value("max_sigma_m", max_sigma_m, "a fix less certain than this is rejected [m]");
-	w.value("max_sigma_deg", max_sigma_deg, "[deg]");
+	w.value("max_sigma_m", max_sigma_m, "a fix less certain than this is not used (0 = no cap) [m]");
+	w.value("max_sigma_deg", max_sigma_deg, "(0 = no cap) [deg]");
 	w.value("uncertain_breaks_chain", uncertain_breaks_chain, "an uncertain solve needs K consistent frames again");
 	w.value("prediction_chi2", prediction_chi2, "chi^2, 6 dof");
 	w.value("motion_chi2", motion_chi2, "chi^2, 6 dof");
@@ -120,6 +124,8 @@ void TLocaliserOptions::validate() const
 	need(kf_back_m >= 0, "kf_back_m", "must be >= 0");
 	need(kf_ahead_m >= 0, "kf_ahead_m", "must be >= 0");
 	need(kf_max_distance_m > 0, "kf_max_distance_m", "must be > 0");
+	need(kf_window_m >= 0, "kf_window_m", "must be >= 0");
+	need(kf_window_max >= 1 && kf_window_max <= 20, "kf_window_max", "must be in [1, 20]");
 	need(kf_max_angle_deg > 0 && kf_max_angle_deg <= 180, "kf_max_angle_deg", "must be in (0, 180]");
 	need(kf_angle_weight_m_per_deg >= 0, "kf_angle_weight_m_per_deg", "must be >= 0");
 	need(cross_segment_sigma_m > 0, "cross_segment_sigma_m", "must be > 0");
@@ -145,8 +151,8 @@ void TLocaliserOptions::validate() const
 	need(min_inliers >= 3, "min_inliers", "must be >= 3");
 	need(cov_scale >= 1, "cov_scale", "must be >= 1");
 	need(bootstrap_samples == 0 || (bootstrap_samples >= 2 && bootstrap_samples <= 1000), "bootstrap_samples", "must be 0 (off) or 2..1000");
-	need(max_sigma_m > 0, "max_sigma_m", "must be > 0");
-	need(max_sigma_deg > 0, "max_sigma_deg", "must be > 0");
+	need(max_sigma_m >= 0, "max_sigma_m", "must be >= 0 (0 = no cap)");
+	need(max_sigma_deg >= 0, "max_sigma_deg", "must be >= 0 (0 = no cap)");
 	need(global_window_px > 0, "global_window_px", "must be > 0");
 	need(prediction_chi2 > 0, "prediction_chi2", "must be > 0");
 	need(motion_chi2 > 0, "motion_chi2", "must be > 0");

@@ -25,15 +25,6 @@ double msSince(std::chrono::steady_clock::time_point t0)
 	return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/** xi^T S^-1 xi; infinity if S is not positive definite. */
-double mahalanobis2(const Vector6d& xi, const Matrix6d& S)
-{
-	const Eigen::LDLT<Matrix6d> ldlt(0.5 * (S + S.transpose()));
-	if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return std::numeric_limits<double>::infinity();
-	const double d2 = xi.dot(ldlt.solve(xi));
-	return std::isfinite(d2) && d2 >= 0 ? d2 : std::numeric_limits<double>::infinity();
-}
-
 double angleBetweenAxesDeg(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B)
 {
 	const double c = std::clamp(A.linear().col(2).dot(B.linear().col(2)), -1.0, 1.0);
@@ -138,6 +129,13 @@ Matrix6d covarianceMax(const Matrix6d& A, const Matrix6d& B, int samples)
 
 }  // namespace
 
+Matrix6d fixCovariance(const Matrix6d& solver, const Matrix6d& bootstrap, double cov_scale, int samples)
+{
+	const Matrix6d scaled = cov_scale * solver;
+	if (samples < 2 || bootstrap.isZero(0)) return scaled;
+	return covarianceMax(scaled, bootstrap, samples);
+}
+
 vo::TKeyframeMatcherOptions matcherOptionsFor(const TLocaliserOptions& o, SearchMode mode)
 {
 	vo::TKeyframeMatcherOptions m;
@@ -224,19 +222,14 @@ CStereoLocaliser::CStereoLocaliser(const CKeyframeMap& map, const std::string& c
 	  m_matcher(matcherOptionsFor(o, o.search)),
 	  m_gateMatcher(matcherOptionsFor(o, SearchMode::Gate)),
 	  m_placeMatcher(placeMatcherOptions(o)),
-	  m_estimator(estimatorOptionsFor(o))
+	  m_estimator(estimatorOptionsFor(o)),
+	  m_accept(TAcceptanceOptions{o.prediction_chi2, o.motion_chi2, o.consistent_frames})
 {
 	m_opts.validate();
 	map.channelIndex(channel);	// throws naming the map's channels
 }
 
-void CStereoLocaliser::reset()
-{
-	m_prevSolve = TKeyframePose();
-	m_prevUncertain = false;
-	m_consistent = 0;
-	m_confirmed = false;
-}
+void CStereoLocaliser::reset() { m_accept.reset(); }
 
 TPoseWithCov CStereoLocaliser::between(uint32_t a, uint32_t b) const
 {
@@ -302,6 +295,92 @@ TKeyframePose CStereoLocaliser::chooseKeyframe(const TKeyframePose& pred) const
 	return out;
 }
 
+std::vector<uint32_t> CStereoLocaliser::window(uint32_t ref, const Eigen::Isometry3d& T_map_pred) const
+{
+	std::vector<uint32_t> w = {ref};
+	if (m_opts.kf_window_m <= 0 || m_opts.kf_window_max <= 1) return w;
+	std::vector<std::pair<double, uint32_t>> near;	// (distance from the prediction, id)
+	for (const uint32_t k : m_map.keyframesAlongChain(ref, m_opts.kf_window_m, m_opts.kf_window_m))
+	{
+		const auto& T = m_map.keyframe(k).T_map_kf;
+		if (k == ref || angleBetweenAxesDeg(T, T_map_pred) > m_opts.kf_max_angle_deg) continue;
+		near.emplace_back((T.translation() - T_map_pred.translation()).norm(), k);
+	}
+	std::sort(near.begin(), near.end());
+	for (const auto& dk : near)
+		if (static_cast<int>(w.size()) < m_opts.kf_window_max) w.push_back(dk.second);
+	return w;
+}
+
+void CStereoLocaliser::searchLocalMap(
+	const TLocaliserInput& in, uint32_t ref, const TKeyframePose& pred, double gateScale,
+	vo::TKeyframeMatchOutput& out) const
+{
+	out = vo::TKeyframeMatchOutput();
+	const geometry::TStereoCalib calibKf = m_map.calibration();
+	const Eigen::Isometry3d T_map_pred = m_map.keyframe(ref).T_map_kf * pred.T_kf_live;
+	TPoseWithCov p;
+	p.T = pred.T_kf_live;
+	p.cov = pred.cov;
+	// A live measurement goes to the landmark of the keyframe nearest the
+	// live camera (searched first): the most similar viewpoint.
+	std::vector<uint8_t> taken(in.meas->meas.size(), 0);
+	for (const uint32_t k : window(ref, T_map_pred))
+	{
+		const TPoseWithCov T_ref_k = between(ref, k);
+		const TPoseWithCov inK = k == ref ? p : geometry::compose(geometry::inverse(T_ref_k), p);
+		const TPoseWithCov pinv = geometry::inverse(inK);
+		vo::TKeyframeMatchInput mi;
+		mi.landmarks = &m_map.measurements(k, m_channel);
+		mi.calib_kf = calibKf;
+		mi.frame = in.meas;
+		mi.calib = in.calib;
+		mi.T_curr_kf_pred = pinv.T;
+		mi.cov_T_curr_kf_pred = pinv.cov * (gateScale * gateScale);
+		vo::TKeyframeMatchOutput mo;
+		m_matcher.match(mi, mo);
+		if (k == ref) out.gate = mo.gate;  // the lost test reads the reference keyframe's gates
+		out.descriptor_matches += mo.descriptor_matches;
+		for (size_t c = 0; c < mo.corr.size(); c++)
+		{
+			const int m = mo.measurement[c];
+			if (taken[static_cast<size_t>(m)]) continue;
+			geometry::TStereoCorrespondence corr = mo.corr[c];
+			if (k != ref)
+			{
+				// Into the reference keyframe; its measurement there is the
+				// landmark's projection (the two-view adjustment needs one).
+				const Eigen::Isometry3d& T = T_ref_k.T;
+				corr.P_ref = T * corr.P_ref;
+				corr.cov_ref = T.linear() * corr.cov_ref * T.linear().transpose();
+				if (!(corr.P_ref.z() > 0.5)) continue;
+				corr.z_ref = calibKf.project(corr.P_ref);
+				corr.calib_ref = calibKf;
+			}
+			taken[static_cast<size_t>(m)] = 1;
+			out.corr.push_back(corr);
+			out.landmark.push_back(mo.landmark[c]);
+			out.measurement.push_back(m);
+		}
+	}
+}
+
+namespace
+{
+LocaliserStatus statusOf(AcceptanceVerdict v)
+{
+	switch (v)
+	{
+		case AcceptanceVerdict::Fix: return LocaliserStatus::Ok;
+		case AcceptanceVerdict::Unconfirmed: return LocaliserStatus::Unconfirmed;
+		case AcceptanceVerdict::Uncounted: return LocaliserStatus::Uncertain;
+		case AcceptanceVerdict::PredictionInconsistent: return LocaliserStatus::PredictionInconsistent;
+		case AcceptanceVerdict::MotionInconsistent: return LocaliserStatus::MotionInconsistent;
+	}
+	return LocaliserStatus::SolverFailed;
+}
+}  // namespace
+
 TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 {
 	const auto t0 = std::chrono::steady_clock::now();
@@ -311,22 +390,18 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 	r.frame = in.frame;
 	r.timestamp = in.timestamp;
 	r.channel = m_channel;
-	// Any frame without a consistent fix is a failure: K consistent frames are
-	// needed again. The previous solve survives only into the next frame.
-	const bool prevIsLastFrame = m_prevSolve.valid && m_prevFrame + 1 == in.frame;
+	// Any frame without a consistent solve is a failure: consistency starts again.
 	auto fail = [&](LocaliserStatus s) {
 		r.status = s;
-		m_consistent = 0;
-		m_confirmed = false;
-		if (!r.solved) m_prevSolve = TKeyframePose();
-		r.consistent = m_consistent;
+		m_accept.noSolve();
+		r.consistent = 0;
 		r.ms = msSince(t0);
 		return r;
 	};
 	if (!in.prediction.valid) return fail(LocaliserStatus::NoPrediction);
 
-	// ---- 1. keyframe choice ---------------------------------------------------------
-	const TKeyframePose pred = chooseKeyframe(in.prediction);
+	// ---- 1. keyframe choice, around where to search ------------------------------------
+	const TKeyframePose pred = chooseKeyframe(in.search.valid ? in.search : in.prediction);
 	if (!pred.valid) return fail(LocaliserStatus::NoKeyframe);
 	const auto& kf = m_map.keyframe(pred.kf);
 	r.kf_id = kf.id;
@@ -343,96 +418,20 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 		if (matchKf == pred.kf) return fail(LocaliserStatus::NoKeyframe);
 	}
 
-	// ---- 2. active search --------------------------------------------------------------
-	vo::TKeyframeMatchInput mi;
-	mi.landmarks = &m_map.measurements(matchKf, m_channel);
-	mi.calib_kf = m_map.calibration();
-	mi.frame = in.meas;
-	mi.calib = in.calib;
-	TPoseWithCov p;
-	p.T = pred.T_kf_live;
-	p.cov = pred.cov;
-	const TPoseWithCov pinv = geometry::inverse(p);
-	mi.T_curr_kf_pred = pinv.T;
-	mi.cov_T_curr_kf_pred = pinv.cov;
+	// ---- 2. active search in the local map, 3. RANSAC and the robust solve ---------------
 	vo::TKeyframeMatchOutput mo;
-	vo::TRelativePoseInput pi;
-	pi.calib = in.calib;
-	pi.T_curr_ref_pred = nullptr;
-	pi.seed = static_cast<uint32_t>(in.frame * 2654435761u + 7);
 	vo::TRelativePoseOutput po;
-	// Search and solve; once more with wider gates when the first finds too
-	// few (a prediction whose covariance is too small for its error).
-	LocaliserStatus searchStatus = LocaliserStatus::Ok;
-	// A frame that fails both searches reports its first (the gates as predicted).
-	struct
-	{
-		vo::TGateStats gate;
-		int matches = 0, inliers = 0;
-		double rms_px = 0;
-	} first;
-	bool retried = false;
-	for (int attempt = 0; attempt < 2; attempt++)
-	{
-		if (attempt == 1)
-		{
-			if (o.retry_gate_scale <= 1.0 || o.search != SearchMode::Gate) break;
-			mi.cov_T_curr_kf_pred *= o.retry_gate_scale * o.retry_gate_scale;
-			first.gate = r.gate;
-			first.matches = r.matches;
-			first.inliers = r.inliers;
-			first.rms_px = r.rms_px;
-			retried = true;
-		}
-		mo = vo::TKeyframeMatchOutput();
-		m_matcher.match(mi, mo);
-		r.gate = mo.gate;
-		r.matches = static_cast<int>(mo.corr.size());
-		if (o.search == SearchMode::Gate && mo.gate.predicted > 0 &&
-			mo.gate.overflow > o.max_overflow_fraction * mo.gate.predicted)
-		{
-			searchStatus = attempt == 0 ? LocaliserStatus::Lost : searchStatus;
-			break;
-		}
-		if (r.matches < o.min_matches)
-		{
-			searchStatus = LocaliserStatus::FewMatches;
-			continue;
-		}
-		// ---- 3. RANSAC and the robust solve, without the prior -----------------------
-		pi.corr = &mo.corr;
-		po = vo::TRelativePoseOutput();
-		m_estimator.estimate(pi, po);
-		r.inliers = static_cast<int>(po.inliers);
-		r.rms_px = po.rms_px;
-		if (po.status == vo::RelativePoseStatus::SolverFailed)
-		{
-			searchStatus = LocaliserStatus::SolverFailed;
-			break;
-		}
-		searchStatus = (!po.ok() || r.inliers < o.min_inliers) ? LocaliserStatus::FewInliers : LocaliserStatus::Ok;
-		if (searchStatus == LocaliserStatus::Ok) break;
-	}
-	if (searchStatus != LocaliserStatus::Ok)
-	{
-		if (retried)
-		{
-			r.gate = first.gate;
-			r.matches = first.matches;
-			r.inliers = first.inliers;
-			r.rms_px = first.rms_px;
-		}
-		return fail(searchStatus);
-	}
+	const LocaliserStatus searchStatus = searchAndSolve(in, matchKf, pred, mo, po, r);
+	if (searchStatus != LocaliserStatus::Ok) return fail(searchStatus);
 	r.solved = true;
 	r.var_factor = varianceFactor(in.calib, mo.corr, po.inlier, po.T_curr_ref, o.sigma_px);
 	r.T_kf_live = po.T_curr_ref.inverse();
-	r.cov = po.cov_T_ref_curr;
-	if (o.bootstrap_samples > 0)
-		r.cov = covarianceMax(
-			r.cov, bootstrapCovariance(in.calib, mo.corr, po.inlier, po.T_curr_ref, o, pi.seed ^ 0x9e3779b9u),
-			o.bootstrap_samples);
-	r.cov *= o.cov_scale;
+	const uint32_t seed = static_cast<uint32_t>(in.frame * 2654435761u + 7) ^ 0x9e3779b9u;
+	r.cov = fixCovariance(
+		po.cov_T_ref_curr,
+		o.bootstrap_samples > 0 ? bootstrapCovariance(in.calib, mo.corr, po.inlier, po.T_curr_ref, o, seed)
+								: Matrix6d::Zero(),
+		o.cov_scale, o.bootstrap_samples);
 	{
 		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> et(r.cov.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
 		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> er(r.cov.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
@@ -440,66 +439,83 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 		r.sigma_deg = std::sqrt(std::max(0.0, er.eigenvalues().maxCoeff())) / kDeg;
 	}
 
-	// ---- 4. the failure test -------------------------------------------------------------
-	bool consistent = true;
-	LocaliserStatus why = LocaliserStatus::Ok;
-	// (0) a fix too uncertain to be within the accuracy asked of it. With
-	// uncertain_breaks_chain off it is no failure of consistency: unless the
-	// tests below fail, such a frame neither counts towards K nor resets it.
-	const bool uncertain = r.sigma_m > o.max_sigma_m || r.sigma_deg > o.max_sigma_deg;
-	if (uncertain && o.uncertain_breaks_chain)
-	{
-		consistent = false;
-		why = LocaliserStatus::Uncertain;
-	}
-	// (a) the fix against the prediction, both covariances.
-	r.prediction_d2 = mahalanobis2(geometry::localLeft(r.T_kf_live, pred.T_kf_live), pred.cov + r.cov);
-	if (r.prediction_d2 > o.prediction_chi2)
-	{
-		consistent = false;
-		if (why == LocaliserStatus::Ok) why = LocaliserStatus::PredictionInconsistent;
-	}
-	// (b) frame-to-frame motion of the two solves against VO's.
-	bool motionTested = false;
-	if (prevIsLastFrame && in.motion.valid)
-	{
-		TPoseWithCov prev, cur;
-		prev.T = m_prevSolve.T_kf_live;
-		prev.cov = m_prevSolve.cov;
-		cur.T = r.T_kf_live;
-		cur.cov = r.cov;
-		const TPoseWithCov D = geometry::compose(geometry::compose(geometry::inverse(prev), between(m_prevSolve.kf, pred.kf)), cur);
-		r.motion_d2 = mahalanobis2(geometry::localLeft(D.T, in.motion.T_prev_curr), D.cov + in.motion.cov);
-		motionTested = true;
-		if (r.motion_d2 > o.motion_chi2)
-		{
-			consistent = false;
-			if (why == LocaliserStatus::Ok) why = LocaliserStatus::MotionInconsistent;
-		}
-	}
-	// A motion test against an uncertain solve is weak (its covariance is
-	// large): it can reject, but only one between two certain solves counts.
-	const bool motionCounts = motionTested && !m_prevUncertain;
-	m_prevSolve.valid = true;
-	m_prevSolve.kf = pred.kf;
-	m_prevSolve.T_kf_live = r.T_kf_live;
-	m_prevSolve.cov = r.cov;
-	m_prevFrame = in.frame;
-	m_prevUncertain = uncertain;
-	if (!consistent) return fail(why);
-	if (uncertain)
-	{
-		r.status = LocaliserStatus::Uncertain;
-		r.consistent = m_consistent;
-		r.ms = msSince(t0);
-		return r;
-	}
-	if (motionCounts) m_consistent++;
-	if (m_consistent >= o.consistent_frames) m_confirmed = true;
-	r.consistent = m_consistent;
-	r.status = m_confirmed ? LocaliserStatus::Ok : LocaliserStatus::Unconfirmed;
+	// ---- 4. acceptance (FixAcceptance.h) ---------------------------------------------------
+	const bool uncertain =
+		(o.max_sigma_m > 0 && r.sigma_m > o.max_sigma_m) || (o.max_sigma_deg > 0 && r.sigma_deg > o.max_sigma_deg);
+	if (uncertain && o.uncertain_breaks_chain) return fail(LocaliserStatus::Uncertain);
+	TSolve sv;
+	sv.frame = in.frame;
+	sv.pose.valid = true;
+	sv.pose.kf = pred.kf;
+	sv.pose.T_kf_live = r.T_kf_live;
+	sv.pose.cov = r.cov;
+	const TAcceptance acc = m_accept.judge(
+		sv, in.prediction, in.motion, in.track_confirmed, !uncertain, [this](uint32_t a, uint32_t b) { return between(a, b); });
+	r.prediction_d2 = acc.prediction_d2;
+	r.motion_d2 = acc.motion_d2;
+	r.consistent = acc.consistent;
+	r.status = statusOf(acc.verdict);
 	r.ms = msSince(t0);
 	return r;
+}
+
+LocaliserStatus CStereoLocaliser::searchAndSolve(
+	const TLocaliserInput& in, uint32_t ref, const TKeyframePose& pred, vo::TKeyframeMatchOutput& mo,
+	vo::TRelativePoseOutput& po, TLocaliserResult& r) const
+{
+	const auto& o = m_opts;
+	vo::TRelativePoseInput pi;
+	pi.calib = in.calib;
+	pi.T_curr_ref_pred = nullptr;
+	pi.seed = static_cast<uint32_t>(in.frame * 2654435761u + 7);
+	LocaliserStatus status = LocaliserStatus::Ok;
+	// A frame that fails both searches reports its first (the gates as predicted).
+	TLocaliserResult first;
+	bool retried = false;
+	for (int attempt = 0; attempt < 2; attempt++)
+	{
+		if (attempt == 1)
+		{
+			// Wider gates: a prediction whose covariance is too small for its error.
+			if (o.retry_gate_scale <= 1.0 || o.search != SearchMode::Gate) break;
+			first = r;
+			retried = true;
+		}
+		searchLocalMap(in, ref, pred, attempt == 0 ? 1.0 : o.retry_gate_scale, mo);
+		r.gate = mo.gate;
+		r.matches = static_cast<int>(mo.corr.size());
+		if (o.search == SearchMode::Gate && mo.gate.predicted > 0 &&
+			mo.gate.overflow > o.max_overflow_fraction * mo.gate.predicted)
+		{
+			status = attempt == 0 ? LocaliserStatus::Lost : status;
+			break;
+		}
+		if (r.matches < o.min_matches)
+		{
+			status = LocaliserStatus::FewMatches;
+			continue;
+		}
+		pi.corr = &mo.corr;
+		po = vo::TRelativePoseOutput();
+		m_estimator.estimate(pi, po);
+		r.inliers = static_cast<int>(po.inliers);
+		r.rms_px = po.rms_px;
+		if (po.status == vo::RelativePoseStatus::SolverFailed)
+		{
+			status = LocaliserStatus::SolverFailed;
+			break;
+		}
+		status = (!po.ok() || r.inliers < o.min_inliers) ? LocaliserStatus::FewInliers : LocaliserStatus::Ok;
+		if (status == LocaliserStatus::Ok) break;
+	}
+	if (status != LocaliserStatus::Ok && retried)
+	{
+		r.gate = first.gate;
+		r.matches = first.matches;
+		r.inliers = first.inliers;
+		r.rms_px = first.rms_px;
+	}
+	return status;
 }
 
 TGlobalPlace CStereoLocaliser::globalSearch(

@@ -429,9 +429,10 @@ TEST(LocalisationOptions, DumpLoadsBackIdentically)
 	localisation::TSystemOptions s;
 	s.threads = 1;
 	s.vo_cov_scale = 2.5;
-	s.relocalise_after_frames = 17;
-	s.seed_with_unconfirmed = false;
-	s.global_sigma_m = 1.0 / 7.0;
+	s.track.relocalise_after_frames = 17;
+	s.track.global_search_after_frames = 40;
+	s.track.seed_with_unconfirmed = false;
+	s.track.global_sigma_m = 1.0 / 7.0;
 	std::ostringstream ds;
 	s.dump(ds);
 	mrpt::config::CConfigFileMemory cs("[localise]\n" + ds.str());
@@ -439,9 +440,10 @@ TEST(LocalisationOptions, DumpLoadsBackIdentically)
 	sb.load(cs, "localise");
 	EXPECT_EQ(sb.threads, 1);
 	EXPECT_EQ(sb.vo_cov_scale, 2.5);
-	EXPECT_EQ(sb.relocalise_after_frames, 17);
-	EXPECT_FALSE(sb.seed_with_unconfirmed);
-	EXPECT_EQ(sb.global_sigma_m, s.global_sigma_m);
+	EXPECT_EQ(sb.track.relocalise_after_frames, 17);
+	EXPECT_EQ(sb.track.global_search_after_frames, 40);
+	EXPECT_FALSE(sb.track.seed_with_unconfirmed);
+	EXPECT_EQ(sb.track.global_sigma_m, s.track.global_sigma_m);
 	std::ostringstream ds2;
 	sb.dump(ds2);
 	EXPECT_EQ(ds2.str(), ds.str());

@@ -59,6 +59,11 @@ struct TFrameEval
 	FixTruth used = FixTruth::None;	 //!< of the fix used
 	double used_err_m = -1, used_err_deg = -1;	//!< its error (when checkable)
 	std::vector<FixTruth> channel;	//!< per localiser (policy order): of its own accepted fix
+	/** Per localiser (policy order), of its solve whether accepted or not
+	 * (the solve log): error against the truth [m], [deg] (-1: no solve or
+	 * no truth), and its normalised estimation error squared
+	 * xi^T cov^-1 xi (6 dof; -1: none). */
+	std::vector<double> solve_err_m, solve_err_deg, solve_nees;
 };
 
 

@@ -22,6 +22,7 @@
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/filters/Channel.h>
 #include <shadyloc/localisation/StereoLocaliser.h>
+#include <shadyloc/localisation/Track.h>
 #include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/vo/StereoVO.h>
 
@@ -53,23 +54,15 @@ struct TSystemOptions
 	int threads = 2;  //!< 1: everything on the calling thread; >= 2: channels in parallel
 	/** VO's covariance is scaled by this (the solver's is optimistic) [-]. */
 	double vo_cov_scale = 4.0;
-	/** Added to each VO step's covariance, per metre of the step: drift that
-	 * the solver's covariance does not see [m/m], [deg/m]. */
-	double vo_sigma_m_per_m = 0.02;
-	double vo_sigma_deg_per_m = 0.2;
 	/** A step VO could not measure (predicted by constant velocity) [m], [deg]. */
 	double vo_lost_sigma_m = 0.3;
 	double vo_lost_sigma_deg = 3.0;
-	/** Without a fix for this many frames the place is searched for anew [frames]. */
-	int relocalise_after_frames = 30;
-	/** A solve that passed its own failure tests but is not yet confirmed (fewer
-	 * than K consistent frames) predicts the next frame instead of dead
-	 * reckoning; it is never reported or used as a fix. */
-	bool seed_with_unconfirmed = true;
-	/** Added to a global-search place's covariance (one frame's solve,
-	 * unconfirmed) [m], [deg]. */
-	double global_sigma_m = 0.1;
-	double global_sigma_deg = 1.0;
+	/** The track, its drift, confirmation and relocalisation (Track.h);
+	 * keys vo_sigma_m_per_m, vo_sigma_deg_per_m (drift per metre since the
+	 * last fix), confirmed_max_sigma_m, relocalise_after_frames,
+	 * relocalise_window_m, global_search_after_frames, global_sigma_m,
+	 * global_sigma_deg, seed_with_unconfirmed. */
+	TTrackOptions track;
 
 	void load(const mrpt::config::CConfigFileBase& c, const std::string& section);
 	void dump(std::ostream& out) const;
@@ -104,7 +97,9 @@ struct TLocalisationUpdate
 	TMotion motion;	 //!< VO's increment used for the prediction
 	/** The VO channel whose step `motion` is ("" on the first frame). */
 	std::string motion_from;
-	bool global_search = false;	 //!< the global search ran on this frame
+	bool track_confirmed = false;  //!< the prediction was of a confirmed place
+	bool global_search = false;	 //!< the place was searched for on this frame (around dead reckoning or everywhere)
+	SearchScope search_scope = SearchScope::None;
 	TGlobalPlace place;	 //!< its outcome (the one adopted, or the first localiser's)
 	double ms_total = 0;  //!< channel conversion, features, VO, localisers and policy (decoding excluded) [ms]
 	double ms_convert = 0;	//!< of which channel conversion, summed over the channels [ms]
@@ -204,11 +199,23 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	std::vector<TPipe> m_pipes;	 //!< the VO channel first
 	TVOTrack m_vo;
 	std::unique_ptr<TVOTrack> m_voFallback;	 //!< null: no fallback VO
+	/** Each channel's live measurements and their VO's motion (the front end). */
+	void frontEnd(
+		const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib, double timestamp,
+		std::vector<features::TStereoFrame>& meas, TLocalisationUpdate& u);
+	/** Runs fn(i) for every localiser's pipe, the first on this thread and
+	 * the others on a second one when threads >= 2. */
+	template <typename F>
+	void forLocalisers(F&& fn);
+	/** Searches for the place (scope) and adopts the first verified one in policy order. */
+	void searchPlace(
+		SearchScope scope, const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib,
+		const std::vector<size_t>& order, TLocalisationUpdate& u);
+
 	// State.
 	size_t m_frame = 0;
-	TKeyframePose m_est;  //!< the current estimate (valid once a place is known)
-	int m_framesSinceFix = 0;
-	std::vector<uint32_t> m_searchAmong;  //!< keyframes the next global search looks at (empty: all)
+	CTrack m_track;
+	std::vector<uint32_t> m_searchAmong;  //!< keyframes a whole-map search looks at (empty: all)
 	double m_distance = 0;
 };
 

@@ -87,6 +87,10 @@ struct TLocaliseProvenance
 /** frames.csv: one row per live frame (docs/localisation.md). */
 void writeFramesCsv(
 	const std::string& path, const std::vector<TLocalisationUpdate>& ups, const TEvaluation& ev, const CKeyframeMap& map);
+/** solves.csv, the solve log: one row per localiser and frame with a solve,
+ * accepted or not, with what the accept stage saw and, with ground truth,
+ * its error and NEES (docs/localisation.md, "The solve log"). */
+void writeSolvesCsv(const std::string& path, const std::vector<TLocalisationUpdate>& ups, const TEvaluation& ev);
 /** trajectory.tum: the live left camera in the map frame where a place is known. */
 void writeTrajectory(const std::string& path, const std::vector<TLocalisationUpdate>& ups);
 /** summary.json's text (versioned; no times: it compares byte for byte). */

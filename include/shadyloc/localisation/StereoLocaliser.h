@@ -31,6 +31,7 @@
 #pragma once
 
 #include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/localisation/FixAcceptance.h>
 #include <shadyloc/geometry/PoseCovariance.h>
 #include <shadyloc/geometry/PoseSolver.h>
 #include <shadyloc/geometry/StereoCamera.h>
@@ -71,6 +72,12 @@ struct TLocaliserOptions
 	 * as of one within 0.2 m (docs/localisation.md), so looking ahead costs. */
 	double kf_lookahead_m = 0.0;
 	double kf_max_distance_m = 6.0;	 //!< farther keyframes are not used [m]
+	/** The local map: the landmarks of the keyframes within this distance
+	 * along the chain of the chosen one are searched too, in one RANSAC and
+	 * one solve (0 = the chosen keyframe only). A live frame half-way
+	 * between two keyframes re-finds part of each [m]. */
+	double kf_window_m = 3.0;
+	int kf_window_max = 3;	//!< at most this many keyframes, nearest the prediction first
 	double kf_max_angle_deg = 30.0;	 //!< optical axes farther apart are not used [deg]
 	double kf_angle_weight_m_per_deg = 0.1;	 //!< ranking: metres a degree of heading is worth [m/deg]
 	/** Covariance added when the prediction crosses from one chain segment to
@@ -118,8 +125,9 @@ struct TLocaliserOptions
 	 * optimistic: correlated errors, model error) [-]. */
 	double cov_scale = 4.0;
 	/** Resamples of the inliers for the bootstrap covariance (0 = off): the
-	 * fix's covariance is the larger of the solver's and the bootstrap's in
-	 * every direction (docs/localisation.md, "False fixes") [-]. */
+	 * fix's covariance is the larger of the scaled solver's and the
+	 * bootstrap's in every direction; the bootstrap's is an empirical spread
+	 * and is not scaled again (fixCovariance; docs/localisation.md) [-]. */
 	int bootstrap_samples = 30;
 
 	/** A fix whose standard deviation (largest axis of the scaled covariance)
@@ -170,29 +178,18 @@ struct TLocaliserOptions
 TLocaliserOptions localiserOptionsFor(
 	const mrpt::config::CConfigFileBase& cfg, const std::string& channel, const std::string& section = "localiser");
 
+/** A fix's covariance: the solver's scaled by cov_scale, raised to the
+ * bootstrap's (`samples` resamples; zero = none) in the directions where
+ * that is larger beyond chance. Scaling after taking the larger would
+ * inflate the bootstrap's empirical spread a second time. */
+geometry::Matrix6d fixCovariance(
+	const geometry::Matrix6d& solver, const geometry::Matrix6d& bootstrap, double cov_scale, int samples);
+
 /** The VO stages a localiser is made of, configured from its options: the
  * keyframe matcher for a search region, and the pose estimator (solved
  * without the motion prior). Diagnostic tools build the same stages. */
 vo::TKeyframeMatcherOptions matcherOptionsFor(const TLocaliserOptions& o, SearchMode mode);
 vo::TRelativePoseOptions estimatorOptionsFor(const TLocaliserOptions& o);
-
-/** A pose relative to a map keyframe with its covariance (left perturbation,
- * translation first [m^2, rad^2]). */
-struct TKeyframePose
-{
-	bool valid = false;
-	uint32_t kf = 0;  //!< map keyframe id
-	Eigen::Isometry3d T_kf_live = Eigen::Isometry3d::Identity();  //!< live left camera in the keyframe's left camera
-	geometry::Matrix6d cov = geometry::Matrix6d::Zero();
-};
-
-/** VO's motion from the previous frame to this one. */
-struct TMotion
-{
-	bool valid = false;
-	Eigen::Isometry3d T_prev_curr = Eigen::Isometry3d::Identity();
-	geometry::Matrix6d cov = geometry::Matrix6d::Zero();  //!< left perturbation [m^2, rad^2]
-};
 
 /** One frame's input. */
 struct TLocaliserInput
@@ -201,7 +198,14 @@ struct TLocaliserInput
 	double timestamp = 0;  //!< [s]
 	const features::TStereoFrame* meas = nullptr;  //!< the live frame's measurements of this channel
 	geometry::TStereoCalib calib;  //!< the live camera
-	TKeyframePose prediction;  //!< the predicted pose (invalid: no prior, nothing to do)
+	/** The system's track propagated to this frame: what a solve is
+	 * validated against (invalid: no prior, nothing to do). */
+	TKeyframePose prediction;
+	/** Where to search, when tighter than the track (an unconfirmed solve's
+	 * seed); invalid: the prediction. Never used to validate. */
+	TKeyframePose search;
+	/** The track is a confirmed place: a consistent solve is a fix at once. */
+	bool track_confirmed = false;
 	TMotion motion;	 //!< VO's increment (for the frame-to-frame test)
 };
 
@@ -215,7 +219,7 @@ enum class LocaliserStatus
 	FewMatches,
 	FewInliers,
 	SolverFailed,
-	Uncertain,	//!< the fix's covariance exceeds max_sigma_m / max_sigma_deg
+	Uncertain,	//!< the fix's covariance exceeds max_sigma_m / max_sigma_deg (when set)
 	PredictionInconsistent,	 //!< the fix disagrees with the prediction
 	MotionInconsistent	//!< its frame-to-frame motion disagrees with VO's
 };
@@ -282,6 +286,9 @@ class CStereoLocaliser
 
 	/** Forgets the previous solve and confirmation (a new start). */
 	void reset();
+	/** A verified place at `frame` (the global search): the first consistent
+	 * frame of the new hypothesis. */
+	void startFrom(size_t frame, const TKeyframePose& place) { m_accept.startFrom(frame, place); }
 
 	const std::string& channel() const { return m_channel; }
 	const TLocaliserOptions& options() const { return m_opts; }
@@ -292,6 +299,20 @@ class CStereoLocaliser
 	/** T_a_b with covariance through the chain, or through map poses plus
 	 * the cross-segment covariance when a and b are in different segments. */
 	geometry::TPoseWithCov between(uint32_t a, uint32_t b) const;
+	/** The local map's keyframes around `ref` (ref first, then by distance
+	 * from the predicted camera). */
+	std::vector<uint32_t> window(uint32_t ref, const Eigen::Isometry3d& T_map_pred) const;
+	/** Searches the window's landmarks around the prediction `pred` (in
+	 * `ref`) with the prediction's covariance scaled by gateScale^2: the
+	 * correspondences in ref's frame, each live measurement at most once. */
+	void searchLocalMap(
+		const TLocaliserInput& in, uint32_t ref, const TKeyframePose& pred, double gateScale,
+		vo::TKeyframeMatchOutput& out) const;
+	/** Search (once more with wider gates when the first finds too few) and
+	 * solve without the prior; fills r's search figures. */
+	LocaliserStatus searchAndSolve(
+		const TLocaliserInput& in, uint32_t ref, const TKeyframePose& pred, vo::TKeyframeMatchOutput& mo,
+		vo::TRelativePoseOutput& po, TLocaliserResult& r) const;
 
 	const CKeyframeMap& m_map;
 	std::string m_channel;
@@ -300,12 +321,7 @@ class CStereoLocaliser
 	vo::CKeyframeMatcher m_gateMatcher;	 //!< global search, second pass
 	vo::CKeyframeMatcher m_placeMatcher;  //!< global search, first pass (window around the keyframe's view)
 	vo::CRelativePoseEstimator m_estimator;
-	// Failure-test state.
-	TKeyframePose m_prevSolve;	//!< the last frame's solve (any status), for the motion test
-	size_t m_prevFrame = 0;
-	bool m_prevUncertain = false;  //!< the last solve was uncertain (its motion test does not count)
-	int m_consistent = 0;
-	bool m_confirmed = false;
+	CFixAcceptance m_accept;  //!< the failure test and its state
 };
 
 }  // namespace shadyloc::localisation

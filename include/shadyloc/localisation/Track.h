@@ -1,0 +1,104 @@
+/* ShadyLoc — the system's track and its switching policy, apart from the
+ * images (tested alone: tests/unit/test_localisation_stages.cpp).
+ *
+ * The track is the last accepted fix (or verified place) propagated by VO:
+ *  - predict(): composes it with VO's step and adds drift that grows in
+ *    proportion to the distance dead-reckoned since the last fix
+ *    (sigma = k * d, whatever the frame rate: driftCovariance);
+ *  - the track is a confirmed place after a fix, until a global search
+ *    adopts a new place or its uncertainty outgrows confirmed_max_sigma_m;
+ *    while confirmed, a consistent solve of any localiser is a fix at once
+ *    (FixAcceptance.h);
+ *  - the policy (McManus et al. 2014, Section III-B): the first localiser
+ *    in policy order with an accepted fix is used; none: dead reckoning;
+ *  - an unconfirmed but consistent solve may narrow the next frame's
+ *    search, never the track a solve is validated against;
+ *  - relocalisation: after relocalise_after_frames without a fix (or when
+ *    every localiser is lost) the place is searched for around dead
+ *    reckoning, within relocalise_window_m along the map's chain, on the
+ *    same frame; after global_search_after_frames, in the whole map.
+ */
+#pragma once
+
+#include <shadyloc/localisation/FixAcceptance.h>
+
+#include <mrpt/config/CConfigFileBase.h>
+
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace shadyloc::localisation
+{
+struct TTrackOptions
+{
+	/** Drift of dead reckoning: standard deviation per metre since the last
+	 * fix [m/m], [deg/m]. */
+	double drift_m_per_m = 0.02;
+	double drift_deg_per_m = 0.2;
+	/** The track stays a confirmed place while its largest translational
+	 * standard deviation is below this [m]. */
+	double confirmed_max_sigma_m = 0.5;
+	int relocalise_after_frames = 2;  //!< frames without a fix before the windowed search [frames]
+	double relocalise_window_m = 20.0;	//!< ... along the chain on both sides of dead reckoning [m]
+	int global_search_after_frames = 30;  //!< frames without a fix before the whole map is searched [frames]
+	/** Added to a global-search place's covariance (one frame's solve) [m], [deg]. */
+	double global_sigma_m = 0.1;
+	double global_sigma_deg = 1.0;
+	/** An unconfirmed, consistent solve narrows the next frame's search. */
+	bool seed_with_unconfirmed = true;
+};
+
+/** Covariance added by a dead-reckoned step of `step` metres after `before`
+ * metres without a fix: the variance of drift k * d grows from
+ * (k before)^2 to (k (before + step))^2 (k: drift per metre) [m^2, rad^2]. */
+geometry::Matrix6d driftCovariance(double before, double step, double k_m_per_m, double k_deg_per_m);
+
+/** Where the place is searched for on a frame without a fix. */
+enum class SearchScope
+{
+	None,
+	Window,	 //!< around dead reckoning
+	Whole  //!< the whole map (or the start keyframes)
+};
+
+class CTrack
+{
+   public:
+	explicit CTrack(const TTrackOptions& o = {}) : m_opts(o) {}
+
+	/** The track propagated by VO's step (invalid when no place is known). */
+	TKeyframePose predict(const TMotion& motion);
+	/** Where to search this frame when not around the prediction: the last
+	 * frame's unconfirmed solve propagated by the same step, when tighter
+	 * than the prediction (invalid otherwise). */
+	const TKeyframePose& searchSeed() const { return m_seedPred; }
+	/** The prediction is of a confirmed place (see the file comment). */
+	bool confirmed() const;
+
+	/** A fix was used: the track restarts from it, confirmed. */
+	void fix(const TKeyframePose& fix);
+	/** No fix: dead reckoning; `seeds` are this frame's unconfirmed solves. */
+	void noFix(const std::vector<TKeyframePose>& seeds);
+	/** Whether (and where) to search for the place now. `allLost`: every
+	 * localiser said its gates outgrew the ceiling. */
+	SearchScope searchNeeded(bool allLost) const;
+	/** A verified place becomes the track: a new, unconfirmed hypothesis. */
+	void adoptPlace(const TKeyframePose& place);
+
+	const TKeyframePose& estimate() const { return m_est; }
+	int framesSinceFix() const { return m_framesSinceFix; }
+	double distanceSinceFix() const { return m_distSinceFix; }
+	void reset() { *this = CTrack(m_opts); }
+
+   private:
+	TTrackOptions m_opts;
+	TKeyframePose m_est;  //!< the track after the last frame
+	TKeyframePose m_pred, m_seedPred;  //!< this frame's prediction and seed
+	TKeyframePose m_seed;  //!< an unconfirmed solve of the last frame
+	bool m_confirmed = false;
+	int m_framesSinceFix = 0;
+	double m_distSinceFix = 0;
+};
+
+}  // namespace shadyloc::localisation

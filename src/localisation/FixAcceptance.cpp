@@ -1,0 +1,116 @@
+/* ShadyLoc — the accept stage of a localiser (see FixAcceptance.h). */
+#include <shadyloc/localisation/FixAcceptance.h>
+
+#include <Eigen/Cholesky>
+
+#include <cmath>
+#include <limits>
+
+namespace shadyloc::localisation
+{
+using geometry::Matrix6d;
+using geometry::TPoseWithCov;
+using geometry::Vector6d;
+
+double mahalanobis2(const Vector6d& xi, const Matrix6d& S)
+{
+	const Eigen::LDLT<Matrix6d> ldlt(0.5 * (S + S.transpose()));
+	if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return std::numeric_limits<double>::infinity();
+	const double d2 = xi.dot(ldlt.solve(xi));
+	return std::isfinite(d2) && d2 >= 0 ? d2 : std::numeric_limits<double>::infinity();
+}
+
+std::string toString(AcceptanceVerdict v)
+{
+	switch (v)
+	{
+		case AcceptanceVerdict::Fix: return "fix";
+		case AcceptanceVerdict::Unconfirmed: return "unconfirmed";
+		case AcceptanceVerdict::Uncounted: return "uncounted";
+		case AcceptanceVerdict::PredictionInconsistent: return "prediction_inconsistent";
+		case AcceptanceVerdict::MotionInconsistent: return "motion_inconsistent";
+	}
+	return "?";
+}
+
+namespace
+{
+TPoseWithCov withCov(const TKeyframePose& p)
+{
+	TPoseWithCov r;
+	r.T = p.T_kf_live;
+	r.cov = p.cov;
+	return r;
+}
+}  // namespace
+
+TAcceptance CFixAcceptance::judge(
+	const TSolve& s, const TKeyframePose& pred, const TMotion& motion, bool trackConfirmed, bool countable,
+	const KeyframeLink& link)
+{
+	TAcceptance a;
+	bool consistent = true;
+	if (pred.valid)
+	{
+		// The prediction re-expressed in the solve's keyframe.
+		const TPoseWithCov p = pred.kf == s.pose.kf ? withCov(pred) : geometry::compose(link(s.pose.kf, pred.kf), withCov(pred));
+		a.prediction_d2 = mahalanobis2(geometry::localLeft(s.pose.T_kf_live, p.T), p.cov + s.pose.cov);
+		if (a.prediction_d2 > m_opts.prediction_chi2)
+		{
+			consistent = false;
+			a.verdict = AcceptanceVerdict::PredictionInconsistent;
+		}
+	}
+	const bool motionTested = m_ref && m_ref->frame + 1 == s.frame && motion.valid;
+	if (motionTested)
+	{
+		// The two solves' frame-to-frame motion: T_prev_curr = T_refkf_prev^-1 T_refkf_kf T_kf_curr.
+		const TPoseWithCov D = geometry::compose(
+			geometry::compose(geometry::inverse(withCov(m_ref->pose)), link(m_ref->pose.kf, s.pose.kf)), withCov(s.pose));
+		a.motion_d2 = mahalanobis2(geometry::localLeft(D.T, motion.T_prev_curr), D.cov + motion.cov);
+		if (a.motion_d2 > m_opts.motion_chi2 && consistent)
+		{
+			consistent = false;
+			a.verdict = AcceptanceVerdict::MotionInconsistent;
+		}
+	}
+	if (!consistent)
+	{
+		noSolve();	// a rejected solve is never a reference
+		a.consistent = 0;
+		return a;
+	}
+	if (!countable)
+	{
+		// Neither a failure nor evidence: the chain waits, with no reference.
+		m_ref.reset();
+		a.verdict = AcceptanceVerdict::Uncounted;
+		a.consistent = m_consistent;
+		return a;
+	}
+	m_ref = s;
+	if (motionTested) m_consistent++;
+	if (m_consistent >= m_opts.consistent_frames) m_confirmed = true;
+	a.consistent = m_consistent;
+	a.verdict = (m_confirmed || trackConfirmed) ? AcceptanceVerdict::Fix : AcceptanceVerdict::Unconfirmed;
+	return a;
+}
+
+void CFixAcceptance::noSolve()
+{
+	m_ref.reset();
+	m_consistent = 0;
+	m_confirmed = false;
+}
+
+void CFixAcceptance::startFrom(size_t frame, const TKeyframePose& place)
+{
+	noSolve();
+	m_ref = TSolve{frame, place};
+	m_consistent = 1;
+	m_confirmed = m_consistent >= m_opts.consistent_frames;
+}
+
+void CFixAcceptance::reset() { noSolve(); }
+
+}  // namespace shadyloc::localisation

@@ -1,0 +1,121 @@
+/* ShadyLoc — the system's track and switching policy (see Track.h). */
+#include <shadyloc/localisation/Track.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <cmath>
+
+namespace shadyloc::localisation
+{
+using geometry::Matrix6d;
+using geometry::TPoseWithCov;
+
+namespace
+{
+constexpr double kDeg = M_PI / 180.0;
+
+TPoseWithCov withCov(const TKeyframePose& p)
+{
+	TPoseWithCov r;
+	r.T = p.T_kf_live;
+	r.cov = p.cov;
+	return r;
+}
+
+/** p composed with the step (its covariance plus `drift`). */
+TKeyframePose propagate(const TKeyframePose& p, const TMotion& m, const Matrix6d& drift)
+{
+	if (!p.valid || !m.valid) return p;
+	TPoseWithCov step;
+	step.T = m.T_prev_curr;
+	step.cov = m.cov + drift;
+	const TPoseWithCov c = geometry::compose(withCov(p), step);
+	TKeyframePose out = p;
+	out.T_kf_live = c.T;
+	out.cov = c.cov;
+	return out;
+}
+
+double largestSigma(const Matrix6d& cov)
+{
+	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
+	return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
+}
+}  // namespace
+
+Matrix6d driftCovariance(double before, double step, double k_m, double k_deg)
+{
+	// Var(k d) grows by k^2 ((d + s)^2 - d^2): a random walk per step would
+	// give sigma ~ k sqrt(s d) instead, over-confident and frame-rate dependent.
+	const double grow = (before + step) * (before + step) - before * before;
+	const double kr = k_deg * kDeg;
+	Matrix6d c = Matrix6d::Zero();
+	c.diagonal() << k_m * k_m * grow, k_m * k_m * grow, k_m * k_m * grow, kr * kr * grow, kr * kr * grow, kr * kr * grow;
+	return c;
+}
+
+TKeyframePose CTrack::predict(const TMotion& motion)
+{
+	const double step = motion.valid ? motion.T_prev_curr.translation().norm() : 0.0;
+	const Matrix6d drift = driftCovariance(m_distSinceFix, step, m_opts.drift_m_per_m, m_opts.drift_deg_per_m);
+	m_distSinceFix += step;
+	m_pred = propagate(m_est, motion, drift);
+	m_seedPred = TKeyframePose();
+	if (m_seed.valid && m_pred.valid)
+	{
+		// The seed is one frame's solve: only its own step's drift is added.
+		const TKeyframePose s = propagate(m_seed, motion, driftCovariance(0, step, m_opts.drift_m_per_m, m_opts.drift_deg_per_m));
+		if (s.cov.topLeftCorner<3, 3>().trace() < m_pred.cov.topLeftCorner<3, 3>().trace()) m_seedPred = s;
+	}
+	return m_pred;
+}
+
+bool CTrack::confirmed() const
+{
+	return m_confirmed && m_pred.valid && largestSigma(m_pred.cov) <= m_opts.confirmed_max_sigma_m;
+}
+
+void CTrack::fix(const TKeyframePose& f)
+{
+	m_est = f;
+	m_est.valid = true;
+	m_seed = TKeyframePose();
+	m_confirmed = true;
+	m_framesSinceFix = 0;
+	m_distSinceFix = 0;
+}
+
+void CTrack::noFix(const std::vector<TKeyframePose>& seeds)
+{
+	m_est = m_pred;
+	m_seed = TKeyframePose();
+	if (m_opts.seed_with_unconfirmed)
+		for (const auto& s : seeds)
+			if (s.valid && (!m_seed.valid || s.cov.topLeftCorner<3, 3>().trace() < m_seed.cov.topLeftCorner<3, 3>().trace()))
+				m_seed = s;
+	if (m_confirmed && !confirmed()) m_confirmed = false;  // outgrew the bound: a new hypothesis is needed
+	m_framesSinceFix++;
+}
+
+SearchScope CTrack::searchNeeded(bool allLost) const
+{
+	if (!m_est.valid || m_framesSinceFix > m_opts.global_search_after_frames) return SearchScope::Whole;
+	if (allLost || m_framesSinceFix >= m_opts.relocalise_after_frames) return SearchScope::Window;
+	return SearchScope::None;
+}
+
+void CTrack::adoptPlace(const TKeyframePose& place)
+{
+	m_est = place;
+	m_est.valid = true;
+	const double sr = m_opts.global_sigma_deg * kDeg;
+	Matrix6d c = Matrix6d::Zero();
+	c.diagonal() << Eigen::Vector3d::Constant(m_opts.global_sigma_m * m_opts.global_sigma_m), Eigen::Vector3d::Constant(sr * sr);
+	m_est.cov += c;  // one frame's solve, unconfirmed
+	m_seed = TKeyframePose();
+	m_confirmed = false;
+	m_framesSinceFix = 0;
+	m_distSinceFix = 0;
+}
+
+}  // namespace shadyloc::localisation

@@ -1,0 +1,217 @@
+/* ShadyLoc tests: the localisation stages without images — the accept
+ * stage (FixAcceptance.h), the track and its policy (Track.h), the fix
+ * covariance. Each of the bugs the localisation issue named has a case
+ * here: drift that grew with the square root of the distance, a rejected
+ * solve kept as the motion test's reference, an unconfirmed solve that
+ * validated the next frame against itself, the bootstrap covariance
+ * inflated twice. */
+#include <shadyloc/localisation/FixAcceptance.h>
+#include <shadyloc/localisation/StereoLocaliser.h>
+#include <shadyloc/localisation/Track.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace
+{
+using namespace shadyloc;
+using namespace shadyloc::localisation;
+using geometry::Matrix6d;
+
+constexpr double kDeg = M_PI / 180.0;
+
+Matrix6d diag(double sm, double sdeg)
+{
+	Matrix6d c = Matrix6d::Zero();
+	c.diagonal() << sm * sm, sm * sm, sm * sm, std::pow(sdeg * kDeg, 2), std::pow(sdeg * kDeg, 2), std::pow(sdeg * kDeg, 2);
+	return c;
+}
+
+Eigen::Isometry3d ahead(double z)
+{
+	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+	T.translation() = Eigen::Vector3d(0, 0, z);
+	return T;
+}
+
+TKeyframePose poseAt(double z, double sm, uint32_t kf = 0)
+{
+	TKeyframePose p;
+	p.valid = true;
+	p.kf = kf;
+	p.T_kf_live = ahead(z);
+	p.cov = diag(sm, sm * 10);
+	return p;
+}
+
+TMotion step(double dz, double sm = 0.005, double sdeg = 0.05)
+{
+	TMotion m;
+	m.valid = true;
+	m.T_prev_curr = ahead(dz);
+	m.cov = diag(sm, sdeg);
+	return m;
+}
+
+// One keyframe: every link is the identity.
+geometry::TPoseWithCov identityLink(uint32_t, uint32_t) { return {}; }
+
+TSolve solveAt(size_t frame, double z, double sm = 0.02)
+{
+	TSolve s;
+	s.frame = frame;
+	s.pose = poseAt(z, sm);
+	return s;
+}
+}  // namespace
+
+// sigma of the drift is k times the distance since the last fix, whatever the
+// step: before, each step added (k s)^2, so sigma was k sqrt(s D) (24 m at
+// 0.8 m steps: 0.09 m instead of 0.48 m) and depended on the frame rate.
+TEST(LocalisationStages, DriftGrowsInProportionToDistanceWhateverTheStep)
+{
+	for (const double s : {0.1, 0.8, 3.0})
+	{
+		Matrix6d sum = Matrix6d::Zero();
+		double d = 0;
+		while (d < 24.0 - 1e-9)
+		{
+			sum += driftCovariance(d, s, 0.02, 0.2);
+			d += s;
+		}
+		EXPECT_NEAR(std::sqrt(sum(0, 0)), 0.02 * d, 1e-9) << "step " << s;
+		EXPECT_NEAR(std::sqrt(sum(5, 5)) / kDeg, 0.2 * d, 1e-9) << "step " << s;
+	}
+	// Through the track: 30 steps of 0.8 m with (almost) exact VO; along the
+	// direction of travel (z) heading errors add nothing.
+	TTrackOptions o;
+	CTrack t(o);
+	t.fix(poseAt(0, 1e-4));
+	TKeyframePose p;
+	for (int i = 0; i < 30; i++)
+	{
+		p = t.predict(step(0.8, 1e-6, 0));
+		t.noFix({});
+	}
+	EXPECT_NEAR(std::sqrt(p.cov(2, 2)), 0.02 * 24.0, 0.005);
+}
+
+// A solve rejected as inconsistent is never the motion test's reference:
+// before, the next (right) solve was tested against the rejected one and
+// failed too.
+TEST(LocalisationStages, RejectedSolveIsNeverAReference)
+{
+	CFixAcceptance acc({22.46, 22.46, 2});
+	const TMotion m = step(0.5);
+	auto predAt = [](double z) { return poseAt(z, 0.05); };
+	EXPECT_EQ(acc.judge(solveAt(1, 0.5), predAt(0.5), m, true, true, identityLink).verdict, AcceptanceVerdict::Fix);
+	// Frame 2: 2 m off the prediction (a wrong keyframe's solve).
+	const auto bad = acc.judge(solveAt(2, 3.0), predAt(1.0), m, true, true, identityLink);
+	EXPECT_EQ(bad.verdict, AcceptanceVerdict::PredictionInconsistent);
+	// Frame 3: right again. No reference from frame 2: the motion test does not run.
+	const auto good = acc.judge(solveAt(3, 1.5), predAt(1.5), m, true, true, identityLink);
+	EXPECT_EQ(good.verdict, AcceptanceVerdict::Fix);
+	EXPECT_EQ(good.motion_d2, -1.0);
+	// Frame 4 is tested against frame 3.
+	const auto next = acc.judge(solveAt(4, 2.0), predAt(2.0), m, true, true, identityLink);
+	EXPECT_GE(next.motion_d2, 0.0);
+	EXPECT_EQ(next.verdict, AcceptanceVerdict::Fix);
+}
+
+// K consistent frames for a new place; while the track is confirmed a
+// consistent solve is a fix at once (the monochrome localiser no longer
+// waits after a failure while the system knows where it is).
+TEST(LocalisationStages, ConfirmationIsOnlyForANewPlace)
+{
+	const TMotion m = step(0.5);
+	CFixAcceptance fresh({22.46, 22.46, 2});
+	std::vector<AcceptanceVerdict> v;
+	for (size_t f = 1; f <= 3; f++)
+		v.push_back(fresh.judge(solveAt(f, 0.5 * f), poseAt(0.5 * f, 0.05), m, false, true, identityLink).verdict);
+	EXPECT_EQ(v[0], AcceptanceVerdict::Unconfirmed);  // no motion test yet
+	EXPECT_EQ(v[1], AcceptanceVerdict::Unconfirmed);  // 1 of K
+	EXPECT_EQ(v[2], AcceptanceVerdict::Fix);  // K = 2
+
+	CFixAcceptance tracked({22.46, 22.46, 2});
+	EXPECT_EQ(tracked.judge(solveAt(1, 0.5), poseAt(0.5, 0.05), m, true, true, identityLink).verdict, AcceptanceVerdict::Fix);
+
+	// A verified place counts as the first consistent frame: the next
+	// consistent solve confirms it.
+	CFixAcceptance placed({22.46, 22.46, 2});
+	placed.startFrom(7, poseAt(0.0, 0.05));
+	const auto a = placed.judge(solveAt(8, 0.5), poseAt(0.5, 0.1), m, false, true, identityLink);
+	EXPECT_GE(a.motion_d2, 0.0);
+	EXPECT_EQ(a.verdict, AcceptanceVerdict::Fix);
+	// ... and one that moved against VO is rejected.
+	CFixAcceptance placed2({22.46, 22.46, 2});
+	placed2.startFrom(7, poseAt(0.0, 0.02));
+	EXPECT_EQ(placed2.judge(solveAt(8, 1.5), poseAt(1.5, 1.0), m, false, true, identityLink).verdict,
+			  AcceptanceVerdict::MotionInconsistent);
+}
+
+// An unconfirmed solve narrows the next search but is never what a solve is
+// validated against: before, it became the estimate, so a wrong place
+// confirmed itself through its own prediction.
+TEST(LocalisationStages, UnconfirmedSeedNarrowsTheSearchButNeverValidates)
+{
+	TTrackOptions o;
+	CTrack t(o);
+	t.adoptPlace(poseAt(0, 0.3));  // a wide place
+	t.predict(step(0.5));
+	t.noFix({poseAt(5.0, 0.01)});  // a tight but wrong solve
+	const TKeyframePose pred = t.predict(step(0.5));
+	EXPECT_NEAR(pred.T_kf_live.translation().z(), 1.0, 1e-9);  // the track: place + VO
+	ASSERT_TRUE(t.searchSeed().valid);
+	EXPECT_NEAR(t.searchSeed().T_kf_live.translation().z(), 5.5, 1e-9);
+	EXPECT_FALSE(t.confirmed());
+}
+
+// The track is a confirmed place after a fix until its uncertainty outgrows
+// the bound; the place is searched for around dead reckoning after
+// relocalise_after_frames, everywhere after global_search_after_frames.
+TEST(LocalisationStages, TrackConfirmationAndRelocalisation)
+{
+	TTrackOptions o;
+	o.relocalise_after_frames = 2;
+	o.global_search_after_frames = 10;
+	o.confirmed_max_sigma_m = 0.5;
+	o.drift_deg_per_m = 0;	// heading drift would add lateral error: here the distance alone
+	CTrack t(o);
+	EXPECT_EQ(t.searchNeeded(false), SearchScope::Whole);  // no place yet
+	t.fix(poseAt(0, 0.01));
+	t.predict(step(0.8, 1e-6, 0));
+	EXPECT_TRUE(t.confirmed());
+	t.noFix({});
+	EXPECT_EQ(t.searchNeeded(false), SearchScope::None);
+	EXPECT_EQ(t.searchNeeded(true), SearchScope::Window);  // every localiser lost
+	t.predict(step(0.8, 1e-6, 0));
+	t.noFix({});
+	EXPECT_EQ(t.searchNeeded(false), SearchScope::Window);
+	int frames = 2;
+	while (t.confirmed() && frames < 100)
+	{
+		t.predict(step(0.8, 1e-6, 0));
+		t.noFix({});
+		frames++;
+	}
+	// sigma = 0.02 m/m * d reaches 0.5 m after about 25 m (31 steps of 0.8 m).
+	EXPECT_NEAR(frames * 0.8, 25.0, 1.0);
+	EXPECT_EQ(t.searchNeeded(false), SearchScope::Whole);
+	t.adoptPlace(poseAt(3, 0.05));
+	t.predict(step(0.8));
+	EXPECT_FALSE(t.confirmed());  // a new hypothesis
+	EXPECT_EQ(t.searchNeeded(false), SearchScope::None);
+}
+
+// The fix covariance: the solver's scaled once, raised to the bootstrap's
+// where that is larger beyond chance; the bootstrap's spread is not scaled
+// again (before: max(solver, bootstrap) * cov_scale).
+TEST(LocalisationStages, FixCovarianceIsNotInflatedTwice)
+{
+	const Matrix6d A = diag(0.01, 0.05);
+	EXPECT_TRUE(fixCovariance(A, Matrix6d::Zero(), 4.0, 30).isApprox(4.0 * A));
+	EXPECT_TRUE(fixCovariance(A, 3.0 * A, 4.0, 30).isApprox(4.0 * A));	// bootstrap below the scaled solver's
+	EXPECT_TRUE(fixCovariance(A, 20.0 * A, 4.0, 30).isApprox(20.0 * A));  // above: the bootstrap's, not 80 A
+	EXPECT_TRUE(fixCovariance(A, 20.0 * A, 4.0, 0).isApprox(4.0 * A));	// bootstrap off
+}
