@@ -237,6 +237,7 @@ double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJ
 	{
 		localisation::CLocaliseRun lr(in.config(), map, mapRel, live.rawlogPath, ro);
 		lr.system().setMinLoggingLevel(o.verbosity);
+		if (gt) lr.enableOracle(*gt);
 		ups = lr.run();
 		sysOpts = lr.system().options();
 		ev = localisation::evaluate(ups, *map, gt ? &*gt : nullptr);

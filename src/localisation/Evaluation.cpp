@@ -283,6 +283,24 @@ TEvaluation evaluate(
 		}
 	}
 
+	// ---- the oracle bound, when probed
+	ev.oracle = n > 0 && !ups.front().oracle.empty();
+	if (ev.oracle)
+	{
+		ev.oracle_in_map.assign(ups.front().oracle.size(), 0);
+		for (size_t i = 0; i < n; i++)
+		{
+			if (!ev.frames[i].in_map || ups[i].oracle.size() != ev.oracle_in_map.size()) continue;
+			bool any = false;
+			for (size_t c = 0; c < ev.oracle_in_map.size(); c++)
+			{
+				ev.oracle_in_map[c] += ups[i].oracle[c] == 1;
+				any |= ups[i].oracle[c] == 1;
+			}
+			ev.oracle_any_in_map += any;
+		}
+	}
+
 	// ---- counts
 	for (size_t i = 0; i < n; i++)
 	{
@@ -323,6 +341,7 @@ TEvaluation evaluate(
 	ev.coverage_in_map = ratio(ev.fixes_in_map, ev.in_map_frames);
 	ev.coverage_all = ratio(ev.fixes, n);
 	ev.true_coverage_in_map = ratio(ev.true_fixes_in_map, ev.in_map_frames);
+	ev.oracle_any_coverage = ratio(ev.oracle_any_in_map, ev.in_map_frames);
 	ev.true_coverage_all = ratio(ev.true_fixes, n);
 	ev.false_fix_share = ratio(ev.false_fixes, ev.true_fixes + ev.false_fixes);
 

@@ -590,7 +590,15 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 				u.frame, r.channel.c_str(), r.kf_id, r.matches, r.inliers, r.gate.median_axis_px, r.gate.overflow,
 				r.gate.predicted, r.sigma_m, r.rms_px, r.var_factor, toString(r.status).c_str());
 	u.ms_total = msSince(tAll);
+	if (m_hook) m_hook(u, meas, calib);
 	return u;
+}
+
+const CStereoLocaliser* CLocalisationSystem::localiser(const std::string& label) const
+{
+	for (const auto& p : m_pipes)
+		if (p.setup.channel.label == label) return p.localiser.get();
+	return nullptr;
 }
 
 }  // namespace shadyloc::localisation

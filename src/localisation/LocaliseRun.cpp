@@ -5,6 +5,7 @@
 #include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/localisation/LocaliseRun.h>
+#include <shadyloc/localisation/Oracle.h>
 #include <shadyloc/vo/VOConfig.h>
 
 #include <algorithm>
@@ -184,6 +185,13 @@ CLocaliseRun::CLocaliseRun(
 
 CLocaliseRun::~CLocaliseRun() = default;
 
+void CLocaliseRun::enableOracle(const io::Trajectory& gt)
+{
+	m_oracle = std::make_unique<COracle>(*m_sys, gt);
+	m_sys->setFrameHook([this](TLocalisationUpdate& u, const std::vector<features::TStereoFrame>& meas,
+							   const geometry::TStereoCalib& calib) { m_oracle->probe(u, meas, calib); });
+}
+
 const std::vector<TLocalisationUpdate>& CLocaliseRun::run(const std::function<void(const TLocalisationUpdate&)>& onFrame)
 {
 	io::TStereoFrameSourceOptions so;
@@ -231,6 +239,9 @@ void writeFramesCsv(
 			header += "," + c + "_" + f;
 	header += ",global_search,global_inliers,global_runner_up,frames_since_fix,vo_from";
 	if (gt) header += ",gt_distance_m,used_true,used_err_m,used_err_deg";
+	const bool oracle = !ups.front().oracle.empty();
+	if (oracle)
+		for (const auto& r : ups.front().localisers) header += "," + r.channel + "_oracle";
 	io::CsvWriter csv(path, header);
 	auto& o = csv.out();
 	o << std::fixed;
@@ -291,6 +302,9 @@ void writeFramesCsv(
 			else
 				o << ',';
 		}
+		if (oracle)
+			for (size_t c = 0; c < ups.front().localisers.size(); c++)
+				o << ',' << (c < u.oracle.size() && u.oracle[c] >= 0 ? std::to_string(int(u.oracle[c])) : std::string());
 		o << '\n';
 	}
 	csv.commit();
@@ -335,6 +349,23 @@ void writeTrajectory(const std::string& path, const std::vector<TLocalisationUpd
 	io::writeTum(path, traj, "live left camera in the map frame (shadyloc localise)");
 }
 
+namespace
+{
+/** summary.json's oracle bound (Oracle.h) inside "ground_truth", when probed. */
+std::string oracleJson(const TEvaluation& ev, const TSystemOptions& sys)
+{
+	if (!ev.oracle) return "";
+	auto share = [&](size_t k) { return ev.in_map_frames ? double(k) / double(ev.in_map_frames) : 0.0; };
+	std::ostringstream js;
+	js << ", \"oracle\": {\"any_in_map\": " << ev.oracle_any_in_map << ", \"any_coverage_in_map\": "
+	   << jsonNumber(ev.oracle_any_coverage, 6);
+	for (size_t c = 0; c < ev.oracle_in_map.size() && c < sys.localisers.size(); c++)
+		js << ", " << jsonString(sys.localisers[c] + "_coverage_in_map") << ": " << jsonNumber(share(ev.oracle_in_map[c]), 6);
+	js << "}";
+	return js.str();
+}
+}  // namespace
+
 std::string summaryJson(
 	const std::vector<TLocalisationUpdate>& ups, const TEvaluation& ev, const TSystemOptions& sys,
 	const TLocaliseProvenance& prov)
@@ -370,7 +401,7 @@ std::string summaryJson(
 		   << ", \"true_fixes_in_map\": " << ev.true_fixes_in_map << ", \"false_fixes\": " << ev.false_fixes
 		   << ", \"unverifiable\": " << ev.unverifiable << ", \"true_coverage_in_map\": " << num(ev.true_coverage_in_map)
 		   << ", \"true_coverage_all\": " << num(ev.true_coverage_all) << ", \"false_fix_share\": "
-		   << num(ev.false_fix_share) << "},\n";
+		   << num(ev.false_fix_share) << oracleJson(ev, sys) << "},\n";
 	else
 		js << "  \"ground_truth\": null,\n";
 	js << "  \"blind\": {\"distance_from\": " << jsonString(gt ? "ground truth" : "VO") << ", \"total_m\": "

@@ -94,6 +94,13 @@ struct TEvaluation
 	double before_first_fix_m = -1;	 //!< distance before the first fix (-1: no fix) [m]
 	int first_fix_frame = -1;
 	size_t global_searches = 0;
+	/** The oracle bound (Oracle.h), when the run was probed: in-map frames
+	 * with a true single-shot fix per localiser (policy order) and with
+	 * either; their shares of the in-map frames [0..1]. */
+	bool oracle = false;
+	std::vector<size_t> oracle_in_map;
+	size_t oracle_any_in_map = 0;
+	double oracle_any_coverage = 0;
 };
 
 /** The exact (Clopper-Pearson) two-sided interval of a binomial proportion:

@@ -31,6 +31,7 @@
 #include <mrpt/poses/CPose3DPDFGaussian.h>
 #include <mrpt/system/COutputLogger.h>
 
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -101,6 +102,10 @@ struct TLocalisationUpdate
 	bool global_search = false;	 //!< the place was searched for on this frame (around dead reckoning or everywhere)
 	SearchScope search_scope = SearchScope::None;
 	TGlobalPlace place;	 //!< its outcome (the one adopted, or the first localiser's)
+	/** The oracle bound of this frame (Oracle.h; empty unless evaluated):
+	 * per localiser in policy order, 1 a true single-shot fix with the truth
+	 * as prediction, 0 none, -1 no truth. */
+	std::vector<int8_t> oracle;
 	double ms_total = 0;  //!< channel conversion, features, VO, localisers and policy (decoding excluded) [ms]
 	double ms_convert = 0;	//!< of which channel conversion, summed over the channels [ms]
 
@@ -162,6 +167,14 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	TLocalisationUpdate processFrame(
 		const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib, double timestamp);
 
+	/** Called at the end of every frame with its update and each channel's
+	 * measurements (channelLabels() order): evaluation probes (Oracle.h). */
+	using FrameHook = std::function<void(
+		TLocalisationUpdate&, const std::vector<features::TStereoFrame>&, const geometry::TStereoCalib&)>;
+	void setFrameHook(FrameHook hook) { m_hook = std::move(hook); }
+	/** The localiser of a channel (nullptr: the channel only feeds the VO). */
+	const CStereoLocaliser* localiser(const std::string& label) const;
+
 	const CKeyframeMap& map() const { return *m_map; }
 	const TSystemOptions& options() const { return m_opts; }
 	/** The channel labels, the VO's first. */
@@ -216,6 +229,7 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	size_t m_frame = 0;
 	CTrack m_track;
 	std::vector<uint32_t> m_searchAmong;  //!< keyframes a whole-map search looks at (empty: all)
+	FrameHook m_hook;
 	double m_distance = 0;
 };
 

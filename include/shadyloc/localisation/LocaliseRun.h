@@ -46,6 +46,8 @@ struct TLocaliseRunOptions
 	std::string configWhat = "(no config)";	 //!< names the config in errors
 };
 
+class COracle;
+
 /** One live run against one map. */
 class CLocaliseRun
 {
@@ -66,9 +68,13 @@ class CLocaliseRun
 	 * file, object and frame (a grey pair; no frames at all). */
 	const std::vector<TLocalisationUpdate>& run(const std::function<void(const TLocalisationUpdate&)>& onFrame = {});
 	const std::vector<TLocalisationUpdate>& updates() const { return m_ups; }
+	/** Probes every frame for the oracle bound against `gt` (Oracle.h;
+	 * evaluation only: the system never sees it). */
+	void enableOracle(const io::Trajectory& gt);
 
    private:
 	std::unique_ptr<CLocalisationSystem> m_sys;
+	std::unique_ptr<COracle> m_oracle;
 	std::string m_livePath, m_label;
 	std::vector<TLocalisationUpdate> m_ups;
 };

@@ -76,8 +76,8 @@ struct TLocaliserOptions
 	 * along the chain of the chosen one are searched too, in one RANSAC and
 	 * one solve (0 = the chosen keyframe only). A live frame half-way
 	 * between two keyframes re-finds part of each [m]. */
-	double kf_window_m = 3.0;
-	int kf_window_max = 3;	//!< at most this many keyframes, nearest the prediction first
+	double kf_window_m = 1.6;
+	int kf_window_max = 2;	//!< at most this many keyframes, nearest the prediction first
 	double kf_max_angle_deg = 30.0;	 //!< optical axes farther apart are not used [deg]
 	double kf_angle_weight_m_per_deg = 0.1;	 //!< ranking: metres a degree of heading is worth [m/deg]
 	/** Covariance added when the prediction crosses from one chain segment to
@@ -123,7 +123,7 @@ struct TLocaliserOptions
 	int min_inliers = 20;  //!< fewer inliers: few_inliers
 	/** The solver's covariance is scaled by this before the tests (it is
 	 * optimistic: correlated errors, model error) [-]. */
-	double cov_scale = 4.0;
+	double cov_scale = 1.5;
 	/** Resamples of the inliers for the bootstrap covariance (0 = off): the
 	 * fix's covariance is the larger of the scaled solver's and the
 	 * bootstrap's in every direction; the bootstrap's is an empirical spread

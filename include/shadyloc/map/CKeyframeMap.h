@@ -44,7 +44,7 @@ struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 	 * the image. 140 with 4-bit patches sits at the knee of the measured
 	 * size-coverage curve, under 5 MB/km per channel (docs/map.md, "Size
 	 * against coverage"); 0 keeps every landmark (3.6x the size). */
-	int landmarks_per_keyframe = 140;
+	int landmarks_per_keyframe = 300;
 	/** How a survey ranks a keyframe's landmarks when it thins them. */
 	enum class LandmarkSelection : uint8_t
 	{
