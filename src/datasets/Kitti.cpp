@@ -387,7 +387,7 @@ KittiExporter::TResult KittiExporter::run(const std::string& inRawlog, const std
 	std::string posesTmp;
 	try
 	{
-		staging = outputs.addDirectory(seqDir.string(), "sequence folder");
+		staging = outputs.addDirectory(seqDir.string(), "sequence folder", "shadyloc export kitti sequence");
 		if (!gt.empty()) posesTmp = outputs.addFile(posesPath.string(), "poses file");
 	}
 	catch (const std::invalid_argument& e)

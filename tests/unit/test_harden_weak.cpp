@@ -202,7 +202,7 @@ TEST(OutputsTogether, TransactionCommitsAllOrNothing)
 	{
 		io::OutputTransaction tx;
 		std::ofstream(tx.addFile(dir + "/a.txt")) << "new a";
-		const std::string d = tx.addDirectory(dir + "/d");
+		const std::string d = tx.addDirectory(dir + "/d", "output", "test output");
 		std::ofstream(d + "/x") << "x";
 		tx.commit();
 	}
@@ -219,11 +219,50 @@ TEST(OutputsTogether, TransactionCommitsAllOrNothing)
 	EXPECT_THROW(tx.addFile(dir + "/a.txt"), std::invalid_argument);
 	EXPECT_THROW(tx.addFile(dir + "/sym.txt"), std::invalid_argument);
 	EXPECT_THROW(tx.addFile(dir + "/hard.txt"), std::invalid_argument);
-	EXPECT_THROW(tx.addDirectory(dir + "/d"), std::invalid_argument);
+	EXPECT_THROW(tx.addDirectory(dir + "/d", "output", "test output"), std::invalid_argument);
 	EXPECT_THROW(tx.addFile(""), std::invalid_argument);
 	EXPECT_THROW(tx.addFile(dir + "/missing/x.txt"), std::invalid_argument);
 	const std::string ok = tx.addFile(dir + "/c.txt");
 	EXPECT_THROW(tx.addFile(dir + "/./c.txt"), std::invalid_argument);
+}
+
+// A folder output replaces an existing folder only if it is empty or marked
+// as an earlier output of the same kind: a folder of the user's files is
+// refused by name and left as it was.
+TEST(OutputsTogether, FolderReplacedOnlyIfAnEarlierOutputOfTheSameKind)
+{
+	const auto dir = test::tempDir("tx_folder_kind");
+	fs::create_directories(dir + "/user");
+	std::ofstream(dir + "/user/thesis.tex") << "years of work";
+	{
+		io::OutputTransaction tx;
+		try
+		{
+			tx.addDirectory(dir + "/user", "output folder", "test output");
+			ADD_FAILURE() << "a folder of the user's files was accepted";
+		}
+		catch (const std::invalid_argument& e)
+		{
+			EXPECT_NE(std::string(e.what()).find("'" + dir + "/user'"), std::string::npos) << e.what();
+		}
+	}
+	EXPECT_EQ(contents(dir + "/user/thesis.tex"), "years of work");
+	EXPECT_TRUE(temporariesUnder(dir).empty());
+
+	// Empty: replaced; then marked, so the next run of that kind replaces it.
+	fs::create_directories(dir + "/out");
+	for (const char* content : {"1", "2"})
+	{
+		io::OutputTransaction tx;
+		std::ofstream(tx.addDirectory(dir + "/out", "output folder", "test output") + "/x") << content;
+		tx.commit();
+		EXPECT_EQ(contents(dir + "/out/x"), content);
+	}
+	EXPECT_EQ(contents(dir + "/out/" + io::kOutputMarker), "test output\n");
+	// Another kind's output is refused.
+	io::OutputTransaction tx;
+	EXPECT_THROW(tx.addDirectory(dir + "/out", "output folder", "other output"), std::invalid_argument);
+	EXPECT_EQ(contents(dir + "/out/x"), "2");
 }
 
 namespace
