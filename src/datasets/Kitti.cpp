@@ -231,6 +231,7 @@ TImportResult KittiImporter::run(
 		throw DatasetError(
 			"'" + timesPath + "' has " + std::to_string(times.size()) + " timestamps for " +
 			std::to_string(filesL.size()) + " stereo frames");
+	detail::checkTimesIncrease(times, timesPath, "the frame numbers");
 
 	const std::string posesPath = (fs::path(root) / "poses" / (sequence + ".txt")).string();
 	std::vector<mrpt::poses::CPose3D> T_world_cam0;
