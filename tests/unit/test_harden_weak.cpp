@@ -184,6 +184,25 @@ TEST(Messages, ImportFolderRefusesTimesThatDoNotIncrease)
 	EXPECT_EQ(test::runCommand(base + dir + "/times.txt", &out), 0) << out;
 }
 
+// A run name is written unquoted into localise's frames.csv (kf_run): a comma
+// split its rows. survey refuses such a name, saying which characters a name
+// may hold, and writes no map.
+TEST(Messages, SurveyRefusesRunNamesFramesCsvCannotHold)
+{
+	const auto dir = test::tempDir("run_name");
+	test::writeSyntheticRawlog(dir + "/r.rawlog", 3, false);
+	test::writeSyntheticRawlog(dir + "/a,b.rawlog", 3, false);
+	for (const std::string& args : {"-i " + dir + "/r.rawlog --run-name a,b", "-i '" + dir + "/a,b.rawlog'",
+									"-i " + dir + "/r.rawlog --run-name 'a\"b'"})
+	{
+		std::string out;
+		EXPECT_NE(test::runCommand(test::appPath() + " survey -q " + args + " -o " + dir + "/m.kfmap", &out), 0)
+			<< args << "\n" << out;
+		EXPECT_NE(out.find("only letters, digits"), std::string::npos) << args << "\n" << out;
+		EXPECT_FALSE(fs::exists(dir + "/m.kfmap")) << args;
+	}
+}
+
 TEST(OutputsTogether, TransactionCommitsAllOrNothing)
 {
 	const auto dir = test::tempDir("tx_all_or_nothing");
