@@ -54,7 +54,11 @@ int run(int argc, char** argv)
 	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> mapArg("m", "map", "keyframe map (.kfmap)", true, "", "map.kfmap", cmd);
 	TCLAP::ValueArg<std::string> in("i", "input", "live rawlog (colour stereo)", true, "", "live.rawlog", cmd);
-	TCLAP::ValueArg<std::string> out("o", "output", "output directory (replaced as a whole if it is an earlier localise output or empty; any other folder is refused)", true, "", "OUTDIR", cmd);
+	TCLAP::ValueArg<std::string> out(
+		"o", "output",
+		"output directory (replaced as a whole if it is empty or an earlier localise output; any other folder is "
+		"refused)",
+		true, "", "OUTDIR", cmd);
 	TCLAP::MultiArg<std::string> cfgArgs(
 		"c", "config",
 		"options .ini, may be repeated (sections of all files together): [localise], [localiser], "

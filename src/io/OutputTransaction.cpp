@@ -283,7 +283,10 @@ std::string OutputTransaction::addFile(const std::string& path, const std::strin
 std::string OutputTransaction::addDirectory(const std::string& path, const std::string& what, const std::string& kind)
 {
 	if (kind.empty()) throw std::logic_error("OutputTransaction::addDirectory: no kind for '" + path + "'");
-	return reserve(path, what, true, kind);
+	// "out/" names the folder "out" (a file name could not end so).
+	std::string p = path;
+	while (p.size() > 1 && p.back() == '/') p.pop_back();
+	return reserve(p, what, true, kind);
 }
 
 void OutputTransaction::reportStale(const std::string& dir)

@@ -268,12 +268,14 @@ TEST(OutputsTogether, FolderReplacedOnlyIfAnEarlierOutputOfTheSameKind)
 	EXPECT_EQ(contents(dir + "/user/thesis.tex"), "years of work");
 	EXPECT_TRUE(temporariesUnder(dir).empty());
 
-	// Empty: replaced; then marked, so the next run of that kind replaces it.
+	// Empty: replaced; then marked, so the next run of that kind replaces it
+	// (a trailing '/' names the same folder).
 	fs::create_directories(dir + "/out");
-	for (const char* content : {"1", "2"})
+	for (const std::string content : {"1", "2"})
 	{
 		io::OutputTransaction tx;
-		std::ofstream(tx.addDirectory(dir + "/out", "output folder", "test output") + "/x") << content;
+		const std::string to = dir + (content == "1" ? "/out" : "/out/");
+		std::ofstream(tx.addDirectory(to, "output folder", "test output") + "/x") << content;
 		tx.commit();
 		EXPECT_EQ(contents(dir + "/out/x"), content);
 	}
