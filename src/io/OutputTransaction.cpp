@@ -341,8 +341,8 @@ std::string OutputTransaction::reserve(const std::string& path, const std::strin
 	if (dir && !fs::create_directory(o.tmp, ec))
 		throw std::invalid_argument(
 			what + " '" + path + "': cannot create the temporary folder '" + o.tmp + "': " + ec.message());
+	m_outputs.push_back(o);	// from here on, rollback() removes the temporary
 	if (dir) markOutputFolder(o.tmp, kind);
-	m_outputs.push_back(o);
 	return o.tmp;
 }
 

@@ -946,12 +946,12 @@ void readExactly(std::ifstream& f, uint8_t* to, size_t n, const std::string& pat
 	if (static_cast<size_t>(f.gcount()) != n)
 		throw std::runtime_error("keyframe map '" + path + "': cannot read (the file is shorter than its size)");
 }
-}  // namespace
 
-CKeyframeMap::Ptr CKeyframeMap::LoadFromFile(const std::string& path)
+/** The bytes of a map file: a regular file only (/dev/zero or a FIFO would
+ * be read until memory ran out), its header checked before the rest is
+ * read, exactly its size read. */
+std::vector<uint8_t> readMapFile(const std::string& path)
 {
-	// Only a regular file has a size to bound the read by: /dev/zero or a
-	// FIFO would be read until memory ran out.
 	std::error_code ec;
 	const auto st = fs::status(path, ec);
 	if (ec || !fs::exists(st)) throw std::runtime_error("keyframe map '" + path + "': cannot open (no such file)");
@@ -959,7 +959,7 @@ CKeyframeMap::Ptr CKeyframeMap::LoadFromFile(const std::string& path)
 		throw std::runtime_error("keyframe map '" + path + "': not a regular file (a directory, device or pipe)");
 	const uint64_t size = fs::file_size(path, ec);
 	if (ec) throw std::runtime_error("keyframe map '" + path + "': cannot open (" + ec.message() + ")");
-	if (size > kMaxSerializedBytes + 256)
+	if (size > kMaxSerializedBytes + 256)  // the object's data, MRPT's header and end byte
 		throw std::runtime_error("keyframe map '" + path + "': " + std::to_string(size) + " bytes, beyond any map");
 	std::ifstream f(path, std::ios::binary);
 	if (!f) throw std::runtime_error("keyframe map '" + path + "': cannot open");
@@ -970,6 +970,13 @@ CKeyframeMap::Ptr CKeyframeMap::LoadFromFile(const std::string& path)
 	checkObjectHeader(bytes.data(), head, path);
 	bytes.resize(size);
 	readExactly(f, bytes.data() + head, size - head, path);
+	return bytes;
+}
+}  // namespace
+
+CKeyframeMap::Ptr CKeyframeMap::LoadFromFile(const std::string& path)
+{
+	const auto bytes = readMapFile(path);
 	return LoadFromBytes(bytes.data(), bytes.size(), path);
 }
 
