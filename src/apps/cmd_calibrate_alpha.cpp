@@ -6,6 +6,8 @@
 #include <shadyloc/eval/Figures.h>
 #include <shadyloc/filters/Filters.h>
 #include <shadyloc/image/InvariantCalibration.h>
+#include <shadyloc/io/ImageFile.h>
+#include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Rawlog.h>
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
@@ -30,8 +32,8 @@ namespace
 cv::Mat readColour(const std::string& path)
 {
 	if (!fs::is_regular_file(path)) throw std::runtime_error("'" + path + "': no such image file");
-	const cv::Mat img = cv::imread(path, cv::IMREAD_UNCHANGED);
-	if (img.empty()) throw std::runtime_error("'" + path + "': cannot read image");
+	// The checked reader: cv::imread returns a cut JPEG with grey rows.
+	const cv::Mat img = shadyloc::io::readImageFile(path, cv::IMREAD_UNCHANGED);
 	if (img.type() != CV_8UC3)
 		throw std::runtime_error(
 			"'" + path + "': needs an 8-bit 3-channel colour image (got " + std::to_string(img.channels()) +
@@ -128,38 +130,23 @@ std::string fmt(double v, int prec = 4)
 	return s.str();
 }
 
-/** Files written to temporaries first and renamed into place together at
- * the end: a failure leaves none of them. */
-class OutputSet
+/** Every input declared to the transaction, before any is read: no output
+ * may be an input, and none may lie in a folder whose images are all read
+ * (a second run would take the first one's curve PNG as an image). */
+void declareInputs(
+	shadyloc::io::OutputTransaction& tx, const std::string& pairsDir, const std::string& imagesDir,
+	const std::vector<std::pair<std::string, std::vector<std::string>>>& lists)
 {
-   public:
-	~OutputSet()
-	{
-		for (const auto& f : m_files)
+	if (!pairsDir.empty()) tx.addListedFolder(pairsDir, "--pairs folder");
+	if (!imagesDir.empty()) tx.addListedFolder(imagesDir, "--images folder");
+	for (const auto& [opt, values] : lists)
+		for (const auto& v : values)
 		{
-			std::error_code ec;
-			fs::remove(f.first, ec);
+			const auto c = v.find(',');
+			tx.addInput(v.substr(0, c), opt + " input");
+			if (c != std::string::npos) tx.addInput(v.substr(c + 1), opt + " input");
 		}
-	}
-	/** Path to write `dst`'s content to now (same directory and extension). */
-	std::string stage(const std::string& dst)
-	{
-		const fs::path d(dst);
-		const auto tmp = (d.parent_path() / (d.stem().string() + ".tmp" + d.extension().string())).string();
-		m_files.emplace_back(tmp, dst);
-		return tmp;
-	}
-	void commit()
-	{
-		for (const auto& [tmp, dst] : m_files)
-			if (!fs::exists(tmp)) throw std::runtime_error("'" + dst + "' was not written");
-		for (const auto& [tmp, dst] : m_files) fs::rename(tmp, dst);
-		m_files.clear();
-	}
-
-   private:
-	std::vector<std::pair<std::string, std::string>> m_files;
-};
+}
 
 void writeText(const std::string& path, const std::string& text)
 {
@@ -307,6 +294,20 @@ int run(int argc, char** argv)
 	const fs::path outDir = fs::path(out.getValue()).parent_path();
 	if (!outDir.empty() && !fs::is_directory(outDir))
 		throw std::runtime_error("-o '" + out.getValue() + "': directory '" + outDir.string() + "' does not exist");
+	shadyloc::io::OutputTransaction outputs;
+	declareInputs(
+		outputs, pairsDir.isSet() ? pairsDir.getValue() : "", imagesDir.isSet() ? imagesDir.getValue() : "",
+		{{"--pair", pair.getValue()},
+		 {"--same-view", sameView.getValue()},
+		 {"--runs", runs.getValue()},
+		 {"--image", images.getValue()},
+		 {"--rawlog", rawlog.getValue()}});
+	const bool withCurve = !knownAlpha.isSet();
+	const std::string iniPath = out.getValue() + ".ini", csvPath = out.getValue() + "_curve.csv",
+					  pngPath = out.getValue() + "_curve.png";
+	const std::string iniTmp = outputs.addFile(iniPath, "-o (ini)");
+	const std::string csvTmp = withCurve ? outputs.addFile(csvPath, "-o (curve csv)") : "";
+	const std::string pngTmp = withCurve && !noPlot.getValue() ? outputs.addFile(pngPath, "-o (curve png)") : "";
 
 	// ---- inputs
 	std::vector<TShadowPair> shadowPairs;
@@ -461,11 +462,7 @@ int run(int argc, char** argv)
 		   "and live data.\n"
 		<< "[invariant]\n"
 		<< filter.optionsAsIni();
-	OutputSet outputs;
-	const std::string iniPath = out.getValue() + ".ini", csvPath = out.getValue() + "_curve.csv",
-					  pngPath = out.getValue() + "_curve.png";
-	writeText(outputs.stage(iniPath), ini.str());
-	const bool withCurve = !curves.empty();
+	writeText(iniTmp, ini.str());
 	if (withCurve)
 	{
 		std::ostringstream csv;
@@ -479,10 +476,9 @@ int run(int argc, char** argv)
 			for (const auto& c : curves) csv << "," << c.cost[j];
 			csv << "\n";
 		}
-		const std::string csvTmp = outputs.stage(csvPath);
 		writeText(csvTmp, csv.str());
-		if (!noPlot.getValue())
-			plotCurves(curves, csvTmp, outputs.stage(pngPath), 0.48,
+		if (!pngTmp.empty())
+			plotCurves(curves, csvTmp, pngTmp, 0.48,
 				"alpha calibration (linearisation " + toString(in.linearisation) + ")");
 	}
 	outputs.commit();

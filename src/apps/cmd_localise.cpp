@@ -4,13 +4,13 @@
 #include "CommandLine.h"
 
 #include <shadyloc/core/Settings.h>
+#include <shadyloc/io/OutputTransaction.h>
+#include <shadyloc/io/Rawlog.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/localisation/LocaliseRun.h>
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/config/CConfigFileMemory.h>
-
-#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
@@ -27,49 +27,6 @@ namespace
 using namespace shadyloc;
 using namespace shadyloc::localisation;
 namespace fs = std::filesystem;
-
-/** A directory filled under a temporary name, renamed into place on commit();
- * removed on destruction otherwise: no partial output. */
-class StagedDir
-{
-   public:
-	explicit StagedDir(const std::string& dst) : m_dst(fs::path(dst).lexically_normal())
-	{
-		if (m_dst.filename().empty()) m_dst = m_dst.parent_path();
-		const fs::path parent = m_dst.parent_path().empty() ? fs::path(".") : m_dst.parent_path();
-		if (!fs::is_directory(parent))
-			throw std::runtime_error("output '" + dst + "': parent directory '" + parent.string() + "' does not exist");
-		if (fs::exists(m_dst) && !fs::is_directory(m_dst))
-			throw std::runtime_error("output '" + dst + "' exists and is not a directory");
-		m_tmp = parent / ("." + m_dst.filename().string() + ".partial-" + std::to_string(::getpid()));
-		fs::remove_all(m_tmp);
-		fs::create_directory(m_tmp);
-	}
-	~StagedDir()
-	{
-		std::error_code ec;
-		if (!m_done) fs::remove_all(m_tmp, ec);
-	}
-	std::string file(const std::string& name) const { return (m_tmp / name).string(); }
-	void commit()
-	{
-		// The files of an earlier run are replaced as a whole.
-		fs::path old;
-		if (fs::exists(m_dst))
-		{
-			old = m_tmp;
-			old += ".old";
-			fs::rename(m_dst, old);
-		}
-		fs::rename(m_tmp, m_dst);
-		m_done = true;
-		if (!old.empty()) fs::remove_all(old);
-	}
-
-   private:
-	fs::path m_dst, m_tmp;
-	bool m_done = false;
-};
 
 std::vector<std::string> splitList(const std::string& s)
 {
@@ -97,7 +54,11 @@ int run(int argc, char** argv)
 	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> mapArg("m", "map", "keyframe map (.kfmap)", true, "", "map.kfmap", cmd);
 	TCLAP::ValueArg<std::string> in("i", "input", "live rawlog (colour stereo)", true, "", "live.rawlog", cmd);
-	TCLAP::ValueArg<std::string> out("o", "output", "output directory (replaced as a whole)", true, "", "OUTDIR", cmd);
+	TCLAP::ValueArg<std::string> out(
+		"o", "output",
+		"output directory (replaced as a whole if it is empty or an earlier localise output; any other folder is "
+		"refused)",
+		true, "", "OUTDIR", cmd);
 	TCLAP::MultiArg<std::string> cfgArgs(
 		"c", "config",
 		"options .ini, may be repeated (sections of all files together): [localise], [localiser], "
@@ -131,6 +92,17 @@ int run(int argc, char** argv)
 	mrpt::config::CConfigFileMemory cfg(cfgText);
 	std::optional<io::Trajectory> gt;
 	if (gtArg.isSet()) gt = io::readTum(gtArg.getValue());
+
+	// The output folder is checked before the run: it may hold no input and
+	// replaces only an earlier localise output.
+	io::OutputTransaction outputs;
+	outputs.addInput(mapPath, "map");
+	outputs.addInput(livePath, "live rawlog");
+	outputs.addInput(io::imagesDirFor(livePath), "live rawlog's images folder");
+	if (gtArg.isSet()) outputs.addInput(gtArg.getValue(), "ground truth");
+	for (const auto& c : cfgArgs.getValue()) outputs.addInput(c, "config");
+	const fs::path dir = outputs.addDirectory(out.getValue(), "output folder", "shadyloc localise output");
+	const auto file = [&](const char* name) { return (dir / name).string(); };
 
 	CKeyframeMap::Ptr map;
 	try
@@ -176,9 +148,8 @@ int run(int argc, char** argv)
 	const TEvaluation ev = evaluate(ups, *map, gt ? &*gt : nullptr);
 
 	// ---- outputs, all or nothing
-	StagedDir dir(out.getValue());
-	writeFramesCsv(dir.file("frames.csv"), ups, ev, *map);
-	writeTrajectory(dir.file("trajectory.tum"), ups);
+	writeFramesCsv(file("frames.csv"), ups, ev, *map);
+	writeTrajectory(file("trajectory.tum"), ups);
 	TLocaliseProvenance prov;
 	prov.buildCommit = SHADYLOC_GIT_COMMIT;
 	prov.configWhat = cfgWhat;
@@ -187,9 +158,9 @@ int run(int argc, char** argv)
 	prov.livePath = livePath;
 	if (gt) prov.gtPath = gtArg.getValue();
 	prov.startKf = startKf.getValue();
-	writeTextFile(dir.file("summary.json"), summaryJson(ups, ev, sys.options(), prov));
-	writeTextFile(dir.file("timing.json"), timingJson(ups, sys.options().threads));
-	dir.commit();
+	writeTextFile(file("summary.json"), summaryJson(ups, ev, sys.options(), prov));
+	writeTextFile(file("timing.json"), timingJson(ups, sys.options().threads));
+	outputs.commit();
 
 	std::cout << std::fixed << std::setprecision(1) << "frames " << ups.size() << ", in map " << ev.in_map_frames
 			  << ", fixes " << ev.fixes << ": coverage " << 100 * ev.coverage_in_map << " % of in-map frames ("

@@ -50,7 +50,7 @@ int run(int argc, char** argv)
 		"", "channels", "channels to store, comma-separated; the first one's VO makes the keyframe chain", false,
 		"mono,invariant", "mono,invariant", cmd);
 	TCLAP::ValueArg<std::string> gtArg("", "gt", "ground truth (TUM), stored beside the keyframes", false, "", "run.tum", cmd);
-	TCLAP::ValueArg<std::string> runName("", "run-name", "survey run name (default: the rawlog's stem)", false, "", "name", cmd);
+	TCLAP::ValueArg<std::string> runName("", "run-name", "survey run name (default: the rawlog's stem): letters, digits, '_', '-' and '.' only", false, "", "name", cmd);
 	TCLAP::ValueArg<std::string> label(
 		"", "label", "sensor label of the colour stereo camera (default: the first one found)", false, "", "label", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no option dump or progress", cmd);

@@ -119,6 +119,21 @@ std::vector<double> readTimes(const std::string& path)
 	return t;
 }
 
+void checkTimesIncrease(const std::vector<double>& times, const std::string& path, const std::string& order)
+{
+	// Frames are paired with their times by position: a repeated or earlier
+	// time is a damaged or mismatched file, and breaks trajectories.
+	for (size_t i = 1; i < times.size(); i++)
+		if (!(times[i] > times[i - 1]))
+		{
+			char b[160];
+			std::snprintf(
+				b, sizeof b, ": timestamp #%zu (%.9f s) is not after #%zu (%.9f s): timestamps must increase with ", i,
+				times[i], i - 1, times[i - 1]);
+			throw DatasetError("'" + path + "'" + b + order);
+		}
+}
+
 StereoSink::StereoSink(
 	const std::string& outRawlog, const TImportOptions& opts, mrpt::system::COutputLogger& log)
 	: m_opts(opts), m_log(log), m_writer(outRawlog, opts.externalImages, &m_outputs)

@@ -32,6 +32,11 @@ double parseDouble(const std::string& token, const std::string& where);
 /** One timestamp [s] per non-empty line (first column; '#' comments). */
 std::vector<double> readTimes(const std::string& path);
 
+/** Throws DatasetError naming `path` and the frame (index and both times)
+ * if a timestamp is not after the one before it; `order` says what the
+ * frames are ordered by, for the message. */
+void checkTimesIncrease(const std::vector<double>& times, const std::string& path, const std::string& order);
+
 /** Turns image pairs into CObservationStereoImages in an atomic rawlog, and
  * ground truth into a TUM file beside it, all or nothing. */
 class StereoSink

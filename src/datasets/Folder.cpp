@@ -132,12 +132,7 @@ TImportResult FolderImporter::run(
 				"'" + timesFile + "' has " + std::to_string(times.size()) + " timestamps for " +
 				std::to_string(filesL.size()) + " image pairs");
 		// Frames are paired by sorted file name: their times must increase too.
-		for (size_t i = 1; i < times.size(); i++)
-			if (!(times[i] > times[i - 1]))
-				throw DatasetError(
-					"'" + timesFile + "': timestamp #" + std::to_string(i) + " (" + std::to_string(times[i]) +
-					" s) is not after #" + std::to_string(i - 1) + " (" + std::to_string(times[i - 1]) +
-					" s): timestamps must increase with the (sorted) image names");
+		detail::checkTimesIncrease(times, timesFile, "the (sorted) image names");
 	}
 	else
 	{

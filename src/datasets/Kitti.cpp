@@ -231,6 +231,7 @@ TImportResult KittiImporter::run(
 		throw DatasetError(
 			"'" + timesPath + "' has " + std::to_string(times.size()) + " timestamps for " +
 			std::to_string(filesL.size()) + " stereo frames");
+	detail::checkTimesIncrease(times, timesPath, "the frame numbers");
 
 	const std::string posesPath = (fs::path(root) / "poses" / (sequence + ".txt")).string();
 	std::vector<mrpt::poses::CPose3D> T_world_cam0;
@@ -387,7 +388,7 @@ KittiExporter::TResult KittiExporter::run(const std::string& inRawlog, const std
 	std::string posesTmp;
 	try
 	{
-		staging = outputs.addDirectory(seqDir.string(), "sequence folder");
+		staging = outputs.addDirectory(seqDir.string(), "sequence folder", "shadyloc export kitti sequence");
 		if (!gt.empty()) posesTmp = outputs.addFile(posesPath.string(), "poses file");
 	}
 	catch (const std::invalid_argument& e)

@@ -550,7 +550,7 @@ TMergeResult merge(const std::string& outDir, const TEvalInputs& in, const std::
 	put("eval.json", js.str());
 	put("timing.json", tj.str());
 	put("figures_inputs.tsv", fig.str());
-	const fs::path pairsTmp = tx.addDirectory((out / "pairs").string(), "pairs");
+	const fs::path pairsTmp = tx.addDirectory((out / "pairs").string(), "pairs", "shadyloc eval pairs folder");
 	for (const auto& j : jobs)
 	{
 		if (j.isMap) continue;
@@ -561,7 +561,7 @@ TMergeResult merge(const std::string& outDir, const TEvalInputs& in, const std::
 	// ---- Figures 7-9 from the pairs' frames.csv (docs/figures.md): Figure 7
 	// per (live, map), Figure 8 per live run, Figure 9 from the pooled
 	// episodes of eval.json, so the figure and the JSON agree.
-	const fs::path figTmp = tx.addDirectory((out / "figures").string(), "figures");
+	const fs::path figTmp = tx.addDirectory((out / "figures").string(), "figures", "shadyloc eval figures folder");
 	for (size_t i = 0; i < n; i++)
 	{
 		std::vector<TFigurePair> rows;

@@ -3,7 +3,9 @@
 
 #include <shadyloc/localisation/LocaliseRun.h>
 
+#include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <functional>
@@ -44,8 +46,10 @@ class RecordReader
 		if (first != header)
 			throw std::runtime_error(path + ":1: expected '" + header + "', found '" + first.substr(0, 60) + "'");
 	}
+	/** Every key but those in `repeatable` may appear once. */
 	void read(const std::map<std::string, std::pair<size_t, std::function<void(const std::vector<std::string>&)>>>& keys,
-			  const std::vector<std::string>& required)
+			  const std::vector<std::string>& required,
+			  const std::vector<std::string>& repeatable = {"channel", "fix_error", "episode"})
 	{
 		std::map<std::string, int> seen;
 		std::string line;
@@ -60,7 +64,8 @@ class RecordReader
 			if (f.size() != it->second.first + 1)
 				fail("'" + f[0] + "' has " + std::to_string(f.size() - 1) + " values, expected " +
 					 std::to_string(it->second.first));
-			seen[f[0]]++;
+			if (seen[f[0]]++ && std::find(repeatable.begin(), repeatable.end(), f[0]) == repeatable.end())
+				fail("'" + f[0] + "' given twice");
 			it->second.second(std::vector<std::string>(f.begin() + 1, f.end()));
 		}
 		for (const auto& k : required)
@@ -90,6 +95,71 @@ class RecordReader
 	std::ifstream m_in;
 	int m_line = 1;
 };
+
+/** Throws "<path>: <what> <why>" unless `ok`. */
+void require(bool ok, const std::string& path, const std::string& why)
+{
+	if (!ok) throw std::runtime_error(path + ": " + why + " (a damaged or edited record)");
+}
+
+std::string n2s(size_t v) { return std::to_string(v); }
+
+bool isLength(double v) { return std::isfinite(v) && v >= 0; }
+
+/** What a map job's counts must satisfy among themselves. */
+void checkMapRecord(const TMapRecord& r, const std::string& path)
+{
+	require(r.keyframes <= r.frames, path, "keyframes " + n2s(r.keyframes) + " > frames " + n2s(r.frames));
+	require(r.gt_keyframes <= r.keyframes, path, "gt_keyframes " + n2s(r.gt_keyframes) + " > keyframes " + n2s(r.keyframes));
+	require(isLength(r.path_m), path, "path_m is not a length >= 0");
+}
+
+/** A channel's counts: each a subset of the one before (accepted of the
+ * frames, used and in-map of accepted, true of in-map). */
+void checkPairChannel(const TPairChannel& c, const TPairRecord& r, const std::string& path)
+{
+	const std::string ch = "channel '" + c.name + "': ";
+	require(c.accepted <= r.frames, path, ch + "accepted " + n2s(c.accepted) + " > frames " + n2s(r.frames));
+	require(c.used <= c.accepted, path, ch + "used " + n2s(c.used) + " > accepted " + n2s(c.accepted));
+	require(c.accepted_in_map <= c.accepted && c.accepted_in_map <= r.in_map_frames, path,
+		ch + "accepted_in_map " + n2s(c.accepted_in_map) + " exceeds accepted or in_map_frames (coverage above 100 %)");
+	require(c.true_in_map <= c.accepted_in_map, path, ch + "true_in_map exceeds accepted_in_map");
+	require(c.true_fixes + c.false_fixes + c.unverifiable <= c.accepted, path, ch + "true + false + unverifiable > accepted");
+}
+
+/** What a pair job's numbers must satisfy: coverage within [0, 100] %,
+ * counts consistent with each other, lengths finite and >= 0. */
+void checkPairRecord(const TPairRecord& r, const std::string& path)
+{
+	require(r.in_map_frames <= r.frames, path, "in_map_frames " + n2s(r.in_map_frames) + " > frames " + n2s(r.frames));
+	require(r.fixes <= r.frames, path, "fixes " + n2s(r.fixes) + " > frames " + n2s(r.frames));
+	require(r.fixes_in_map <= r.fixes && r.fixes_in_map <= r.in_map_frames, path,
+		"fixes_in_map " + n2s(r.fixes_in_map) + " exceeds fixes or in_map_frames (coverage above 100 %)");
+	require(r.true_fixes_in_map <= r.fixes_in_map && r.true_fixes_in_map <= r.true_fixes, path,
+		"true_fixes_in_map exceeds fixes_in_map or true_fixes");
+	require(r.true_fixes + r.false_fixes + r.unverifiable <= r.fixes, path, "true + false + unverifiable fixes > fixes");
+	require(r.ground_truth || r.true_fixes + r.false_fixes == 0, path, "true or false fixes without ground truth");
+	require(r.first_fix_frame >= -1 && (r.first_fix_frame < 0 || size_t(r.first_fix_frame) < r.frames), path,
+		"first_fix_frame " + std::to_string(r.first_fix_frame) + " outside -1.." + std::to_string(long(r.frames) - 1));
+	require(isLength(r.total_m) && isLength(r.blind_m), path, "total_m and blind_m must be lengths >= 0");
+	require(r.before_first_fix_m == -1 || isLength(r.before_first_fix_m), path, "before_first_fix_m is neither -1 nor >= 0");
+	for (const auto& c : r.channels) checkPairChannel(c, r, path);
+	for (size_t b = 0; b < r.bins.size(); b++)
+		require(r.bins[b] <= r.in_map_frames && (b == 0 || r.bins[b - 1] <= r.bins[b]), path,
+			"accuracy bins " + n2s(r.bins[0]) + ", " + n2s(r.bins[1]) + ", " + n2s(r.bins[2]) +
+				": each within in_map_frames, the wider ones holding the narrower");
+	require(r.fix_errors.size() <= r.fixes, path, "more fix errors than fixes");
+	for (const auto& e : r.fix_errors)
+		require(isLength(e[0]) && isLength(e[1]) && e[1] <= 180, path, "fix error outside [0, inf) m x [0, 180] deg");
+	double episodes = 0;
+	for (const auto& e : r.episodes)
+	{
+		require(isLength(e.second), path, "episode length is not a length >= 0");
+		episodes += e.second;
+	}
+	require(std::fabs(episodes - r.blind_m) <= 1e-6 * std::max(1.0, r.blind_m), path,
+		"blind_m is not the sum of the episodes' lengths");
+}
 
 const std::string kMapHeader = "# shadyloc eval map v" + std::to_string(kPlanVersion);
 const std::string kPairHeader = "# shadyloc eval pair v" + std::to_string(kPlanVersion);
@@ -176,6 +246,7 @@ TMapRecord readMapRecord(const std::string& path)
 		 {"breaks", {1, [&](const auto& v) { r.breaks = rd.count(v[0]); }}},
 		 {"path_m", {1, [&](const auto& v) { r.path_m = rd.number(v[0]); }}}},
 		{"run", "frames", "keyframes", "gt_keyframes", "breaks", "path_m"});
+	checkMapRecord(r, path);
 	return r;
 }
 
@@ -256,8 +327,12 @@ TPairRecord readPairRecord(const std::string& path)
 		   }}},
 		 {"end", {0, [](const auto&) {}}}},
 		{"live", "map", "system", "frames", "ground_truth", "in_map_frames", "channel", "bins", "end"});
+	if (gt > 1) throw std::runtime_error(path + ": ground_truth " + std::to_string(gt) + " is neither 0 nor 1");
+	if (!(firstFix >= -1 && firstFix <= 2e9 && firstFix == std::floor(firstFix)))
+		throw std::runtime_error(path + ": first_fix_frame is not a frame index or -1");
 	r.ground_truth = gt != 0;
 	r.first_fix_frame = static_cast<int>(firstFix);
+	checkPairRecord(r, path);
 	return r;
 }
 

@@ -181,7 +181,7 @@ double runMapJob(const std::string& outDir, const TEvalInputs& in, const TEvalJo
 	io::OutputTransaction tx;
 	tx.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	tx.addInput(run.rawlogPath, "rawlog of run '" + run.name + "'");
-	const std::string dir = tx.addDirectory(jobDir(outDir, job), "output of " + jobWhat(in.runs, job));
+	const std::string dir = tx.addDirectory(jobDir(outDir, job), "output of " + jobWhat(in.runs, job), "shadyloc eval job output");
 	map->saveToFile((fs::path(dir) / "map.kfmap").string());
 	TMapRecord rec;
 	rec.run = run.name;
@@ -251,7 +251,7 @@ double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJ
 	tx.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	tx.addInput(live.rawlogPath, "rawlog of run '" + live.name + "'");
 	tx.addInput(mapFile, "map of run '" + mapRun.name + "'");
-	const std::string dir = tx.addDirectory(jobDir(outDir, job), "output of " + what);
+	const std::string dir = tx.addDirectory(jobDir(outDir, job), "output of " + what, "shadyloc eval job output");
 	const auto file = [&](const char* n) { return (fs::path(dir) / n).string(); };
 	localisation::writeFramesCsv(file("frames.csv"), ups, ev, *map);
 	localisation::writeSolvesCsv(file("solves.csv"), ups, ev);

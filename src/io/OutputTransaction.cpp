@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <mutex>
 #include <regex>
 #include <set>
@@ -139,6 +140,42 @@ void installSignalCleanup()
 
 std::string temporaryPathFor(const std::string& path) { return siblingFor(path, "tmp", false); }
 
+const char* const kOutputMarker = ".shadyloc-output";
+
+namespace
+{
+/** The kind named by the marker in `dir`, "" if it has none. */
+std::string markedKind(const fs::path& dir)
+{
+	std::ifstream f(dir / kOutputMarker);
+	std::string kind;
+	std::getline(f, kind);
+	return kind;
+}
+}  // namespace
+
+void checkReplaceableFolder(const std::string& path, const std::string& what, const std::string& kind)
+{
+	std::error_code ec;
+	if (!fs::is_directory(path, ec) || fs::is_empty(path, ec)) return;
+	// Only a folder known to be our own earlier output may go: anything else
+	// (the user's files, the command's inputs, another command's output)
+	// would be lost without a trace.
+	const std::string found = markedKind(path);
+	if (found == kind) return;
+	throw std::invalid_argument(
+		what + " '" + path + "': the folder exists and is not an earlier " + kind + " (" +
+		(found.empty() ? std::string("no '") + kOutputMarker + "' file in it" : "it is a " + found) +
+		"); it would be replaced as a whole: nothing was changed; remove it or choose another folder");
+}
+
+void markOutputFolder(const std::string& dir, const std::string& kind)
+{
+	std::ofstream f(fs::path(dir) / kOutputMarker);
+	f << kind << "\n";
+	if (!f) throw std::runtime_error("cannot write '" + (fs::path(dir) / kOutputMarker).string() + "'");
+}
+
 std::vector<std::string> staleTemporaries(const std::string& dir)
 {
 	// Ours: ".<name>.tmp-<pid>[.ext]" and ".<name>.old-<pid>[.ext]"; older
@@ -196,8 +233,19 @@ void OutputTransaction::checkAgainst(const TEntry& out, const TEntry& other, boo
 			(otherIsInput ? ": an output may not replace an input" : ""));
 	if (out.isDir && isInside(other.canonical, out.canonical))
 		throw std::invalid_argument(a + " would replace the folder that holds the " + b);
+	if (other.listed && isInside(out.canonical, other.canonical))
+		throw std::invalid_argument(
+			a + " lies inside the " + b + ", whose files are read as inputs: a later run would read it as one; "
+			"write it outside that folder");
 	if (!otherIsInput && other.isDir && isInside(out.canonical, other.canonical))
 		throw std::invalid_argument(a + " lies inside the " + b + ", which is replaced as a whole");
+}
+
+void OutputTransaction::addListedFolder(const std::string& path, const std::string& what)
+{
+	addInput(path, what);
+	m_inputs.back().listed = true;
+	for (const auto& o : m_outputs) checkAgainst(o, m_inputs.back(), true);
 }
 
 void OutputTransaction::addInput(const std::string& path, const std::string& what)
@@ -232,9 +280,13 @@ std::string OutputTransaction::addFile(const std::string& path, const std::strin
 	return reserve(path, what, false);
 }
 
-std::string OutputTransaction::addDirectory(const std::string& path, const std::string& what)
+std::string OutputTransaction::addDirectory(const std::string& path, const std::string& what, const std::string& kind)
 {
-	return reserve(path, what, true);
+	if (kind.empty()) throw std::logic_error("OutputTransaction::addDirectory: no kind for '" + path + "'");
+	// "out/" names the folder "out" (a file name could not end so).
+	std::string p = path;
+	while (p.size() > 1 && p.back() == '/') p.pop_back();
+	return reserve(p, what, true, kind);
 }
 
 void OutputTransaction::reportStale(const std::string& dir)
@@ -247,7 +299,7 @@ void OutputTransaction::reportStale(const std::string& dir)
 			"'" << s << "': temporary output left by an interrupted run; delete it with: rm -rf -- '" << s << "'");
 }
 
-std::string OutputTransaction::reserve(const std::string& path, const std::string& what, bool dir)
+std::string OutputTransaction::reserve(const std::string& path, const std::string& what, bool dir, const std::string& kind)
 {
 	if (m_committed) throw std::logic_error("OutputTransaction: outputs added after commit()");
 	if (path.empty()) throw std::invalid_argument(what + ": the output path is empty");
@@ -280,6 +332,7 @@ std::string OutputTransaction::reserve(const std::string& path, const std::strin
 	}
 	for (const auto& in : m_inputs) checkAgainst(o, in, true);
 	for (const auto& other : m_outputs) checkAgainst(o, other, false), checkAgainst(other, o, false);
+	if (dir) checkReplaceableFolder(path, what, kind);
 
 	reportStale(parent.string());
 	o.tmp = siblingFor(path, "tmp", dir);
@@ -288,7 +341,8 @@ std::string OutputTransaction::reserve(const std::string& path, const std::strin
 	if (dir && !fs::create_directory(o.tmp, ec))
 		throw std::invalid_argument(
 			what + " '" + path + "': cannot create the temporary folder '" + o.tmp + "': " + ec.message());
-	m_outputs.push_back(o);
+	m_outputs.push_back(o);	// from here on, rollback() removes the temporary
+	if (dir) markOutputFolder(o.tmp, kind);
 	return o.tmp;
 }
 

@@ -236,7 +236,7 @@ const std::string& RawlogWriter::stagedImagesDir()
 	{
 		try
 		{
-			m_tmpImagesDir = m_tx->addDirectory(m_imagesDir, "'" + m_path + "': its images folder");
+			m_tmpImagesDir = m_tx->addDirectory(m_imagesDir, "'" + m_path + "': its images folder", "shadyloc rawlog images folder");
 		}
 		catch (const std::invalid_argument& e)
 		{

@@ -4,6 +4,7 @@
 #include <mrpt/core/Clock.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <sstream>
 
 namespace shadyloc::io
@@ -79,6 +80,17 @@ std::string findStereoLabel(
 	return "";
 }
 
+namespace
+{
+/** Seconds with the nanoseconds rawlogs hold. */
+std::string secondsText(double t)
+{
+	char b[48];
+	std::snprintf(b, sizeof b, "%.9f", t);
+	return b;
+}
+}  // namespace
+
 StereoFrameSource::StereoFrameSource(const std::string& rawlogPath, const TStereoFrameSourceOptions& opts)
 	: m_reader(rawlogPath), m_opts(opts), m_label(opts.sensorLabel)
 {
@@ -134,6 +146,13 @@ bool StereoFrameSource::next(TStereoFrame& f)
 		f.object = m_pendingObject;
 		f.sensorLabel = m_label;
 		f.timestamp = mrpt::Clock::toDouble(st->timestamp);
+		// Trajectories, ground-truth lookups and frame rates assume time
+		// moves forward: a repeated or earlier time is a damaged input.
+		if (m_frames > 0 && !(f.timestamp > m_lastTime))
+			throw RawlogError(
+				where + "timestamp " + secondsText(f.timestamp) + " s is not after frame " +
+				std::to_string(m_frames - 1) + "'s (" + secondsText(m_lastTime) + " s): frame times must increase");
+		m_lastTime = f.timestamp;
 		f.left = st->imageLeft.asCvMatRef();
 		f.right = st->imageRight.asCvMatRef();
 		if (f.left.empty() || f.right.empty() || f.left.size() != f.right.size())

@@ -141,6 +141,13 @@ CLocaliseRun::CLocaliseRun(
 {
 	if (map->isEmpty()) throw std::runtime_error("map '" + mapPath + "' has no keyframes: nothing to localise against");
 	const size_t nKf = map->keyframeCount();
+	// frames.csv writes run names unquoted (kf_run): maps surveyed before
+	// names were restricted may hold one that would split its row.
+	for (const auto& run : map->runs())
+		if (run.find_first_of(",\"\r\n") != std::string::npos)
+			throw std::runtime_error(
+				"map '" + mapPath + "': run name '" + run +
+				"' holds a comma, quote or line break, which frames.csv cannot hold: survey it again with --run-name");
 	try
 	{
 		checkLocaliseSections(cfg, o.configWhat);

@@ -24,6 +24,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <memory>
@@ -33,6 +34,7 @@
 using namespace shadyloc;
 using shadyloc::map::detail::ByteReader;
 using shadyloc::map::detail::ByteWriter;
+namespace fs = std::filesystem;
 
 IMPLEMENTS_SERIALIZABLE(CKeyframeMap, mrpt::maps::CMetricMap, shadyloc)
 MAP_DEFINITION_REGISTER("shadyloc::CKeyframeMap,keyframeMap", shadyloc::CKeyframeMap)
@@ -95,13 +97,18 @@ geometry::Matrix6d getCov(ByteReader& r)
 	return C;
 }
 
-/** FNV-1a, 64 bit, of the stored (compressed) bytes: each step is a
- * bijection of the state for a given byte, so any single changed byte
- * changes the sum. zstd's own checksum covers the decompressed content only:
- * a flipped bit the entropy decoder ignores would pass it. */
-uint64_t fnv1a(const std::vector<uint8_t>& b)
+/** FNV-1a, 64 bit, of a block's position (version 3, channel blocks only)
+ * and its stored (compressed) bytes: each step is a bijection of the state
+ * for a given byte, so any single changed byte changes the sum. zstd's own
+ * checksum covers the decompressed content only: a flipped bit the entropy
+ * decoder ignores would pass it. The metadata names the channels in block
+ * order, so with the position in the sum a channel block moved (two
+ * channels' blocks swapped) fails too. Position 0 (the metadata, and every
+ * block of versions 1-2) is plain FNV-1a of the bytes. */
+uint64_t blockSum(const std::vector<uint8_t>& b, size_t position)
 {
 	uint64_t h = 0xcbf29ce484222325ull;
+	if (position > 0) h = (h ^ static_cast<uint8_t>(position)) * 0x100000001b3ull;
 	for (uint8_t x : b) h = (h ^ x) * 0x100000001b3ull;
 	return h;
 }
@@ -696,7 +703,9 @@ static TBlocks encode(
 // 2: the options' landmark selection (policy, re-observation window and
 //    radius, minimum re-observations) after the version 1 options; a
 //    version 1 map reads as thinned by the strongest corners.
-uint8_t CKeyframeMap::serializeGetVersion() const { return 2; }
+// 3: each channel block's checksum covers its position (blockSum): blocks
+//    swapped between channels fail the load.
+uint8_t CKeyframeMap::serializeGetVersion() const { return 3; }
 
 void CKeyframeMap::serializeTo(mrpt::serialization::CArchive& out) const
 {
@@ -704,10 +713,11 @@ void CKeyframeMap::serializeTo(mrpt::serialization::CArchive& out) const
 	std::vector<const std::vector<uint8_t>*> blocks{&b.meta};
 	for (const auto& c : b.channels) blocks.push_back(&c);
 	out << static_cast<uint8_t>(blocks.size());
-	for (const auto* raw : blocks)
+	for (size_t i = 0; i < blocks.size(); i++)
 	{
+		const auto* raw = blocks[i];
 		const auto comp = compressBlock(*raw, options.compression_level);
-		out << static_cast<uint64_t>(raw->size()) << static_cast<uint64_t>(comp.size()) << fnv1a(comp);
+		out << static_cast<uint64_t>(raw->size()) << static_cast<uint64_t>(comp.size()) << blockSum(comp, i);
 		out.WriteBuffer(comp.data(), comp.size());
 	}
 }
@@ -723,6 +733,7 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 				"with `shadyloc survey`");
 		case 1:
 		case 2:
+		case 3:
 		{
 			// The stream's size is unknown here: the budget is the largest map
 			// (kMaxSerializedBytes); offsets count from the object's data.
@@ -742,7 +753,8 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 				if (rawSize > kMaxSerializedBytes)
 					in_.fail("block raw size", std::to_string(rawSize) + " bytes: beyond any map (damaged)");
 				const auto comp = readBlob(in_, compSize, "block data");
-				if (fnv1a(comp) != sum) throw io::CorruptDataError(what + ": checksum mismatch (damaged)");
+				if (blockSum(comp, version >= 3 ? static_cast<size_t>(i) : 0) != sum)
+					throw io::CorruptDataError(what + ": checksum mismatch (damaged, or a block moved from another position)");
 				raw.push_back(decompressBlock(comp, rawSize, what));
 			}
 			// Parse into locals, then swap in: a failed load leaves the map as it was.
@@ -909,30 +921,69 @@ void CKeyframeMap::saveToFile(const std::string& path, const std::function<void(
 	});
 }
 
-CKeyframeMap::Ptr CKeyframeMap::LoadFromFile(const std::string& path)
+namespace
 {
+/** MRPT's object header: 0x80 | name length, the class name, the version.
+ * ReadObject(existing) does not compare the name, so check it here: a file
+ * of another class is refused before anything of it is parsed. */
+void checkObjectHeader(const uint8_t* data, size_t size, const std::string& path)
+{
+	if (size == 0) throw std::runtime_error("keyframe map '" + path + "': empty file");
+	const std::string name = kClass;
+	const size_t nameLen = data[0] & 0x7f;
+	const std::string stored(reinterpret_cast<const char*>(data) + 1, std::min(nameLen, size - 1));
+	if ((data[0] & 0x80) == 0 || stored != name)
+		throw std::runtime_error(
+			"keyframe map '" + path + "': holds " +
+			((data[0] & 0x80) && nameLen == stored.size() ? "a '" + stored + "' object" : std::string("no MRPT object")) +
+			", not a " + name);
+}
+
+/** Exactly `n` bytes of `f` from its current position, or an error naming `path`. */
+void readExactly(std::ifstream& f, uint8_t* to, size_t n, const std::string& path)
+{
+	f.read(reinterpret_cast<char*>(to), static_cast<std::streamsize>(n));
+	if (static_cast<size_t>(f.gcount()) != n)
+		throw std::runtime_error("keyframe map '" + path + "': cannot read (the file is shorter than its size)");
+}
+
+/** The bytes of a map file: a regular file only (/dev/zero or a FIFO would
+ * be read until memory ran out), its header checked before the rest is
+ * read, exactly its size read. */
+std::vector<uint8_t> readMapFile(const std::string& path)
+{
+	std::error_code ec;
+	const auto st = fs::status(path, ec);
+	if (ec || !fs::exists(st)) throw std::runtime_error("keyframe map '" + path + "': cannot open (no such file)");
+	if (!fs::is_regular_file(st))
+		throw std::runtime_error("keyframe map '" + path + "': not a regular file (a directory, device or pipe)");
+	const uint64_t size = fs::file_size(path, ec);
+	if (ec) throw std::runtime_error("keyframe map '" + path + "': cannot open (" + ec.message() + ")");
+	if (size > kMaxSerializedBytes + 256)  // the object's data, MRPT's header and end byte
+		throw std::runtime_error("keyframe map '" + path + "': " + std::to_string(size) + " bytes, beyond any map");
 	std::ifstream f(path, std::ios::binary);
 	if (!f) throw std::runtime_error("keyframe map '" + path + "': cannot open");
-	const std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
+	// The header first: a file of something else is refused unread.
+	const size_t head = static_cast<size_t>(std::min<uint64_t>(size, 128));
+	std::vector<uint8_t> bytes(head);
+	readExactly(f, bytes.data(), head, path);
+	checkObjectHeader(bytes.data(), head, path);
+	bytes.resize(size);
+	readExactly(f, bytes.data() + head, size - head, path);
+	return bytes;
+}
+}  // namespace
+
+CKeyframeMap::Ptr CKeyframeMap::LoadFromFile(const std::string& path)
+{
+	const auto bytes = readMapFile(path);
 	return LoadFromBytes(bytes.data(), bytes.size(), path);
 }
 
 CKeyframeMap::Ptr CKeyframeMap::LoadFromBytes(const uint8_t* data, size_t size, const std::string& path)
 {
-	if (size == 0) throw std::runtime_error("keyframe map '" + path + "': empty file");
+	checkObjectHeader(data, size, path);
 	const std::vector<uint8_t> bytes(data, data + size);
-	// MRPT's object header: 0x80 | name length, the class name, the version.
-	// ReadObject(existing) does not compare the name, so check it here: a file
-	// of another class is refused before anything of it is parsed.
-	const std::string name = kClass;
-	const size_t nameLen = bytes[0] & 0x7f;
-	const std::string stored(
-		reinterpret_cast<const char*>(bytes.data()) + 1, std::min(nameLen, bytes.size() - 1));
-	if ((bytes[0] & 0x80) == 0 || stored != name)
-		throw std::runtime_error(
-			"keyframe map '" + path + "': holds " +
-			((bytes[0] & 0x80) && nameLen == stored.size() ? "a '" + stored + "' object" : std::string("no MRPT object")) +
-			", not a " + name);
 	mrpt::io::CMemoryStream mem;
 	mem.assignMemoryNotOwn(bytes.data(), bytes.size());
 	auto ar = mrpt::serialization::archiveFrom(mem);

@@ -6,6 +6,8 @@
 #include <shadyloc/vo/ChannelOptions.h>
 #include <shadyloc/vo/StereoVO.h>
 
+#include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -45,6 +47,20 @@ struct CSurveyRun::TImpl
 	std::unique_ptr<vo::StereoVO> voChain;
 	bool ran = false;
 };
+
+namespace
+{
+/** Run names end up in frames.csv (kf_run), file names and messages:
+ * letters, digits, '_', '-' and '.' only, so that none needs quoting. */
+void checkRunName(const std::string& name, const std::string& what)
+{
+	const auto ok = [](unsigned char c) { return std::isalnum(c) || c == '_' || c == '-' || c == '.'; };
+	if (name.empty() || !std::all_of(name.begin(), name.end(), ok))
+		throw std::invalid_argument(
+			what + ": a run name may hold only letters, digits, '_', '-' and '.' (it is written unquoted into "
+			"frames.csv); give another with --run-name");
+}
+}  // namespace
 
 CSurveyRun::CSurveyRun(const std::string& inPath, const mrpt::config::CConfigFileBase& cfg, const TSurveyRunOptions& o)
 	: mrpt::system::COutputLogger("CSurveyRun"), m_impl(std::make_unique<TImpl>())
@@ -92,6 +108,8 @@ CSurveyRun::CSurveyRun(const std::string& inPath, const mrpt::config::CConfigFil
 	I.voOptions = vo::voOptionsFor(cfg, I.channels[0].channel.label);
 	I.voChain = std::make_unique<vo::StereoVO>(I.voOptions, I.channels[0].extractor.options());
 	m_runName = o.runName.empty() ? std::filesystem::path(inPath).stem().string() : o.runName;
+	checkRunName(m_runName, o.runName.empty() ? "run name '" + m_runName + "' (the stem of '" + inPath + "')"
+											  : "--run-name '" + m_runName + "'");
 }
 
 CSurveyRun::~CSurveyRun() = default;

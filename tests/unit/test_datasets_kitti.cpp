@@ -363,6 +363,29 @@ TEST(DatasetsKitti, BadInputNamesTheCulpritAndLeavesNothing)
 	expectImportError(dir + "/K", out, "times.txt' has 4 timestamps");
 	fs::copy_file(dir + "/times.bak", seq + "/times.txt", fs::copy_options::overwrite_existing);
 
+	// A repeated and a decreasing time (frame 3's): refused, naming the frame
+	// and both times, as the folder importer does.
+	for (const std::string& t3 : {std::string("2.072446e-01"), std::string("0.1")})
+	{
+		auto lines = readLines(dir + "/times.bak");
+		ASSERT_EQ(lines[2], "2.072446e-01");
+		lines[3] = t3;
+		{
+			std::ofstream f(seq + "/times.txt");
+			for (const auto& l : lines) f << l << "\n";
+		}
+		expectImportError(dir + "/K", out, "times.txt': timestamp #3 (");
+		expectImportError(dir + "/K", out, "is not after #2 (0.207244600 s)");
+		std::string text;
+		EXPECT_NE(shadyloc::test::runCommand(
+					  shadyloc::test::appPath() + " import kitti '" + dir + "/K' --sequence 00 -q -o '" + out + "'", &text),
+			0)
+			<< text;
+		EXPECT_NE(text.find("timestamp #3"), std::string::npos) << text;
+		expectNoOutput(out);
+	}
+	fs::copy_file(dir + "/times.bak", seq + "/times.txt", fs::copy_options::overwrite_existing);
+
 	// Mismatched sizes at frame 3: frames 0-2 are already written when it is
 	// found, so this checks the atomic clean-up too (inline and external).
 	fs::copy_file(seq + "/image_3/000003.png", dir + "/r3.png");

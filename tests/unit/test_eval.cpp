@@ -327,6 +327,80 @@ TEST(EvalApp, BadInputNamesTheCulpritAndLeavesNothing)
 	EXPECT_EQ(run(base + " --plan --merge"), 2);
 }
 
+namespace
+{
+/** A pair job's record as runPairJob writes it (pair.tsv), with `edit`
+ * applied: one line replaced by key. */
+std::string pairRecord(const std::string& live, const std::string& map, const std::string& system,
+	const std::map<std::string, std::string>& edit = {})
+{
+	std::vector<std::pair<std::string, std::string>> lines = {
+		{"live", live}, {"map", map}, {"system", system},
+		{"localisers", system == "baseline" ? "mono" : "mono,invariant"}, {"frames", "10"}, {"ground_truth", "0"},
+		{"in_map_frames", "8"}, {"fixes", "6"}, {"fixes_in_map", "5"}, {"true_fixes", "0"},
+		{"true_fixes_in_map", "0"}, {"false_fixes", "0"}, {"unverifiable", "0"}, {"total_m", "9"},
+		{"blind_m", "2.5"}, {"before_first_fix_m", "1"}, {"first_fix_frame", "2"}, {"global_searches", "1"},
+		{"channel", "mono\t6\t6\t5\t0\t0\t0\t0"}, {"bins", "0\t0\t0"}, {"episode", "before_first_fix\t1"},
+		{"episode", "at_end\t1.5"}};
+	std::string t = "# shadyloc eval pair v1\n";
+	for (auto& [k, v] : lines) t += k + "\t" + (edit.count(k) ? edit.at(k) : v) + "\n";
+	return t + "end\n";
+}
+}  // namespace
+
+// The merge trusted each job's record: a coverage above 100 % or a negative
+// count went into Table I. Each record is checked (schema, ranges, counts
+// consistent) and the job at fault is named.
+TEST(EvalApp, MergeRefusesJobRecordsOutOfRange)
+{
+	const std::string dir = test::tempDir("eval_merge_check");
+	writeRun(dir + "/a.rawlog", 2);
+	writeRun(dir + "/b.rawlog", 2);
+	writeText(dir + "/runs.txt", "a a.rawlog\nb b.rawlog\n");
+	const std::string o = dir + "/o", base = app() + " --runs " + dir + "/runs.txt -o " + o;
+	std::string out;
+	ASSERT_EQ(test::runCommand(base + " --plan", &out), 0) << out;
+	for (const char* r : {"a", "b"})
+	{
+		const std::string d = o + "/jobs/map_" + std::string(r);
+		fs::create_directories(d);
+		writeText(d + "/map.kfmap", "");
+		writeText(d + "/map.tsv", "# shadyloc eval map v1\nrun\t" + std::string(r) +
+									  "\nframes\t10\nkeyframes\t4\ngt_keyframes\t0\nbreaks\t0\npath_m\t9\n");
+	}
+	const auto writePairs = [&](const std::string& badJob, const std::map<std::string, std::string>& edit) {
+		for (const auto& [live, map] : {std::pair<std::string, std::string>{"a", "b"}, {"b", "a"}})
+			for (const char* sys : {"baseline", "combined"})
+			{
+				const std::string name = "pair_" + live + "__" + map + "__" + sys, d = o + "/jobs/" + name;
+				fs::create_directories(d);
+				for (const char* f : {"frames.csv", "summary.json", "trajectory.tum"}) writeText(d + "/" + f, "");
+				writeText(d + "/pair.tsv", pairRecord(live, map, sys, name == badJob ? edit : std::map<std::string, std::string>{}));
+			}
+	};
+	struct TCase
+	{
+		std::map<std::string, std::string> edit;
+		std::string expect;
+	};
+	for (const auto& c : std::vector<TCase>{
+			 {{{"fixes_in_map", "12"}}, "coverage above 100 %"},
+			 {{{"fixes", "-3"}}, "'-3' is not a count"},
+			 {{{"total_m", "nan"}}, "total_m and blind_m must be lengths >= 0"},
+			 {{{"channel", "mono\t6\t7\t5\t0\t0\t0\t0"}}, "used 7 > accepted 6"},
+			 {{{"bins", "3\t2\t1"}}, "accuracy bins"},
+			 {{{"blind_m", "7"}}, "sum of the episodes"}})
+	{
+		writePairs("pair_b__a__combined", c.edit);
+		EXPECT_EQ(test::runCommand(base + " --merge", &out), 1) << out;
+		EXPECT_NE(out.find("job 5 (live run 'b' against the map of 'a', combined)"), std::string::npos) << out;
+		EXPECT_NE(out.find("pair_b__a__combined/pair.tsv"), std::string::npos) << out;
+		EXPECT_NE(out.find(c.expect), std::string::npos) << c.expect << ": " << out;
+		EXPECT_EQ(out.find("job 4 ("), std::string::npos) << out;  // the others are fine
+		EXPECT_FALSE(fs::exists(o + "/table1.md"));
+	}
+}
+
 TEST(EvalApp, ResultsIdenticalAcrossWorkersAndJobs)
 {
 	// Three traversals of the simulator, 12 frames each (about 8 m: the
@@ -376,8 +450,10 @@ TEST(EvalApp, ResultsIdenticalAcrossWorkersAndJobs)
 		EXPECT_TRUE(a.count(f)) << f;
 	// Outputs and plan, the map jobs (map, record), pairs/ (3 files each),
 	// the pair jobs (those 3 and the record), figures (Figure 7 per ordered
-	// pair, Figure 8 per live run, one Figure 9); the PNGs compare too.
-	EXPECT_EQ(a.size(), 6u + 3 * 2 + 12 * 3 + 12 * 4 + 6 + 3 + 1);
+	// pair, Figure 8 per live run, one Figure 9), and the marker of each
+	// folder replaced as a whole (15 jobs, pairs/, figures/); the PNGs
+	// compare too.
+	EXPECT_EQ(a.size(), 6u + 3 * 2 + 12 * 3 + 12 * 4 + 6 + 3 + 1 + 15 + 2);
 	const auto same = [](const auto& x, const auto& y, const char* what) {
 		EXPECT_EQ(x.size(), y.size()) << what;
 		for (const auto& [name, bytes] : x)

@@ -94,7 +94,8 @@ TEST(FilterExternalInput, OutputWithTheInputsStemNeverTouchesItsImages)
 		const auto dir = test::tempDir("filter_ext_stem");
 		writeExternalRawlog(dir + "/run.rawlog", 3);
 		const auto before = snapshot(dir + "/run_Images");
-		ASSERT_EQ(before.size(), 6u);
+		ASSERT_EQ(before.size(), 7u);  // 3 frames x 2 images, and the folder's output marker
+		ASSERT_EQ(before.count(".shadyloc-output"), 1u);
 		std::string out;
 		const int rc = test::runCommand(
 			test::appPath() + " filter -q -i " + dir + "/run.rawlog -o " + dir + "/run.filtered" + ext, &out);

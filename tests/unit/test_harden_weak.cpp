@@ -184,6 +184,25 @@ TEST(Messages, ImportFolderRefusesTimesThatDoNotIncrease)
 	EXPECT_EQ(test::runCommand(base + dir + "/times.txt", &out), 0) << out;
 }
 
+// A run name is written unquoted into localise's frames.csv (kf_run): a comma
+// split its rows. survey refuses such a name, saying which characters a name
+// may hold, and writes no map.
+TEST(Messages, SurveyRefusesRunNamesFramesCsvCannotHold)
+{
+	const auto dir = test::tempDir("run_name");
+	test::writeSyntheticRawlog(dir + "/r.rawlog", 3, false);
+	test::writeSyntheticRawlog(dir + "/a,b.rawlog", 3, false);
+	for (const std::string& args : {"-i " + dir + "/r.rawlog --run-name a,b", "-i '" + dir + "/a,b.rawlog'",
+									"-i " + dir + "/r.rawlog --run-name 'a\"b'"})
+	{
+		std::string out;
+		EXPECT_NE(test::runCommand(test::appPath() + " survey -q " + args + " -o " + dir + "/m.kfmap", &out), 0)
+			<< args << "\n" << out;
+		EXPECT_NE(out.find("only letters, digits"), std::string::npos) << args << "\n" << out;
+		EXPECT_FALSE(fs::exists(dir + "/m.kfmap")) << args;
+	}
+}
+
 TEST(OutputsTogether, TransactionCommitsAllOrNothing)
 {
 	const auto dir = test::tempDir("tx_all_or_nothing");
@@ -202,7 +221,7 @@ TEST(OutputsTogether, TransactionCommitsAllOrNothing)
 	{
 		io::OutputTransaction tx;
 		std::ofstream(tx.addFile(dir + "/a.txt")) << "new a";
-		const std::string d = tx.addDirectory(dir + "/d");
+		const std::string d = tx.addDirectory(dir + "/d", "output", "test output");
 		std::ofstream(d + "/x") << "x";
 		tx.commit();
 	}
@@ -219,11 +238,52 @@ TEST(OutputsTogether, TransactionCommitsAllOrNothing)
 	EXPECT_THROW(tx.addFile(dir + "/a.txt"), std::invalid_argument);
 	EXPECT_THROW(tx.addFile(dir + "/sym.txt"), std::invalid_argument);
 	EXPECT_THROW(tx.addFile(dir + "/hard.txt"), std::invalid_argument);
-	EXPECT_THROW(tx.addDirectory(dir + "/d"), std::invalid_argument);
+	EXPECT_THROW(tx.addDirectory(dir + "/d", "output", "test output"), std::invalid_argument);
 	EXPECT_THROW(tx.addFile(""), std::invalid_argument);
 	EXPECT_THROW(tx.addFile(dir + "/missing/x.txt"), std::invalid_argument);
 	const std::string ok = tx.addFile(dir + "/c.txt");
 	EXPECT_THROW(tx.addFile(dir + "/./c.txt"), std::invalid_argument);
+}
+
+// A folder output replaces an existing folder only if it is empty or marked
+// as an earlier output of the same kind: a folder of the user's files is
+// refused by name and left as it was.
+TEST(OutputsTogether, FolderReplacedOnlyIfAnEarlierOutputOfTheSameKind)
+{
+	const auto dir = test::tempDir("tx_folder_kind");
+	fs::create_directories(dir + "/user");
+	std::ofstream(dir + "/user/thesis.tex") << "years of work";
+	{
+		io::OutputTransaction tx;
+		try
+		{
+			tx.addDirectory(dir + "/user", "output folder", "test output");
+			ADD_FAILURE() << "a folder of the user's files was accepted";
+		}
+		catch (const std::invalid_argument& e)
+		{
+			EXPECT_NE(std::string(e.what()).find("'" + dir + "/user'"), std::string::npos) << e.what();
+		}
+	}
+	EXPECT_EQ(contents(dir + "/user/thesis.tex"), "years of work");
+	EXPECT_TRUE(temporariesUnder(dir).empty());
+
+	// Empty: replaced; then marked, so the next run of that kind replaces it
+	// (a trailing '/' names the same folder).
+	fs::create_directories(dir + "/out");
+	for (const std::string content : {"1", "2"})
+	{
+		io::OutputTransaction tx;
+		const std::string to = dir + (content == "1" ? "/out" : "/out/");
+		std::ofstream(tx.addDirectory(to, "output folder", "test output") + "/x") << content;
+		tx.commit();
+		EXPECT_EQ(contents(dir + "/out/x"), content);
+	}
+	EXPECT_EQ(contents(dir + "/out/" + io::kOutputMarker), "test output\n");
+	// Another kind's output is refused.
+	io::OutputTransaction tx;
+	EXPECT_THROW(tx.addDirectory(dir + "/out", "output folder", "other output"), std::invalid_argument);
+	EXPECT_EQ(contents(dir + "/out/x"), "2");
 }
 
 namespace

@@ -959,24 +959,27 @@ TEST(InvariantCalibrationApp, WritesIniCurveAndPlotThatLoadBack)
 	}
 	const bool havePlot = shadyloc::test::runCommand("command -v gnuplot >/dev/null") == 0;
 	std::string out;
+	// The outputs go beside the --pairs folder: inside it they are refused.
+	const std::string images = dir;
+	const auto dirOut = shadyloc::test::tempDir("calib_app_out");
 	const int rc = shadyloc::test::runCommand(
-		shadyloc::test::appPath() + " calibrate-alpha --pairs " + dir + " --linearise none --bootstrap 20 " +
-			(havePlot ? "" : "--no-plot ") + "-o " + dir + "/cam",
+		shadyloc::test::appPath() + " calibrate-alpha --pairs " + images + " --linearise none --bootstrap 20 " +
+			(havePlot ? "" : "--no-plot ") + "-o " + dirOut + "/cam",
 		&out);
 	ASSERT_EQ(rc, 0) << out;
 	EXPECT_NE(out.find("[invariant]"), std::string::npos) << out;
-	ASSERT_TRUE(fs::exists(dir + "/cam.ini"));
-	ASSERT_TRUE(fs::exists(dir + "/cam_curve.csv"));
+	ASSERT_TRUE(fs::exists(dirOut + "/cam.ini"));
+	ASSERT_TRUE(fs::exists(dirOut + "/cam_curve.csv"));
 	if (havePlot)
 	{
-		const cv::Mat png = cv::imread(dir + "/cam_curve.png");
+		const cv::Mat png = cv::imread(dirOut + "/cam_curve.png");
 		ASSERT_FALSE(png.empty());
 		EXPECT_GE(png.cols, 600);
 	}
-	for (const auto& e : fs::directory_iterator(dir))
+	for (const auto& e : fs::directory_iterator(dirOut))
 		EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << "left over: " << e.path();
 	// The section pastes into a filters .ini and loads back with the estimate.
-	const auto inv = filterFromCalibration(dir + "/cam.ini");
+	const auto inv = filterFromCalibration(dirOut + "/cam.ini");
 	ASSERT_TRUE(inv);
 	// 0.02: three small pairs, shadowed pixels at codes 8-40 (quantisation steps of 2.5-12 %).
 	EXPECT_NEAR(inv->params().alpha, trueAlpha(), 0.02);
@@ -985,6 +988,7 @@ TEST(InvariantCalibrationApp, WritesIniCurveAndPlotThatLoadBack)
 
 	// Bad input: clear message, non-zero exit, no output.
 	const auto bad = shadyloc::test::tempDir("calib_app_bad");
+	const auto badOut = shadyloc::test::tempDir("calib_app_bad_out");
 	for (const auto& [args, expect] : std::vector<std::pair<std::string, std::string>>{
 			 {"--pairs " + bad, "no <name>_free"},
 			 {"--image " + bad + "/missing.png", "missing.png"},
@@ -993,12 +997,13 @@ TEST(InvariantCalibrationApp, WritesIniCurveAndPlotThatLoadBack)
 	{
 		EXPECT_NE(
 			shadyloc::test::runCommand(
-				shadyloc::test::appPath() + " calibrate-alpha " + args + " --linearise none -o " + bad + "/x", &out),
+				shadyloc::test::appPath() + " calibrate-alpha " + args + " --linearise none -o " + badOut + "/x", &out),
 			0)
 			<< args;
 		EXPECT_NE(out.find(expect), std::string::npos) << args << ": " << out;
 	}
 	EXPECT_TRUE(fs::is_empty(bad));
+	EXPECT_TRUE(fs::is_empty(badOut));
 }
 
 // A camera with a datasheet alpha needs only the 8-bit mapping: --alpha (and
@@ -1047,4 +1052,51 @@ TEST(InvariantCalibrationApp, KnownAlphaCalibratesOnlyTheMapping)
 		0);
 	EXPECT_NE(out.find("exclude each other"), std::string::npos) << out;
 	EXPECT_FALSE(fs::exists(dir + "/b.ini"));
+}
+
+// An output inside a folder whose images are all read would be read back as
+// an input by the next run (the curve PNG is a colour image): refused, naming
+// the folder, before anything is written.
+TEST(InvariantCalibrationApp, OutputInsideAnInputFolderIsRefused)
+{
+	const auto dir = shadyloc::test::tempDir("calib_app_out_in");
+	for (int i = 0; i < 3; i++)
+	{
+		cv::imwrite(dir + "/s" + std::to_string(i) + "_free.png", syntheticScene(90 + i, kSun, kSun, {}));
+		cv::imwrite(dir + "/s" + std::to_string(i) + "_shadow1.png", syntheticScene(90 + i, kSun, kSky, shadowShape(90 + i)));
+	}
+	const auto before = std::distance(fs::directory_iterator(dir), fs::directory_iterator());
+	for (const std::string opt : {"--images", "--pairs"})
+	{
+		std::string out;
+		EXPECT_NE(shadyloc::test::runCommand(
+					  shadyloc::test::appPath() + " calibrate-alpha " + opt + " " + dir +
+						  " --linearise none --bootstrap 0 --no-plot -o " + dir + "/cam",
+					  &out),
+			0)
+			<< opt << ": " << out;
+		EXPECT_NE(out.find("'" + dir + "'"), std::string::npos) << opt << ": " << out;
+		EXPECT_EQ(std::distance(fs::directory_iterator(dir), fs::directory_iterator()), before) << opt << ": " << out;
+	}
+}
+
+// A JPEG cut short is an error naming it (cv::imread fills its missing rows
+// grey), as in `shadyloc image`.
+TEST(InvariantCalibrationApp, TruncatedJpegIsAnError)
+{
+	const auto dir = shadyloc::test::tempDir("calib_app_cut_jpeg");
+	const auto outDir = shadyloc::test::tempDir("calib_app_cut_jpeg_out");
+	for (int i = 0; i < 2; i++)
+		cv::imwrite(dir + "/im" + std::to_string(i) + ".jpg", syntheticScene(100 + i, kSun, kSky, shadowShape(100 + i)));
+	const std::string cut = dir + "/im1.jpg";
+	fs::resize_file(cut, fs::file_size(cut) / 2);
+	std::string out;
+	EXPECT_NE(shadyloc::test::runCommand(
+				  shadyloc::test::appPath() + " calibrate-alpha --images " + dir +
+					  " --linearise none --bootstrap 0 --no-plot -o " + outDir + "/cam",
+				  &out),
+		0)
+		<< out;
+	EXPECT_NE(out.find("im1.jpg"), std::string::npos) << out;
+	EXPECT_TRUE(fs::is_empty(outDir)) << out;
 }

@@ -144,6 +144,47 @@ TEST(IoStereoFrameSource, CalibrationChangeNamesFileObjectAndFrame)
 	}
 }
 
+// survey, localise (and vo) read frames here: a repeated or earlier frame
+// time is refused where it enters, naming the frame and both times.
+TEST(IoStereoFrameSource, RepeatedOrEarlierTimestampNamesTheFrame)
+{
+	const std::string dir = test::tempDir("io_frames_time");
+	for (const int earlier : {1, 0})  // frame 1's time again; frame 0's
+	{
+		const std::string path = dir + "/t.rawlog";
+		{
+			io::RawlogWriter w(path);
+			for (int i = 0; i < 4; i++)
+			{
+				auto o = test::syntheticStereoFrame(i);
+				if (i == 2) o->timestamp = test::syntheticStereoFrame(earlier)->timestamp;
+				w.write(*o);
+			}
+			w.commit();
+		}
+		io::StereoFrameSource src(path);
+		io::TStereoFrame f;
+		ASSERT_TRUE(src.next(f));
+		ASSERT_TRUE(src.next(f));
+		try
+		{
+			src.next(f);
+			ADD_FAILURE() << "frame 2 at frame " << earlier << "'s time was accepted";
+		}
+		catch (const io::RawlogError& e)
+		{
+			const std::string m = e.what();
+			EXPECT_NE(m.find("'" + path + "': object #2: frame 2"), std::string::npos) << m;
+			EXPECT_NE(m.find("is not after frame 1's ("), std::string::npos) << m;
+		}
+		// The program says the same and writes no map.
+		std::string out;
+		EXPECT_NE(test::runCommand(test::appPath() + " survey -q -i " + path + " -o " + dir + "/m.kfmap", &out), 0) << out;
+		EXPECT_NE(out.find("frame 2"), std::string::npos) << out;
+		EXPECT_FALSE(fs::exists(dir + "/m.kfmap"));
+	}
+}
+
 TEST(IoStereoFrameSource, PicksChannelsByLabelSuffixAndTransforms)
 {
 	const std::string dir = test::tempDir("io_frames_labels");

@@ -105,11 +105,13 @@ int jsonInt(const std::string& json, const std::string& key)
 	return std::stoi(m[1]);
 }
 
-/** Nothing staged beside `dir` was left behind (".<name>.partial-<pid>"). */
+/** Nothing staged beside `dir` was left behind (".<name>.tmp-<pid>",
+ * ".<name>.old-<pid>", or the older ".<name>.partial-<pid>"). */
 void expectNoStagedLeftovers(const std::string& dir)
 {
 	for (const auto& e : fs::directory_iterator(fs::path(dir).parent_path()))
-		EXPECT_EQ(e.path().filename().string().find(".partial"), std::string::npos) << e.path();
+		for (const char* staged : {".partial", ".tmp-", ".old-"})
+			EXPECT_EQ(e.path().filename().string().find(staged), std::string::npos) << e.path();
 }
 
 TEST(LocalisationApp, OutputsIdenticalWithoutGroundTruthAcrossRunsAndThreadCounts)
@@ -202,10 +204,11 @@ TEST(LocalisationApp, BadInputFailsCleanlyOrGivesNoFix)
 {
 	const auto& d = dataset();
 	std::string out;
-	// An earlier OUTDIR: a failed run leaves it as it was.
+	// An earlier OUTDIR (its marker says so): a failed run leaves it as it was.
 	const std::string outDir = d.dir + "/bad_out";
 	fs::create_directories(outDir);
 	writeText(outDir + "/frames.csv", "earlier\n");
+	writeText(outDir + "/.shadyloc-output", "shadyloc localise output\n");
 	const auto expectUntouched = [&](const std::string& what) {
 		EXPECT_EQ(contents(outDir + "/frames.csv"), "earlier\n") << what;
 		EXPECT_FALSE(fs::exists(outDir + "/summary.json")) << what;
@@ -303,3 +306,41 @@ TEST(LocalisationApp, BadInputFailsCleanlyOrGivesNoFix)
 }
 
 }  // namespace
+
+// -o replaces a folder only if it is an earlier localise output (or empty):
+// a folder of the user's files, or one holding the run's own inputs, is
+// refused by name with nothing deleted.
+TEST(LocalisationApp, OutputFolderReplacedOnlyIfAnEarlierLocaliseOutput)
+{
+	const auto& d = dataset();
+	std::string out;
+	// A folder of unrelated files.
+	const std::string mine = d.dir + "/mine";
+	fs::create_directories(mine);
+	writeText(mine + "/notes.txt", "mine\n");
+	EXPECT_NE(test::runCommand(localiseCmd(d.map, d.overcast, mine), &out), 0) << out;
+	EXPECT_NE(out.find("'" + mine + "'"), std::string::npos) << out;
+	EXPECT_EQ(contents(mine + "/notes.txt"), "mine\n");
+	EXPECT_FALSE(fs::exists(mine + "/frames.csv"));
+	expectNoStagedLeftovers(mine);
+
+	// The folder that holds the map, the live rawlog and its ground truth.
+	const std::string inputs = d.dir + "/inputs";
+	fs::create_directories(inputs);
+	for (const auto& f : {d.map, d.overcast, d.overcastGt}) fs::copy_file(f, inputs + "/" + fs::path(f).filename().string());
+	const std::string map = inputs + "/noon.kfmap", live = inputs + "/overcast.rawlog", gt = inputs + "/overcast.tum";
+	EXPECT_NE(test::runCommand(localiseCmd(map, live, inputs, " --gt " + gt), &out), 0) << out;
+	EXPECT_NE(out.find(inputs), std::string::npos) << out;
+	for (const auto& f : {map, live, gt}) EXPECT_TRUE(fs::is_regular_file(f)) << f << " deleted: " << out;
+
+	// An earlier localise output is replaced; so is an empty folder.
+	const std::string again = d.dir + "/again";
+	fs::create_directories(again);
+	ASSERT_EQ(test::runCommand(localiseCmd(d.map, d.overcast, again), &out), 0) << out;
+	EXPECT_TRUE(fs::is_regular_file(again + "/frames.csv"));
+	writeText(again + "/stale.txt", "from before\n");
+	ASSERT_EQ(test::runCommand(localiseCmd(d.map, d.overcast, again), &out), 0) << out;
+	EXPECT_FALSE(fs::exists(again + "/stale.txt"));
+	EXPECT_TRUE(fs::is_regular_file(again + "/summary.json"));
+	expectNoStagedLeftovers(again);
+}

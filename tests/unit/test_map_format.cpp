@@ -14,6 +14,7 @@
 #include <mrpt/maps/CMultiMetricMap.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <sys/stat.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -300,7 +301,7 @@ TEST(MapFormat, OldVersionAndLyingBlockSizesAreRefused)
 	const std::string name = "shadyloc::CKeyframeMap";
 	const size_t ver = 1 + name.size();	 // MRPT's header: 0x80 | length, the name, the version
 	ASSERT_EQ(std::string(good.begin() + 1, good.begin() + 1 + name.size()), name);
-	ASSERT_EQ(good[ver], 2);
+	ASSERT_EQ(good[ver], 3);
 	// The loader on bytes in memory (the fuzz entry point) loads them as the file loader does.
 	EXPECT_EQ(CKeyframeMap::LoadFromBytes(good.data(), good.size())->keyframeCount(), 6u);
 	try
@@ -382,7 +383,7 @@ TEST(MapFormat, Version1MapsStillLoad)
 	// populatedKeyframeMap) as version 1 wrote it, before the options held
 	// the landmark selection. It loads; its selection reads as the strongest
 	// corners (the only one then), the rest as stored; saved again it is a
-	// version 2 map that loads to the same content.
+	// map of the current version that loads to the same content.
 	const auto v1 = fileBytes(std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/CKeyframeMap_v1.bin");
 	const std::string name = "shadyloc::CKeyframeMap";
 	ASSERT_GT(v1.size(), 2 + name.size());
@@ -398,11 +399,113 @@ TEST(MapFormat, Version1MapsStillLoad)
 	EXPECT_EQ(m->channels()[1].label, "inv9");
 	EXPECT_EQ(m->runs(), (std::vector<std::string>{"dawn", "dusk"}));
 	EXPECT_EQ(m->keyframe(2).channels[1].size(), 3u);
-	const auto v2 = bytesOf(*m);
-	EXPECT_EQ(v2[1 + name.size()], 2);
-	const auto back = CKeyframeMap::LoadFromBytes(v2.data(), v2.size());
+	const auto v3 = bytesOf(*m);
+	EXPECT_EQ(v3[1 + name.size()], 3);
+	const auto back = CKeyframeMap::LoadFromBytes(v3.data(), v3.size());
 	EXPECT_TRUE(back->options == m->options);
-	EXPECT_EQ(bytesOf(*back), v2);
+	EXPECT_EQ(bytesOf(*back), v3);
+}
+
+// tests/golden/CKeyframeMap_v2.bin: the format-test map as version 2 wrote it
+// (checksums of the bytes alone). It loads, to the content the current
+// golden file (version 3) holds.
+TEST(MapFormat, Version2MapsStillLoad)
+{
+	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
+	const auto v2 = fileBytes(golden + "CKeyframeMap_v2.bin"), v3 = fileBytes(golden + "CKeyframeMap.bin");
+	const std::string name = "shadyloc::CKeyframeMap";
+	ASSERT_GT(v2.size(), 2 + name.size());
+	ASSERT_EQ(v2[1 + name.size()], 2) << "the fixture is not a version 2 map";
+	ASSERT_EQ(v3[1 + name.size()], 3);
+	const auto m = CKeyframeMap::LoadFromBytes(v2.data(), v2.size(), "CKeyframeMap_v2.bin");
+	EXPECT_EQ(bytesOf(*m), v3);
+}
+
+namespace
+{
+/** Offsets of the blocks of a saved map: [start of the block's header, end of its data). */
+std::vector<std::pair<size_t, size_t>> blockSpans(const std::vector<uint8_t>& b)
+{
+	const size_t ver = 1 + std::string("shadyloc::CKeyframeMap").size();
+	std::vector<std::pair<size_t, size_t>> spans;
+	size_t at = ver + 2;  // the version byte, the block count
+	for (int i = 0; i < b[ver + 1]; i++)
+	{
+		uint64_t comp;
+		std::memcpy(&comp, b.data() + at + 8, 8);
+		spans.emplace_back(at, at + 24 + comp);
+		at += 24 + comp;
+	}
+	return spans;
+}
+}  // namespace
+
+// Each block's checksum covered its bytes only: the two channels' blocks
+// swapped (headers and all) loaded, each channel with the other's
+// measurements. The sum now covers the block's position.
+TEST(MapFormat, SwappedChannelBlocksAreRefused)
+{
+	const auto good = bytesOf(*test::makeSyntheticMap(6, 8, 4));
+	const auto spans = blockSpans(good);
+	ASSERT_EQ(spans.size(), 3u);  // metadata, mono, invariant
+	ASSERT_EQ(spans.back().second + 1, good.size());  // then MRPT's end-of-object byte
+	std::vector<uint8_t> b(good.begin(), good.begin() + spans[1].first);
+	b.insert(b.end(), good.begin() + spans[2].first, good.begin() + spans[2].second);
+	b.insert(b.end(), good.begin() + spans[1].first, good.begin() + spans[1].second);
+	b.push_back(good.back());
+	ASSERT_EQ(b.size(), good.size());
+	ASSERT_NE(b, good);
+	try
+	{
+		CKeyframeMap::LoadFromBytes(b.data(), b.size(), "swapped.kfmap");
+		ADD_FAILURE() << "a map with its channel blocks swapped loaded";
+	}
+	catch (const std::runtime_error& e)
+	{
+		const std::string w = e.what();
+		EXPECT_NE(w.find("swapped.kfmap"), std::string::npos) << w;
+		EXPECT_NE(w.find("block 1: checksum mismatch"), std::string::npos) << w;
+	}
+}
+
+// The loader read the whole file before looking at its header: `map-info
+// /dev/zero` grew until bad_alloc, naming nothing. Now a file that is not
+// regular is refused unread, and the header is checked before the rest.
+TEST(MapFormat, NonRegularFilesAndForeignFilesAreRefusedUnread)
+{
+	const std::string dir = test::tempDir("map_not_regular");
+	ASSERT_EQ(::mkfifo((dir + "/fifo.kfmap").c_str(), 0600), 0);
+	for (const std::string& path : {std::string("/dev/zero"), dir, dir + "/fifo.kfmap"})
+	{
+		try
+		{
+			CKeyframeMap::LoadFromFile(path);
+			ADD_FAILURE() << path << " loaded";
+		}
+		catch (const std::runtime_error& e)
+		{
+			EXPECT_NE(std::string(e.what()).find("'" + path + "': not a regular file"), std::string::npos) << e.what();
+		}
+	}
+	// A large file of zeros: its first byte is no MRPT object header.
+	{
+		std::ofstream(dir + "/zeros.kfmap");
+		fs::resize_file(dir + "/zeros.kfmap", 64 << 20);
+		try
+		{
+			CKeyframeMap::LoadFromFile(dir + "/zeros.kfmap");
+			ADD_FAILURE() << "zeros loaded";
+		}
+		catch (const std::runtime_error& e)
+		{
+			EXPECT_NE(std::string(e.what()).find("zeros.kfmap': holds no MRPT object"), std::string::npos) << e.what();
+		}
+	}
+	// The program, with its memory capped in case the loader regresses.
+	std::string out;
+	EXPECT_NE(test::runCommand("ulimit -v 4000000; timeout 60 " + test::appPath() + " map-info /dev/zero", &out), 0)
+		<< out;
+	EXPECT_NE(out.find("'/dev/zero': not a regular file"), std::string::npos) << out;
 }
 
 TEST(MapFormat, KilledSavesLeaveThePreviousFileLoadable)

@@ -14,6 +14,11 @@
  * inputs by canonical path (through symbolic links) and by device/inode
  * (hard links), and may not contain an input (a directory replaced as a
  * whole). Outputs may not coincide or nest either.
+ *
+ * A folder output carries a marker file (kOutputMarker) naming the kind of
+ * output it is; an existing folder is replaced only if it is empty or
+ * carries the same marker: a folder the user filled, or another command's
+ * output, is refused with its name and left untouched.
  */
 #pragma once
 
@@ -38,6 +43,11 @@ class OutputTransaction : public mrpt::system::COutputLogger
 	 * output already declared is this input. */
 	void addInput(const std::string& path, const std::string& what = "input");
 
+	/** Declares an input folder whose files the command lists and reads
+	 * (e.g. every image in it): no output may lie anywhere inside it, or
+	 * the next run would read that output as an input. */
+	void addListedFolder(const std::string& path, const std::string& what);
+
 	/** Reserves an output file; returns the temporary path to write it to.
 	 * `what` names it in messages (e.g. "--stats"). Throws
 	 * std::invalid_argument: empty path, directory missing, an existing
@@ -45,8 +55,12 @@ class OutputTransaction : public mrpt::system::COutputLogger
 	std::string addFile(const std::string& path, const std::string& what = "output");
 
 	/** Reserves an output directory, replaced as a whole on commit(); returns
-	 * the temporary directory (created, empty). Same checks as addFile(). */
-	std::string addDirectory(const std::string& path, const std::string& what = "output");
+	 * the temporary directory (created, holding only the marker file). Same
+	 * checks as addFile(); `kind` (e.g. "shadyloc localise output") is
+	 * written to the marker, and an existing directory at `path` is refused
+	 * (std::invalid_argument naming it) unless it is empty or its marker
+	 * names the same kind. */
+	std::string addDirectory(const std::string& path, const std::string& what, const std::string& kind);
 
 	/** True if `path` is already an output of this transaction. */
 	bool hasOutput(const std::string& path) const;
@@ -65,9 +79,10 @@ class OutputTransaction : public mrpt::system::COutputLogger
 		std::string path, canonical, what;
 		uint64_t dev = 0, ino = 0;	//!< of an existing file (hard links)
 		bool isDir = false;
+		bool listed = false;  //!< an input folder whose files are all read
 		std::string tmp;  //!< outputs only
 	};
-	std::string reserve(const std::string& path, const std::string& what, bool dir);
+	std::string reserve(const std::string& path, const std::string& what, bool dir, const std::string& kind = "");
 	void checkAgainst(const TEntry& out, const TEntry& other, bool otherIsInput) const;
 	void reportStale(const std::string& dir);
 
@@ -75,6 +90,17 @@ class OutputTransaction : public mrpt::system::COutputLogger
 	std::vector<std::string> m_checkedDirs;	 //!< for stale temporaries
 	bool m_committed = false;
 };
+
+/** The file that marks a folder as a command's output: ".shadyloc-output",
+ * whose first line is the kind of output. */
+extern const char* const kOutputMarker;
+
+/** Throws std::invalid_argument (naming `path` as `what`) if `path` is an
+ * existing directory that is neither empty nor marked as output of `kind`. */
+void checkReplaceableFolder(const std::string& path, const std::string& what, const std::string& kind);
+
+/** Writes the marker of `kind` into the directory `dir`. */
+void markOutputFolder(const std::string& dir, const std::string& kind);
 
 /** The temporary sibling this process uses for `path`: "dir/.<stem>.tmp-<pid><ext>". */
 std::string temporaryPathFor(const std::string& path);

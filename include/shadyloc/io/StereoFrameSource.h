@@ -72,7 +72,8 @@ class StereoFrameSource
 
 	/** The next frame into f; false at the end of the rawlog. Throws
 	 * RawlogError "'<file>': object #<k>: frame <i> (sensor '<label>'): ..."
-	 * on a missing right image, empty or mismatched images, a calibration or
+	 * on a missing right image, a timestamp not after the previous frame's,
+	 * empty or mismatched images, a calibration or
 	 * image size other than the first frame's, a pair that is not rectified,
 	 * a failing transform, or any error of the reader. */
 	bool next(TStereoFrame& f);
@@ -98,6 +99,7 @@ class StereoFrameSource
 	std::set<std::string> m_otherLabels;
 	std::vector<mrpt::obs::CObservation::Ptr> m_pending;  //!< rest of the current sensory frame
 	size_t m_pendingObject = 0;
+	double m_lastTime = 0;  //!< the previous frame's timestamp [s]
 	// The first frame's, which every later frame must match.
 	mrpt::img::TStereoCamera m_camera;
 	geometry::TStereoCalib m_calib;
