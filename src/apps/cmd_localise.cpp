@@ -49,7 +49,7 @@ int run(int argc, char** argv)
 		"Localises a live stereo run against a dual-channel keyframe map (shadyloc survey) with the combined "
 		"system: live VO on the monochrome channel predicts for the localisers (mono, invariant), which run in "
 		"parallel; the monochrome fix is used when it succeeds, else the invariant one, else VO dead-reckons. "
-		"The run starts by a global search over the map (or at --start-kf). Writes OUTDIR/frames.csv, "
+		"The run starts by a global search over the map (or at --start-kf). Writes OUTDIR/frames.csv, solves.csv, "
 		"trajectory.tum, summary.json and timing.json (docs/localisation.md).");
 	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> mapArg("m", "map", "keyframe map (.kfmap)", true, "", "map.kfmap", cmd);
@@ -149,6 +149,7 @@ int run(int argc, char** argv)
 
 	// ---- outputs, all or nothing
 	writeFramesCsv(file("frames.csv"), ups, ev, *map);
+	writeSolvesCsv(file("solves.csv"), ups, ev);
 	writeTrajectory(file("trajectory.tum"), ups);
 	TLocaliseProvenance prov;
 	prov.buildCommit = SHADYLOC_GIT_COMMIT;

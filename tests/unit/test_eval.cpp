@@ -449,11 +449,11 @@ TEST(EvalApp, ResultsIdenticalAcrossWorkersAndJobs)
 		  "figures/figure7_noon__overcast.png", "figures/figure8_morning.png", "figures/figure9.png"})
 		EXPECT_TRUE(a.count(f)) << f;
 	// Outputs and plan, the map jobs (map, record), pairs/ (3 files each),
-	// the pair jobs (those 3 and the record), figures (Figure 7 per ordered
+	// the pair jobs (those 3, the solve log and the record), figures (Figure 7 per ordered
 	// pair, Figure 8 per live run, one Figure 9), and the marker of each
 	// folder replaced as a whole (15 jobs, pairs/, figures/); the PNGs
 	// compare too.
-	EXPECT_EQ(a.size(), 6u + 3 * 2 + 12 * 3 + 12 * 4 + 6 + 3 + 1 + 15 + 2);
+	EXPECT_EQ(a.size(), 6u + 3 * 2 + 12 * 3 + 12 * 5 + 6 + 3 + 1 + 15 + 2);
 	const auto same = [](const auto& x, const auto& y, const char* what) {
 		EXPECT_EQ(x.size(), y.size()) << what;
 		for (const auto& [name, bytes] : x)
