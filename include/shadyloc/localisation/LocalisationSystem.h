@@ -8,11 +8,14 @@
  * Not fused: the invariant estimate is noisier and slightly biased, so
  * switching beats fusing (the paper).
  *
- * Starting and recovering: with no known place (the start, a prediction
- * whose gates grew past the ceiling, or too many frames without a fix) every
- * localiser's global search runs on the frame; the first verified,
- * unambiguous place in policy order becomes the prediction, and fixes are
- * accepted again after K consistent frames.
+ * Stages per frame: the channels' front end and the motion source
+ * (frontEnd), the predictor and policy (CTrack, Track.h), the localisers,
+ * relocalisation (searchPlace). Starting and recovering: with no known
+ * place, and on a frame without a fix after relocalise_after_frames (or
+ * when every localiser is lost), every localiser's global search runs on
+ * that frame, around dead reckoning or in the whole map; the first
+ * verified, unambiguous place in policy order becomes the track, a new
+ * hypothesis confirmed by K consistent frames (the place the first).
  *
  * The MRPT-facing call: feed CObservationStereoImages one at a time
  * (processObservation), read one TLocalisationUpdate per frame.

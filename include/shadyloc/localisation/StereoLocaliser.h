@@ -4,8 +4,8 @@
  * channel from config (monochrome, illumination-invariant).
  *
  * Per frame (localise()):
- *   1. keyframe choice: from the predicted pose (the last fix composed with
- *      the VO increment, with covariance), the keyframe nearest a point
+ *   1. keyframe choice: from the predicted pose (the system's track, or a
+ *      tighter search seed), the keyframe nearest a point
  *      look-ahead metres in front of the camera along the chain, heading
  *      included (roads are driven both ways); the prediction is re-expressed
  *      in that keyframe with the inter-keyframe covariance;
@@ -14,15 +14,15 @@
  *      the prediction (vo::CKeyframeMatcher::predict), a chi-square gate with
  *      a floor; when the gates grow past the ceiling the localiser declares
  *      itself lost (it never clips a gate); BRIEF inside, patch refinement;
- *   3. RANSAC and the robust solve for T_kf_live with covariance, WITHOUT the
- *      motion prior (a RANSAC that favours the prediction would agree with it
- *      by construction, and the failure test would test nothing);
- *   4. the failure test: too few inliers; the fix against the prediction
- *      (catches a constant offset appearing, e.g. a wrong keyframe where the
- *      scenery repeats); the frame-to-frame motion of two consecutive solves
- *      against VO's (the paper's test), both Mahalanobis tests on the sum of
- *      the covariances; a fix is accepted only after K consecutive
- *      consistent frames after any failure.
+ *      the same for the chosen keyframe's neighbours along the chain (the
+ *      local map), their correspondences moved into the chosen keyframe;
+ *   3. one RANSAC and one robust solve for T_kf_live with covariance,
+ *      WITHOUT the motion prior (a RANSAC that favours the prediction would
+ *      agree with it by construction, and the failure test would test
+ *      nothing);
+ *   4. acceptance (CFixAcceptance): too few inliers, too uncertain, the fix
+ *      against the track's prediction, the frame-to-frame motion against
+ *      VO's; K consistent frames only for a new place.
  * Starting and recovering: globalSearch() votes with BRIEF over every
  * keyframe and verifies the best candidates geometrically (RANSAC + solve);
  * it never returns a place without a verified pose, nor an ambiguous one.
