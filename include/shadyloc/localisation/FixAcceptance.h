@@ -47,7 +47,7 @@ struct TMotion
 
 struct TAcceptanceOptions
 {
-	double prediction_chi2 = 22.46;	 //!< chi^2 with 6 dof (99.9 %) [-]
+	double prediction_chi2 = 16.81;	 //!< chi^2 with 6 dof (99 %) [-]
 	double motion_chi2 = 22.46;	 //!< [-]
 	int consistent_frames = 2;	//!< K: motion-tested consistent frames that confirm a new place
 };

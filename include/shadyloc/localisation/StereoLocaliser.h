@@ -131,10 +131,11 @@ struct TLocaliserOptions
 	int bootstrap_samples = 30;
 
 	/** A fix whose standard deviation (largest axis of the scaled covariance)
-	 * exceeds these is not accepted (status uncertain): at 3 sigma it could
-	 * not meet the accuracy a fix is judged by (0.5 m, 2 deg) [m], [deg]. */
-	double max_sigma_m = 0.5 / 3;
-	double max_sigma_deg = 2.0 / 3;
+	 * exceeds these is not accepted (status uncertain; 0 = no cap): 3.6 sigma
+	 * of the 0.5 m / 2 deg a fix is judged by; the NEES tail makes 3 sigma
+	 * too loose (docs/localisation.md, the trade-off) [m], [deg]. */
+	double max_sigma_m = 0.14;
+	double max_sigma_deg = 0.56;
 	/** An uncertain solve is a failure (K consistent frames needed again);
 	 * off: it is only not a fix, and when it passes the consistency tests it
 	 * neither counts towards K nor resets it. */
@@ -142,8 +143,8 @@ struct TLocaliserOptions
 
 	// ---- failure test
 	/** Fix against prediction: Mahalanobis distance^2 bound, chi^2 with 6 dof
-	 * (22.46 = 99.9 %) [-]. */
-	double prediction_chi2 = 22.46;
+	 * (16.81 = 99 %) [-]. */
+	double prediction_chi2 = 16.81;
 	/** Frame-to-frame motion of two consecutive solves against VO's [-]. */
 	double motion_chi2 = 22.46;
 	int consistent_frames = 3;	//!< K: consecutive consistent frames before fixes are accepted again
