@@ -22,10 +22,7 @@
 
 #include <shadyloc/localisation/FixAcceptance.h>
 
-#include <mrpt/config/CConfigFileBase.h>
 
-#include <ostream>
-#include <string>
 #include <vector>
 
 namespace shadyloc::localisation
