@@ -33,17 +33,6 @@ std::string toString(AcceptanceVerdict v)
 	return "?";
 }
 
-namespace
-{
-TPoseWithCov withCov(const TKeyframePose& p)
-{
-	TPoseWithCov r;
-	r.T = p.T_kf_live;
-	r.cov = p.cov;
-	return r;
-}
-}  // namespace
-
 TAcceptance CFixAcceptance::judge(
 	const TSolve& s, const TKeyframePose& pred, const TMotion& motion, bool trackConfirmed, bool countable,
 	const KeyframeLink& link)
@@ -53,7 +42,7 @@ TAcceptance CFixAcceptance::judge(
 	if (pred.valid)
 	{
 		// The prediction re-expressed in the solve's keyframe.
-		const TPoseWithCov p = pred.kf == s.pose.kf ? withCov(pred) : geometry::compose(link(s.pose.kf, pred.kf), withCov(pred));
+		const TPoseWithCov p = pred.kf == s.pose.kf ? pred.withCov() : geometry::compose(link(s.pose.kf, pred.kf), pred.withCov());
 		a.prediction_d2 = mahalanobis2(geometry::localLeft(s.pose.T_kf_live, p.T), p.cov + s.pose.cov);
 		if (a.prediction_d2 > m_opts.prediction_chi2)
 		{
@@ -66,7 +55,7 @@ TAcceptance CFixAcceptance::judge(
 	{
 		// The two solves' frame-to-frame motion: T_prev_curr = T_refkf_prev^-1 T_refkf_kf T_kf_curr.
 		const TPoseWithCov D = geometry::compose(
-			geometry::compose(geometry::inverse(withCov(m_ref->pose)), link(m_ref->pose.kf, s.pose.kf)), withCov(s.pose));
+			geometry::compose(geometry::inverse(m_ref->pose.withCov()), link(m_ref->pose.kf, s.pose.kf)), s.pose.withCov());
 		a.motion_d2 = mahalanobis2(geometry::localLeft(D.T, motion.T_prev_curr), D.cov + motion.cov);
 		if (a.motion_d2 > m_opts.motion_chi2 && consistent)
 		{

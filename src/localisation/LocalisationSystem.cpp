@@ -539,12 +539,7 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 	if (fix)
 	{
 		u.used = fix->channel;
-		TKeyframePose f;
-		f.valid = true;
-		f.kf = fix->kf_id;
-		f.T_kf_live = fix->T_kf_live;
-		f.cov = fix->cov;
-		m_track.fix(f);
+		m_track.fix(fix->pose());
 	}
 	else
 	{
@@ -553,15 +548,7 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 		for (const size_t i : order)
 		{
 			allLost &= res[i].status == LocaliserStatus::Lost;
-			if (res[i].status == LocaliserStatus::Unconfirmed)
-			{
-				TKeyframePose s;
-				s.valid = true;
-				s.kf = res[i].kf_id;
-				s.T_kf_live = res[i].T_kf_live;
-				s.cov = res[i].cov;
-				seeds.push_back(s);
-			}
+			if (res[i].status == LocaliserStatus::Unconfirmed) seeds.push_back(res[i].pose());
 		}
 		m_track.noFix(seeds);
 		// ---- relocalisation, on this frame

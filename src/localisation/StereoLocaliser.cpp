@@ -319,9 +319,7 @@ void CStereoLocaliser::searchLocalMap(
 	out = vo::TKeyframeMatchOutput();
 	const geometry::TStereoCalib calibKf = m_map.calibration();
 	const Eigen::Isometry3d T_map_pred = m_map.keyframe(ref).T_map_kf * pred.T_kf_live;
-	TPoseWithCov p;
-	p.T = pred.T_kf_live;
-	p.cov = pred.cov;
+	const TPoseWithCov p = pred.withCov();
 	// A live measurement goes to the landmark of the keyframe nearest the
 	// live camera (searched first): the most similar viewpoint.
 	std::vector<uint8_t> taken(in.meas->meas.size(), 0);
@@ -445,10 +443,7 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 	if (uncertain && o.uncertain_breaks_chain) return fail(LocaliserStatus::Uncertain);
 	TSolve sv;
 	sv.frame = in.frame;
-	sv.pose.valid = true;
-	sv.pose.kf = pred.kf;
-	sv.pose.T_kf_live = r.T_kf_live;
-	sv.pose.cov = r.cov;
+	sv.pose = r.pose();  // r.kf_id is pred.kf
 	const TAcceptance acc = m_accept.judge(
 		sv, in.prediction, in.motion, in.track_confirmed, !uncertain, [this](uint32_t a, uint32_t b) { return between(a, b); });
 	r.prediction_d2 = acc.prediction_d2;

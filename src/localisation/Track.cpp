@@ -14,14 +14,6 @@ namespace
 {
 constexpr double kDeg = M_PI / 180.0;
 
-TPoseWithCov withCov(const TKeyframePose& p)
-{
-	TPoseWithCov r;
-	r.T = p.T_kf_live;
-	r.cov = p.cov;
-	return r;
-}
-
 /** p composed with the step (its covariance plus `drift`). */
 TKeyframePose propagate(const TKeyframePose& p, const TMotion& m, const Matrix6d& drift)
 {
@@ -29,7 +21,7 @@ TKeyframePose propagate(const TKeyframePose& p, const TMotion& m, const Matrix6d
 	TPoseWithCov step;
 	step.T = m.T_prev_curr;
 	step.cov = m.cov + drift;
-	const TPoseWithCov c = geometry::compose(withCov(p), step);
+	const TPoseWithCov c = geometry::compose(p.withCov(), step);
 	TKeyframePose out = p;
 	out.T_kf_live = c.T;
 	out.cov = c.cov;

@@ -35,6 +35,14 @@ struct TKeyframePose
 	uint32_t kf = 0;  //!< map keyframe id
 	Eigen::Isometry3d T_kf_live = Eigen::Isometry3d::Identity();  //!< live left camera in the keyframe's left camera
 	geometry::Matrix6d cov = geometry::Matrix6d::Zero();
+
+	geometry::TPoseWithCov withCov() const
+	{
+		geometry::TPoseWithCov p;
+		p.T = T_kf_live;
+		p.cov = cov;
+		return p;
+	}
 };
 
 /** VO's motion from the previous frame to this one. */

@@ -236,6 +236,16 @@ struct TLocaliserResult
 	LocaliserStatus status = LocaliserStatus::NoPrediction;
 	bool solved = false;  //!< a pose was solved (T_kf_live, cov meaningful)
 	bool accepted() const { return status == LocaliserStatus::Ok; }
+	/** The solve as a pose in its keyframe (invalid when nothing was solved). */
+	TKeyframePose pose() const
+	{
+		TKeyframePose p;
+		p.valid = solved;
+		p.kf = kf_id;
+		p.T_kf_live = T_kf_live;
+		p.cov = cov;
+		return p;
+	}
 	uint32_t kf_id = 0;	 //!< the keyframe localised against
 	uint16_t kf_run = 0;  //!< its survey run (CKeyframeMap::runs())
 	uint64_t kf_frame = 0;	//!< its frame in the survey run
