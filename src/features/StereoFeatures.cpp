@@ -180,6 +180,24 @@ float zncc(const cv::Mat& a, int xa, int ya, const cv::Mat& b, int xb, int yb, i
 	return static_cast<float>((sab - double(sa) * sb / n) / std::sqrt(va * vb));
 }
 
+bool matchAlongRow(
+	const cv::Mat& left, int xl, int y, const cv::Mat& right, float uRPred, int halfRange, int r, float minZncc,
+	int iterations, float& uR)
+{
+	const int x0 = static_cast<int>(std::lround(uRPred));
+	const int lo = x0 - halfRange - 1, hi = x0 + halfRange + 1;	// one beyond, for the parabola
+	if (xl - r < 0 || xl + r >= left.cols || y - r < 0 || y + r >= left.rows || lo - r < 0 || hi + r >= right.cols)
+		return false;
+	std::vector<float> c(static_cast<size_t>(hi - lo + 1));
+	for (int x = lo; x <= hi; x++) c[static_cast<size_t>(x - lo)] = zncc(left, xl, y, right, x, y, r);
+	const auto best = std::max_element(c.begin() + 1, c.end() - 1);
+	if (*best < minZncc) return false;
+	const size_t i = static_cast<size_t>(best - c.begin());
+	const float xs = static_cast<float>(lo + static_cast<int>(i)) + parabolaPeak(c[i - 1], c[i], c[i + 1]);
+	uR = iterations > 0 ? refineRowShift(left, xl, y, right, xs, r, iterations) : xs;
+	return true;
+}
+
 namespace
 {
 /** Keys' cubic convolution weights (a = -1/2) at fraction t and their derivatives. */
@@ -558,6 +576,7 @@ void StereoFeatureExtractor::process(
 		cv::GaussianBlur(rightIn, right, cv::Size(), o.presmooth_sigma);
 	}
 	out.left = left;  // what the patches come from: later frames correlate against this
+	out.right = right;
 	const int r = o.patch_radius;
 	const int borderL = std::max({m_brief.radius() + 1, r + 4, kPatchSize / 2 + 3});
 	const int borderR = r + 3;
@@ -726,6 +745,7 @@ void StereoFeatureExtractor::process(
 		}
 		out.meas.push_back(m);
 	}
+	out.smoothed = smoothed;
 	out.timings.describe_ms = msSince(t0);
 }
 

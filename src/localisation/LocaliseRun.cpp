@@ -321,7 +321,7 @@ void writeSolvesCsv(const std::string& path, const std::vector<TLocalisationUpda
 {
 	io::CsvWriter csv(
 		path,
-		"frame,channel,status,kf_id,matches,inliers,rms_px,var_factor,sigma_m,sigma_deg,prediction_d2,motion_d2,"
+		"frame,channel,status,kf_id,matches,warped,patch_matches,inliers,rms_px,var_factor,sigma_m,sigma_deg,prediction_d2,motion_d2,"
 		"consistent,track_confirmed,used,err_m,err_deg,nees");
 	auto& o = csv.out();
 	o << std::fixed;
@@ -334,7 +334,7 @@ void writeSolvesCsv(const std::string& path, const std::vector<TLocalisationUpda
 			const auto& r = u.localisers[c];
 			if (!r.solved) continue;
 			o << u.frame << ',' << r.channel << ',' << toString(r.status) << ',' << r.kf_id << ',' << r.matches << ','
-			  << r.inliers << ',' << std::setprecision(3) << r.rms_px << ',' << r.var_factor << ',' << std::setprecision(5)
+			  << r.warped << ',' << r.patch_matches << ',' << r.inliers << ',' << std::setprecision(3) << r.rms_px << ',' << r.var_factor << ',' << std::setprecision(5)
 			  << r.sigma_m << ',' << r.sigma_deg << ',' << std::setprecision(3) << r.prediction_d2 << ',' << r.motion_d2
 			  << ',' << r.consistent << ',' << int(u.track_confirmed) << ',' << int(u.used == r.channel) << ',';
 			if (c < f.solve_err_m.size() && f.solve_err_m[c] >= 0)

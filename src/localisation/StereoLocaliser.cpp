@@ -144,6 +144,7 @@ vo::TKeyframeMatcherOptions matcherOptionsFor(const TLocaliserOptions& o, Search
 	m.refine_min_zncc = o.refine_min_zncc;
 	m.refine_radius = o.refine_radius_px;
 	m.refine_iterations = o.refine_iterations;
+	m.patch_search_radius_px = o.patch_search_radius_px;
 	m.sigma_px = o.sigma_px;
 	m.min_matches = 0;	// never widen on its own: the localiser decides
 	switch (mode)
@@ -155,10 +156,14 @@ vo::TKeyframeMatcherOptions matcherOptionsFor(const TLocaliserOptions& o, Search
 			m.gate_max_px = o.gate_max_px;
 			m.gate_landmark_max_px = o.gate_landmark_max_px;
 			m.gate_clamp = false;
+			m.warp = o.warp_patches;
+			m.warp_min_distortion = o.warp_min_distortion;
 			break;
 		case SearchMode::Window:
 			m.region = vo::SearchRegion::Circle;
 			m.search_radius_px = m.search_radius_lost_px = o.window_px;
+			m.warp = o.warp_patches;
+			m.warp_min_distortion = o.warp_min_distortion;
 			break;
 		case SearchMode::Global:
 			// A circle larger than any image around an identity projection:
@@ -223,6 +228,9 @@ CStereoLocaliser::CStereoLocaliser(const CKeyframeMap& map, const std::string& c
 	  m_gateMatcher(matcherOptionsFor(o, SearchMode::Gate)),
 	  m_placeMatcher(placeMatcherOptions(o)),
 	  m_estimator(estimatorOptionsFor(o)),
+	  m_brief(
+		  map.channels()[map.channelIndex(channel)].brief_patch_size,
+		  map.channels()[map.channelIndex(channel)].brief_seed),
 	  m_accept(TAcceptanceOptions{o.prediction_chi2, o.motion_chi2, o.consistent_frames})
 {
 	m_opts.validate();
@@ -312,11 +320,70 @@ std::vector<uint32_t> CStereoLocaliser::window(uint32_t ref, const Eigen::Isomet
 	return w;
 }
 
+namespace
+{
+/** A correspondence with a landmark of keyframe k moved into keyframe ref's
+ * frame; its measurement there is the landmark's projection (the two-view
+ * adjustment needs one). False when it lies behind ref's camera. */
+bool intoReference(
+	geometry::TStereoCorrespondence& corr, const Eigen::Isometry3d& T_ref_k, const geometry::TStereoCalib& calibKf)
+{
+	corr.P_ref = T_ref_k * corr.P_ref;
+	corr.cov_ref = T_ref_k.linear() * corr.cov_ref * T_ref_k.linear().transpose();
+	if (!(corr.P_ref.z() > 0.5)) return false;
+	corr.z_ref = calibKf.project(corr.P_ref);
+	corr.calib_ref = calibKf;
+	return true;
+}
+}  // namespace
+
+void CStereoLocaliser::searchLocalMapByPatches(
+	const TLocaliserInput& in, uint32_t ref, const Eigen::Isometry3d& T_curr_ref, vo::TKeyframeMatchOutput& out,
+	std::vector<uint32_t>& keyframeOf) const
+{
+	const geometry::TStereoCalib calibKf = m_map.calibration();
+	cv::Mat occupied = cv::Mat::zeros(in.meas->left.size(), CV_8UC1);
+	for (const auto& c : out.corr)
+	{
+		const int x = static_cast<int>(std::lround(c.z_curr.x())), y = static_cast<int>(std::lround(c.z_curr.y()));
+		if (x >= 0 && y >= 0 && x < occupied.cols && y < occupied.rows) occupied.at<uint8_t>(y, x) = 1;
+	}
+	const Eigen::Isometry3d T_map_curr = m_map.keyframe(ref).T_map_kf * T_curr_ref.inverse();
+	for (const uint32_t k : window(ref, T_map_curr))
+	{
+		const auto& lms = m_map.measurements(k, m_channel);
+		std::vector<uint8_t> skip(lms.size(), 0);
+		for (size_t c = 0; c < out.landmark.size(); c++)
+			if (keyframeOf[c] == k) skip[static_cast<size_t>(out.landmark[c])] = 1;
+		const Eigen::Isometry3d T_ref_k = between(ref, k).T;
+		vo::TKeyframeMatchInput mi;
+		mi.landmarks = &lms;
+		mi.calib_kf = calibKf;
+		mi.frame = in.meas;
+		mi.calib = in.calib;
+		mi.T_curr_kf_pred = T_curr_ref * T_ref_k;
+		mi.brief = &m_brief;
+		vo::TKeyframeMatchOutput mo;
+		m_gateMatcher.searchPatches(mi, skip, occupied, mo);
+		for (size_t c = 0; c < mo.corr.size(); c++)
+		{
+			geometry::TStereoCorrespondence corr = mo.corr[c];
+			if (k != ref && !intoReference(corr, T_ref_k, calibKf)) continue;
+			out.corr.push_back(corr);
+			out.landmark.push_back(mo.landmark[c]);
+			out.measurement.push_back(-1);
+			keyframeOf.push_back(k);
+		}
+		out.warped += mo.warped;
+	}
+}
+
 void CStereoLocaliser::searchLocalMap(
 	const TLocaliserInput& in, uint32_t ref, const TKeyframePose& pred, double gateScale,
-	vo::TKeyframeMatchOutput& out) const
+	vo::TKeyframeMatchOutput& out, std::vector<uint32_t>& keyframeOf) const
 {
 	out = vo::TKeyframeMatchOutput();
+	keyframeOf.clear();
 	const geometry::TStereoCalib calibKf = m_map.calibration();
 	const Eigen::Isometry3d T_map_pred = m_map.keyframe(ref).T_map_kf * pred.T_kf_live;
 	const TPoseWithCov p = pred.withCov();
@@ -335,30 +402,23 @@ void CStereoLocaliser::searchLocalMap(
 		mi.calib = in.calib;
 		mi.T_curr_kf_pred = pinv.T;
 		mi.cov_T_curr_kf_pred = pinv.cov * (gateScale * gateScale);
+		mi.brief = &m_brief;
 		vo::TKeyframeMatchOutput mo;
 		m_matcher.match(mi, mo);
 		if (k == ref) out.gate = mo.gate;  // the lost test reads the reference keyframe's gates
 		out.descriptor_matches += mo.descriptor_matches;
+		out.warped += mo.warped;
 		for (size_t c = 0; c < mo.corr.size(); c++)
 		{
 			const int m = mo.measurement[c];
 			if (taken[static_cast<size_t>(m)]) continue;
 			geometry::TStereoCorrespondence corr = mo.corr[c];
-			if (k != ref)
-			{
-				// Into the reference keyframe; its measurement there is the
-				// landmark's projection (the two-view adjustment needs one).
-				const Eigen::Isometry3d& T = T_ref_k.T;
-				corr.P_ref = T * corr.P_ref;
-				corr.cov_ref = T.linear() * corr.cov_ref * T.linear().transpose();
-				if (!(corr.P_ref.z() > 0.5)) continue;
-				corr.z_ref = calibKf.project(corr.P_ref);
-				corr.calib_ref = calibKf;
-			}
+			if (k != ref && !intoReference(corr, T_ref_k.T, calibKf)) continue;
 			taken[static_cast<size_t>(m)] = 1;
 			out.corr.push_back(corr);
 			out.landmark.push_back(mo.landmark[c]);
 			out.measurement.push_back(m);
+			keyframeOf.push_back(k);
 		}
 	}
 }
@@ -464,6 +524,7 @@ LocaliserStatus CStereoLocaliser::searchAndSolve(
 	pi.T_curr_ref_pred = nullptr;
 	pi.seed = static_cast<uint32_t>(in.frame * 2654435761u + 7);
 	LocaliserStatus status = LocaliserStatus::Ok;
+	std::vector<uint32_t> keyframeOf;  // per correspondence of mo: its landmark's keyframe
 	// A frame that fails both searches reports its first (the gates as predicted).
 	TLocaliserResult first;
 	bool retried = false;
@@ -476,9 +537,10 @@ LocaliserStatus CStereoLocaliser::searchAndSolve(
 			first = r;
 			retried = true;
 		}
-		searchLocalMap(in, ref, pred, attempt == 0 ? 1.0 : o.retry_gate_scale, mo);
+		searchLocalMap(in, ref, pred, attempt == 0 ? 1.0 : o.retry_gate_scale, mo, keyframeOf);
 		r.gate = mo.gate;
 		r.matches = static_cast<int>(mo.corr.size());
+		r.warped = mo.warped;
 		if (o.search == SearchMode::Gate && mo.gate.predicted > 0 &&
 			mo.gate.overflow > o.max_overflow_fraction * mo.gate.predicted)
 		{
@@ -507,8 +569,33 @@ LocaliserStatus CStereoLocaliser::searchAndSolve(
 	{
 		r.gate = first.gate;
 		r.matches = first.matches;
+		r.warped = first.warped;
 		r.inliers = first.inliers;
 		r.rms_px = first.rms_px;
+	}
+	if (status == LocaliserStatus::Ok && o.patch_search)
+	{
+		// The second pass: at the solved pose the unmatched landmarks are
+		// found by their patches alone, and the frame is solved again.
+		vo::TKeyframeMatchOutput more = mo;
+		searchLocalMapByPatches(in, ref, po.T_curr_ref, more, keyframeOf);
+		const int added = static_cast<int>(more.corr.size() - mo.corr.size());
+		vo::TRelativePoseOutput po2;
+		if (added > 0)
+		{
+			pi.corr = &more.corr;
+			m_estimator.estimate(pi, po2);
+		}
+		if (added > 0 && po2.ok() && po2.inliers >= po.inliers)
+		{
+			mo = std::move(more);
+			po = po2;
+			r.matches = static_cast<int>(mo.corr.size());
+			r.warped = mo.warped;
+			r.patch_matches = added;
+			r.inliers = static_cast<int>(po.inliers);
+			r.rms_px = po.rms_px;
+		}
 	}
 	return status;
 }
@@ -601,6 +688,7 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 		p1.cov = geometry::invertCovariance(po.T_curr_ref.inverse(), o.cov_scale * po.cov_T_ref_curr);
 		mi.T_curr_kf_pred = p1.T;
 		mi.cov_T_curr_kf_pred = p1.cov;
+		mi.brief = &m_brief;  // a pose now: the second pass may warp
 		vo::TKeyframeMatchOutput mo2;
 		m_gateMatcher.match(mi, mo2);
 		vo::TRelativePoseOutput po2;

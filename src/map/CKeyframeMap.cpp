@@ -22,6 +22,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -55,6 +56,26 @@ constexpr const char* kClass = "shadyloc::CKeyframeMap";
 // Bytes per stored measurement: uL, v, disparity, response (u16 each), zncc
 // (i8), BRIEF (32), patch.
 constexpr size_t kMeasBytes = 2 + 2 + 2 + 2 + 1 + 32 + features::kPatchSize * features::kPatchSize;
+constexpr size_t kNormalBytes = 3;	//!< version 4: the surface normal, 3 x int8
+
+/** A unit normal as stored: each component times 127, rounded; (0, 0, 0) = unknown. */
+std::array<int8_t, 3> normalCode(const Eigen::Vector3f& n)
+{
+	std::array<int8_t, 3> c{};
+	for (int i = 0; i < 3; i++) c[i] = static_cast<int8_t>(std::clamp<long>(std::lround(n(i) * 127.f), -127, 127));
+	return c;
+}
+
+/** The normal a stored code stands for, code / 127 (not renormalised, so
+ * that coding it again gives the same code: a loaded map saves to the same
+ * bytes); false for a code no unit normal makes (its length, 127 for a unit
+ * normal, off by more than rounding can). */
+bool normalFromCode(const std::array<int8_t, 3>& c, Eigen::Vector3f& n)
+{
+	n = Eigen::Vector3f(c[0], c[1], c[2]) / 127.f;
+	const float len = n.norm();
+	return len == 0.f || (len > 0.98f && len < 1.02f);
+}
 constexpr uint8_t kMaxChannels = 16;
 /** Largest serialised map (and block) a reader accepts [bytes]: 64 GiB, far
  * beyond any map (150,000 keyframes of 120 measurements per channel are ~3.7 GB). */
@@ -294,6 +315,8 @@ void TKeyframeMapOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase
 	r.read("selection_grid_cols", selection_grid_cols);
 	r.read("selection_grid_rows", selection_grid_rows);
 	r.read("patch_bits", patch_bits);
+	r.read("surface_normals", surface_normals);
+	r.read("normal_window_px", normal_window_px);
 	r.read("compression_level", compression_level);
 	r.read("index_cell_m", index_cell_m);
 	r.read("draw_landmarks", draw_landmarks);
@@ -328,6 +351,8 @@ void TKeyframeMapOptions::dumpToTextStream(std::ostream& out) const
 	w.value("selection_grid_cols", selection_grid_cols, "landmark selection buckets across the image");
 	w.value("selection_grid_rows", selection_grid_rows, "... and down the image");
 	w.value("patch_bits", patch_bits, "bits kept of each stored patch pixel, 1..8 (fewer compress better)");
+	w.value("surface_normals", surface_normals, "store a surface normal per landmark (patches warped to the live viewpoint)");
+	w.value("normal_window_px", normal_window_px, "normals: plane fitted to the (2r+1)^2 dense disparities around a landmark [px]");
 	w.value("compression_level", compression_level, "zstd level 1 (fast) .. 22 (small)");
 	w.value("index_cell_m", index_cell_m, "cell of the spatial hash grid over camera centres [m]");
 	w.value("draw_landmarks", draw_landmarks, "drawings show landmarks, coloured by channel");
@@ -352,6 +377,7 @@ void TKeyframeMapOptions::validate() const
 	need(selection_grid_cols >= 1 && selection_grid_cols <= 256, "selection_grid_cols must be in 1..256");
 	need(selection_grid_rows >= 1 && selection_grid_rows <= 256, "selection_grid_rows must be in 1..256");
 	need(patch_bits >= 1 && patch_bits <= 8, "patch_bits must be in 1..8");
+	need(normal_window_px >= 2 && normal_window_px <= 32, "normal_window_px must be in 2..32 [px]");
 	need(compression_level >= 1 && compression_level <= 22, "compression_level must be in 1..22");
 	need(index_cell_m > 0 && std::isfinite(index_cell_m), "index_cell_m must be > 0 [m]");
 	need(draw_landmark_max_depth_m > 0, "draw_landmark_max_depth_m must be > 0 [m]");
@@ -428,6 +454,7 @@ bool CKeyframeMap::quantise(features::TStereoMeasurement& m, const map::TChannel
 	m.response = static_cast<float>(std::clamp<long>(std::lround(m.response), 0, 65535));
 	m.zncc = static_cast<float>(std::clamp<long>(std::lround(m.zncc * 127.f), -127, 127)) / 127.f;
 	for (auto& p : m.patch) p = dequantisePixel(static_cast<uint8_t>(p >> (8 - options.patch_bits)), options.patch_bits);
+	if (!normalFromCode(normalCode(m.normal), m.normal)) m.normal.setZero();  // not unit: unknown
 	Eigen::Matrix3d J;
 	if (!m_calib.triangulate(m.uL, m.v, m.uR, m.P, &J)) return false;
 	m.cov = m_calib.triangulationCovariance(J, ch.sigma_px);
@@ -691,6 +718,11 @@ static TBlocks encode(
 														: uint8_t(mm.patch[i] >> sh);
 				x.bytes(row, sizeof(row));
 			}
+			for (const auto& mm : ms)
+			{
+				const auto nc = normalCode(mm.normal);
+				x.bytes(nc.data(), nc.size());
+			}
 		}
 		b.channels.push_back(std::move(x.buf));
 	}
@@ -705,7 +737,9 @@ static TBlocks encode(
 //    version 1 map reads as thinned by the strongest corners.
 // 3: each channel block's checksum covers its position (blockSum): blocks
 //    swapped between channels fail the load.
-uint8_t CKeyframeMap::serializeGetVersion() const { return 3; }
+// 4: a surface normal per measurement (3 x int8 after the patches), for
+//    warped matching; maps of versions 1-3 load without normals.
+uint8_t CKeyframeMap::serializeGetVersion() const { return 4; }
 
 void CKeyframeMap::serializeTo(mrpt::serialization::CArchive& out) const
 {
@@ -734,6 +768,7 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 		case 1:
 		case 2:
 		case 3:
+		case 4:
 		{
 			// The stream's size is unknown here: the budget is the largest map
 			// (kMaxSerializedBytes); offsets count from the object's data.
@@ -816,7 +851,7 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 				for (uint32_t i = 0; i < nk; i++)
 				{
 					const auto n = x.get<uint32_t>();
-					x.requireItems(n, kMeasBytes, "measurement");
+					x.requireItems(n, kMeasBytes + (version >= 4 ? kNormalBytes : 0), "measurement");
 					auto& ms = kfs[i].channels[c];
 					ms.resize(n);
 					for (auto& m : ms) m.uL = static_cast<float>(x.get<uint16_t>()) / kPixelQuantum;
@@ -842,6 +877,13 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 							p = dequantisePixel(p, o.patch_bits);
 						}
 					}
+					if (version >= 4)
+						for (auto& m : ms)
+						{
+							std::array<int8_t, 3> nc;
+							x.bytes(nc.data(), nc.size());
+							if (!normalFromCode(nc, m.normal)) x.fail("surface normal not of unit length");
+						}
 					for (size_t j = 0; j < ms.size(); j++)
 					{
 						Eigen::Matrix3d J;

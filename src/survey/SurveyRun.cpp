@@ -1,5 +1,6 @@
 /* ShadyLoc — a survey rawlog into a keyframe map (docs/map.md). */
 #include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/features/SurfaceNormals.h>
 #include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/survey/SurveyBuilder.h>
 #include <shadyloc/survey/SurveyRun.h>
@@ -222,6 +223,15 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 				features::TStereoFrame fr;
 				channels[c].extractor.process(channels[c].frame.left, channels[c].frame.right, calib, fr);
 				meas[c] = std::move(fr.meas);
+			}
+			if (kfmap.options.surface_normals)
+			{
+				// One dense disparity image, from the chain's channel: the
+				// geometry it measures is every channel's.
+				features::TSurfaceNormalOptions no;
+				no.window_radius_px = kfmap.options.normal_window_px;
+				const cv::Mat disp = features::denseDisparity(f0.left, f0.right, no);
+				for (auto& m : meas) features::estimateNormals(disp, calib, no, m);
 			}
 			std::optional<Eigen::Isometry3d> T_gt;
 			if (I.opts.gt)

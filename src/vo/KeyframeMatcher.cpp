@@ -1,10 +1,13 @@
 /* ShadyLoc — the keyframe matcher (stereo VO stage, reused by the localisers). */
 #include <shadyloc/vo/KeyframeMatcher.h>
 
+#include <shadyloc/features/PatchWarp.h>
+
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
 #include <algorithm>
+#include <optional>
 #include <cmath>
 #include <stdexcept>
 
@@ -47,6 +50,15 @@ void checkInput(const TKeyframeMatchInput& in)
 }  // namespace
 
 CKeyframeMatcher::CKeyframeMatcher(const TOptions& o) : m_opts(o) {}
+
+bool CKeyframeMatcher::warpOf(
+	const TKeyframeMatchInput& in, const features::TStereoMeasurement& lm, Eigen::Matrix2d& A) const
+{
+	if (!m_opts.warp || !in.brief || in.frame->smoothed.empty() || lm.normal.isZero()) return false;
+	return features::planeInducedAffine(
+			   in.calib_kf, in.calib, in.T_curr_kf_pred, lm.P, lm.normal.cast<double>(), A) &&
+		   features::warpDistortion(A) > m_opts.warp_min_distortion;
+}
 
 TPredictedMeasurement CKeyframeMatcher::predict(
 	const geometry::TStereoCalib& calib, const Eigen::Isometry3d& T_curr_kf, const geometry::Matrix6d& cov_T,
@@ -154,6 +166,12 @@ int CKeyframeMatcher::searchDescriptors(
 		const int r0 = std::max(0, static_cast<int>((v - hv) / MeasGrid::kCell));
 		const int r1 = std::min(grid.rows - 1, static_cast<int>((v + hv) / MeasGrid::kCell));
 		int b1 = 999, b2 = 999, bi = -1;
+		// Through the landmark's warp, the candidates' descriptors are made
+		// again with the warped tests (features/PatchWarp.h).
+		Eigen::Matrix2d A;
+		std::optional<features::CWarpedBriefPattern> warped;
+		if (warpOf(in, kfm[j], A)) warped.emplace(*in.brief, A);
+		features::TBriefDescriptor wd;
 		for (int rr = r0; rr <= r1; rr++)
 			for (int cc = c0; cc <= c1; cc++)
 				for (int i : grid.cells[rr * grid.cols + cc])
@@ -169,7 +187,10 @@ int CKeyframeMatcher::searchDescriptors(
 						const double du = m.uL - u, dv = m.v - v;
 						if (du * du + dv * dv > r2) continue;
 					}
-					const int d = features::hamming(kfm[j].desc, m.desc);
+					const int d = !warped ? features::hamming(kfm[j].desc, m.desc)
+										  : warped->compute(in.frame->smoothed, static_cast<int>(m.uL), static_cast<int>(m.v), wd)
+											  ? features::hamming(kfm[j].desc, wd)
+											  : 999;
 					if (d < b1)
 					{
 						b2 = b1;
@@ -204,6 +225,58 @@ int CKeyframeMatcher::searchDescriptors(
 	return static_cast<int>(std::count_if(matchOf.begin(), matchOf.end(), [](int i) { return i >= 0; }));
 }
 
+void CKeyframeMatcher::searchPatches(
+	const TKeyframeMatchInput& in, const std::vector<uint8_t>& skip, cv::Mat& occupied, TKeyframeMatchOutput& out) const
+{
+	checkInput(in);
+	const auto& o = m_opts;
+	const auto& kfm = *in.landmarks;
+	const auto& fr = *in.frame;
+	if (fr.right.empty() || skip.size() != kfm.size() || occupied.size() != fr.left.size() || occupied.type() != CV_8UC1)
+		throw std::invalid_argument("CKeyframeMatcher::searchPatches: no right image, or skip/occupied of the wrong size");
+	const int margin = features::kPatchSize + o.patch_search_radius_px + 8;
+	for (size_t j = 0; j < kfm.size(); j++)
+	{
+		if (skip[j]) continue;
+		const Eigen::Vector3d p = in.T_curr_kf_pred * kfm[j].P;
+		if (p.z() < 0.5) continue;
+		const Eigen::Vector3d z = in.calib.project(p);
+		const int x0 = static_cast<int>(std::lround(z.x())), y0 = static_cast<int>(std::lround(z.y()));
+		if (x0 < margin || y0 < margin || x0 >= fr.left.cols - margin || y0 >= fr.left.rows - margin) continue;
+		Eigen::Matrix2d A;
+		const bool warped = warpOf(in, kfm[j], A);
+		float xs, ys;
+		if (warped ? !features::locateWarpedPatch(
+						 kfm[j].patch, fr.left, x0, y0, A, o.patch_search_radius_px, o.refine_min_zncc,
+						 o.refine_iterations, xs, ys)
+				   : !features::locatePatch(
+						 kfm[j].patch, fr.left, x0, y0, o.patch_search_radius_px, o.refine_min_zncc, o.refine_iterations,
+						 xs, ys))
+			continue;
+		const int xi = static_cast<int>(std::lround(xs)), yi = static_cast<int>(std::lround(ys));
+		if (xi < 0 || yi < 0 || xi >= occupied.cols || yi >= occupied.rows || occupied.at<uint8_t>(yi, xi)) continue;
+		// The column in the right image: the predicted disparity carried to
+		// the found pixel, refined along the row.
+		float uR;
+		if (!features::matchAlongRow(
+				fr.left, xi, yi, fr.right, static_cast<float>(xi - (z.x() - z.z())), o.patch_stereo_range_px, 3,
+				static_cast<float>(o.patch_stereo_min_zncc), o.refine_iterations, uR))
+			continue;
+		geometry::TStereoCorrespondence k;
+		k.P_ref = kfm[j].P;
+		k.cov_ref = kfm[j].cov;
+		k.z_ref = Eigen::Vector3d(kfm[j].uL, kfm[j].v, kfm[j].uR);
+		k.calib_ref = in.calib_kf;
+		k.z_curr = Eigen::Vector3d(xs, ys, uR + (xs - xi));
+		if (!in.calib.triangulate(k.z_curr.x(), k.z_curr.y(), k.z_curr.z(), k.P_curr)) continue;
+		occupied.at<uint8_t>(yi, xi) = 1;
+		out.corr.push_back(k);
+		out.warped += warped;
+		out.landmark.push_back(static_cast<int>(j));
+		out.measurement.push_back(-1);
+	}
+}
+
 void CKeyframeMatcher::match(const TKeyframeMatchInput& in, TKeyframeMatchOutput& out) const
 {
 	checkInput(in);
@@ -235,9 +308,13 @@ void CKeyframeMatcher::match(const TKeyframeMatchInput& in, TKeyframeMatchOutput
 		if (matchOf[j] < 0) continue;
 		const auto& m = fr.meas[matchOf[j]];
 		float xs, ys;
-		if (!features::locatePatch(
-				kfm[j].patch, img, static_cast<int>(m.uL), static_cast<int>(m.v), o.refine_radius, o.refine_min_zncc,
-				o.refine_iterations, xs, ys))
+		Eigen::Matrix2d A;
+		const bool warped = warpOf(in, kfm[j], A);
+		const int x0 = static_cast<int>(m.uL), y0 = static_cast<int>(m.v);
+		if (warped ? !features::locateWarpedPatch(
+						 kfm[j].patch, img, x0, y0, A, o.refine_radius, o.refine_min_zncc, o.refine_iterations, xs, ys)
+				   : !features::locatePatch(
+						 kfm[j].patch, img, x0, y0, o.refine_radius, o.refine_min_zncc, o.refine_iterations, xs, ys))
 			continue;
 		geometry::TStereoCorrespondence k;
 		k.P_ref = kfm[j].P;
@@ -249,6 +326,7 @@ void CKeyframeMatcher::match(const TKeyframeMatchInput& in, TKeyframeMatchOutput
 		k.z_curr = Eigen::Vector3d(xs, ys, m.uR + du);
 		if (!calib.triangulate(k.z_curr.x(), k.z_curr.y(), k.z_curr.z(), k.P_curr)) continue;
 		out.corr.push_back(k);
+		out.warped += warped;
 		out.landmark.push_back(static_cast<int>(j));
 		out.measurement.push_back(matchOf[j]);
 	}

@@ -21,6 +21,7 @@
  * for developers: not part of the test suite. */
 #include <shadyloc/core/Registration.h>
 #include <shadyloc/features/Brief.h>
+#include <shadyloc/features/PatchWarp.h>
 #include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
@@ -115,7 +116,8 @@ int main(int argc, char** argv)
 		std::map<int, TBin> bins;
 		std::printf(
 			"frame,kf,dist_m,lateral_m,visible,detected,brief_ok,patch_ok,gate_overflow,gate_median_px,exact_gate_overflow,exact_gate_median_px,gate_matches,"
-			"gate_right,refined,refined_right,inliers,wide_matches,wide_right,wide_refined_right,wide_inliers,status,global\n");
+			"gate_right,refined,refined_right,inliers,wide_matches,wide_right,wide_refined_right,wide_inliers,status,global,"
+			"with_normal,brief_ok_warped,patch_ok_warped,hamming,hamming_warped,patch_all,patch_all_warped\n");
 		while (source.next(fr))
 		{
 			if (static_cast<int>(fr.index) % step) continue;
@@ -149,9 +151,14 @@ int main(int argc, char** argv)
 			features::TStereoFrame meas;
 			extractor.process(gl, gr, fr.calib, meas);
 			const auto& lms = map->measurements(kf.id, channel);
+			if (std::getenv("PROBE_NORMALS") && fr.index == 0)
+				for (const auto& l : lms)
+					std::printf("N %.0f %.0f %.1f %.2f %.2f %.2f\n", l.uL, l.v, l.P.z(), l.normal.x(), l.normal.y(), l.normal.z());
 
 			// ---- per landmark, with the truth
-			int visible = 0, detected = 0, briefOk = 0, patchOk = 0;
+			int visible = 0, detected = 0, briefOk = 0, patchOk = 0, withNormal = 0, briefOkW = 0, patchOkW = 0;
+			long hamSum = 0, hamSumW = 0;
+			int patchAll = 0, patchAllW = 0;
 			std::vector<Eigen::Vector2d> truthPx(lms.size(), Eigen::Vector2d(-1e9, -1e9));
 			std::vector<double> scale(lms.size(), 0);
 			for (size_t j = 0; j < lms.size(); j++)
@@ -165,6 +172,18 @@ int main(int argc, char** argv)
 				visible++;
 				TBin& b = bins[binOf(scale[j])];
 				b.visible++;
+				{
+					// Direct patch search at the true projection, detected or not.
+					const int xi0 = static_cast<int>(std::lround(u)), yi0 = static_cast<int>(std::lround(v));
+					float xa, ya;
+					if (xi0 >= 16 && yi0 >= 16 && xi0 < gl.cols - 16 && yi0 < gl.rows - 16)
+					{
+						patchAll += features::locatePatch(lms[j].patch, gl, xi0, yi0, lo.refine_radius_px, lo.refine_min_zncc, lo.refine_iterations, xa, ya) && std::hypot(xa - u, ya - v) < 1.5;
+						Eigen::Matrix2d A0;
+						const bool hasA = !lms[j].normal.isZero() && features::planeInducedAffine(map->calibration(), fr.calib, T_live_kf, lms[j].P, lms[j].normal.cast<double>(), A0);
+						patchAllW += features::locateWarpedPatch(lms[j].patch, gl, xi0, yi0, hasA ? A0 : Eigen::Matrix2d::Identity(), lo.refine_radius_px, lo.refine_min_zncc, lo.refine_iterations, xa, ya) && std::hypot(xa - u, ya - v) < 1.5;
+					}
+				}
 				int nearest = -1;
 				double nd = 4.0;
 				for (size_t i = 0; i < meas.meas.size(); i++)
@@ -188,8 +207,31 @@ int main(int argc, char** argv)
 					std::hypot(xs - u, ys - v) < 3)
 					patchOk++;
 				b.detected++;
-				const int h = features::hamming(lms[j].desc, meas.meas[static_cast<size_t>(nearest)].desc);
+				const auto& near = meas.meas[static_cast<size_t>(nearest)];
+				const int h = features::hamming(lms[j].desc, near.desc);
 				b.hamming_sum += h;
+				// Through the landmark's plane-induced warp at the true pose.
+				Eigen::Matrix2d A;
+				if (!lms[j].normal.isZero() &&
+					features::planeInducedAffine(
+						map->calibration(), fr.calib, T_live_kf, lms[j].P, lms[j].normal.cast<double>(), A))
+				{
+					withNormal++;
+					features::TBriefDescriptor wd;
+					const features::CWarpedBriefPattern wp(extractor.brief(), A);
+					const int hw = wp.compute(meas.smoothed, static_cast<int>(near.uL), static_cast<int>(near.v), wd)
+									   ? features::hamming(lms[j].desc, wd)
+									   : 256;
+					hamSum += h;
+					hamSumW += hw;
+					briefOkW += hw <= lo.max_hamming;
+					if (xi >= 16 && yi >= 16 && xi < gl.cols - 16 && yi < gl.rows - 16 &&
+						features::locateWarpedPatch(
+							lms[j].patch, gl, xi, yi, A, lo.refine_radius_px, lo.refine_min_zncc, lo.refine_iterations,
+							xs, ys) &&
+						std::hypot(xs - u, ys - v) < 3)
+						patchOkW++;
+				}
 				if (h <= lo.max_hamming)
 				{
 					briefOk++;
@@ -205,6 +247,7 @@ int main(int argc, char** argv)
 			mi.calib = fr.calib;
 			mi.T_curr_kf_pred = T_live_kf;
 			mi.cov_T_curr_kf_pred = predCov;
+			mi.brief = &extractor.brief();
 			std::vector<int> matchOf;
 			matcher.searchDescriptors(mi, 0, matchOf);
 			int gateMatches = 0, gateRight = 0;
@@ -279,11 +322,12 @@ int main(int argc, char** argv)
 			for (auto& c : gs)
 				if (c == ',') c = ';';
 			std::printf(
-				"%zu,%u,%.2f,%.2f,%d,%d,%d,%d,%d,%.1f,%d,%.1f,%d,%d,%zu,%d,%d,%d,%d,%d,%d,%s,%s\n", fr.index, kf.id, bestD,
+				"%zu,%u,%.2f,%.2f,%d,%d,%d,%d,%d,%.1f,%d,%.1f,%d,%d,%zu,%d,%d,%d,%d,%d,%d,%s,%s,%d,%d,%d,%.1f,%.1f,%d,%d\n", fr.index, kf.id, bestD,
 				T_kf_live.translation().x(), visible, detected, briefOk, patchOk, out.gate.overflow, out.gate.median_axis_px, exactGate.overflow,
 				exactGate.median_axis_px,
 				gateMatches, gateRight, out.corr.size(), refinedRight, inliers, wideMatches, wideRight, wideRefinedRight,
-				wideInliers, localisation::toString(res.status).c_str(), gs.c_str());
+				wideInliers, localisation::toString(res.status).c_str(), gs.c_str(), withNormal, briefOkW, patchOkW,
+				withNormal ? double(hamSum) / withNormal : 0.0, withNormal ? double(hamSumW) / withNormal : 0.0, patchAll, patchAllW);
 			std::fflush(stdout);
 		}
 		std::printf("\nscale_bin_lo,scale_bin_hi,visible,detected,brief_ok,refined_right,mean_hamming\n");

@@ -301,7 +301,7 @@ TEST(MapFormat, OldVersionAndLyingBlockSizesAreRefused)
 	const std::string name = "shadyloc::CKeyframeMap";
 	const size_t ver = 1 + name.size();	 // MRPT's header: 0x80 | length, the name, the version
 	ASSERT_EQ(std::string(good.begin() + 1, good.begin() + 1 + name.size()), name);
-	ASSERT_EQ(good[ver], 3);
+	ASSERT_EQ(good[ver], 4);
 	// The loader on bytes in memory (the fuzz entry point) loads them as the file loader does.
 	EXPECT_EQ(CKeyframeMap::LoadFromBytes(good.data(), good.size())->keyframeCount(), 6u);
 	try
@@ -400,7 +400,7 @@ TEST(MapFormat, Version1MapsStillLoad)
 	EXPECT_EQ(m->runs(), (std::vector<std::string>{"dawn", "dusk"}));
 	EXPECT_EQ(m->keyframe(2).channels[1].size(), 3u);
 	const auto v3 = bytesOf(*m);
-	EXPECT_EQ(v3[1 + name.size()], 3);
+	EXPECT_EQ(v3[1 + name.size()], 4);
 	const auto back = CKeyframeMap::LoadFromBytes(v3.data(), v3.size());
 	EXPECT_TRUE(back->options == m->options);
 	EXPECT_EQ(bytesOf(*back), v3);
@@ -408,7 +408,7 @@ TEST(MapFormat, Version1MapsStillLoad)
 
 // tests/golden/CKeyframeMap_v2.bin: the format-test map as version 2 wrote it
 // (checksums of the bytes alone). It loads, to the content the current
-// golden file (version 3) holds.
+// golden file (version 4) holds.
 TEST(MapFormat, Version2MapsStillLoad)
 {
 	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
@@ -416,9 +416,67 @@ TEST(MapFormat, Version2MapsStillLoad)
 	const std::string name = "shadyloc::CKeyframeMap";
 	ASSERT_GT(v2.size(), 2 + name.size());
 	ASSERT_EQ(v2[1 + name.size()], 2) << "the fixture is not a version 2 map";
-	ASSERT_EQ(v3[1 + name.size()], 3);
+	ASSERT_EQ(v3[1 + name.size()], 4);
 	const auto m = CKeyframeMap::LoadFromBytes(v2.data(), v2.size(), "CKeyframeMap_v2.bin");
 	EXPECT_EQ(bytesOf(*m), v3);
+}
+
+// tests/golden/CKeyframeMap_v3.bin: the format-test map as version 3 wrote it
+// (no surface normals). It loads, without normals, to the content the
+// current golden file (version 4, whose map has none either) holds.
+TEST(MapFormat, Version3MapsStillLoad)
+{
+	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
+	const auto v3 = fileBytes(golden + "CKeyframeMap_v3.bin"), v4 = fileBytes(golden + "CKeyframeMap.bin");
+	const std::string name = "shadyloc::CKeyframeMap";
+	ASSERT_GT(v3.size(), 2 + name.size());
+	ASSERT_EQ(v3[1 + name.size()], 3) << "the fixture is not a version 3 map";
+	ASSERT_EQ(v4[1 + name.size()], 4);
+	const auto m = CKeyframeMap::LoadFromBytes(v3.data(), v3.size(), "CKeyframeMap_v3.bin");
+	for (const auto& k : m->keyframes())
+		for (const auto& ch : k.channels)
+			for (const auto& meas : ch) EXPECT_TRUE(meas.normal.isZero());
+	EXPECT_EQ(bytesOf(*m), v4);
+}
+
+// Version 4 stores a surface normal per landmark (3 x int8): a map built
+// with normals loads them back as they were stored (unit length up to the
+// quantisation, unknown ones zero), and saves to the same bytes.
+TEST(MapFormat, SurfaceNormalsRoundTrip)
+{
+	auto m = test::makeSyntheticMap(4, 10, 4);
+	CKeyframeMap withNormals;
+	withNormals.options = m->options;
+	withNormals.setup(m->calibration(), m->imageWidth(), m->imageHeight(), m->channels());
+	for (const auto& r : m->runs()) withNormals.addRun(r);
+	size_t i = 0;
+	for (auto k : m->keyframes())
+	{
+		for (auto& ch : k.channels)
+			for (auto& meas : ch)
+				meas.normal = i++ % 3 == 0 ? Eigen::Vector3f::Zero()
+										   : Eigen::Vector3f(0.3f * std::sin(0.7f * i), -1.f, -0.2f * std::cos(0.3f * i)).normalized();
+		withNormals.appendKeyframe(k);
+	}
+	const auto bytes = bytesOf(withNormals);
+	const auto back = CKeyframeMap::LoadFromBytes(bytes.data(), bytes.size());
+	size_t known = 0;
+	for (uint32_t k = 0; k < back->keyframeCount(); k++)
+		for (size_t c = 0; c < back->channels().size(); c++)
+		{
+			const auto& a = withNormals.keyframe(k).channels[c];
+			const auto& b = back->keyframe(k).channels[c];
+			ASSERT_EQ(a.size(), b.size());
+			for (size_t j = 0; j < a.size(); j++)
+			{
+				EXPECT_EQ(a[j].normal, b[j].normal);  // quantised once, when appended
+				if (b[j].normal.isZero()) continue;
+				known++;
+				EXPECT_NEAR(b[j].normal.norm(), 1.0f, 0.02f);	// 3 x int8: unit up to rounding
+			}
+		}
+	EXPECT_GT(known, 0u);
+	EXPECT_EQ(bytesOf(*back), bytes);
 }
 
 namespace

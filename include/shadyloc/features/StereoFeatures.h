@@ -39,6 +39,9 @@ struct TStereoMeasurement
 	std::array<uint8_t, kPatchSize * kPatchSize> patch{};  //!< left pixels around (uL, v), row-major
 	Eigen::Vector3d P = Eigen::Vector3d::Zero();  //!< landmark in the left camera frame [m]
 	Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();	//!< covariance of P [m^2]
+	/** Unit normal of the surface at P, facing the camera, in the left camera
+	 * frame; zero when unknown (SurfaceNormals.h: map keyframes only). */
+	Eigen::Vector3f normal = Eigen::Vector3f::Zero();
 };
 
 /** Stage times of one extraction [ms]. */
@@ -54,6 +57,8 @@ struct TStereoFrame
 	size_t cornersLeft = 0, cornersRight = 0;  //!< FAST corners kept per eye
 	TFeatureTimings timings;
 	cv::Mat left;  //!< the left grey image (shared, not copied)
+	cv::Mat right;	//!< the right grey image the stereo matches were found in (shared)
+	cv::Mat smoothed;  //!< left as BRIEF sees it (BriefExtractor::smooth): warped descriptors sample it
 };
 
 /** FAST corners (OpenCV) spread by a grid: the image is cut into cols x rows
@@ -112,6 +117,16 @@ float patchZncc(const std::array<uint8_t, kPatchSize * kPatchSize>& patch, const
 bool locatePatch(
 	const std::array<uint8_t, kPatchSize * kPatchSize>& patch, const cv::Mat& img, int x0, int y0, int radius_px,
 	float min_zncc, int iterations, float& x, float& y);
+
+/** The right-image column of the left pixel (xl, y) near a predicted uR:
+ * the ZNCC of (2r+1)^2 windows at every integer column within +-halfRange of
+ * uRPred, the best at least minZncc and not on the range's edge, then the
+ * parabola and refineRowShift (`iterations` steps). False when no such peak
+ * exists or a window leaves an image. For a point found without a stereo
+ * feature (a landmark's patch located in the left image). */
+bool matchAlongRow(
+	const cv::Mat& left, int xl, int y, const cv::Mat& right, float uRPred, int halfRange, int r, float minZncc,
+	int iterations, float& uR);
 
 /** Options of StereoFeatureExtractor ([features] in config/vo.ini). */
 struct TStereoFeatureOptions : public mrpt::config::CLoadableOptions

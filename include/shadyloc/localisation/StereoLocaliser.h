@@ -112,6 +112,18 @@ struct TLocaliserOptions
 	double refine_min_zncc = 0.6;  //!< the refined patch must correlate this well
 	int refine_radius_px = 2;  //!< refinement climbs at most this far from the BRIEF match [px]
 	int refine_iterations = 5;	//!< Gauss-Newton steps of the sub-pixel refinement
+	/** Match each landmark that has a surface normal through the warp its
+	 * plane induces at the predicted pose (features/PatchWarp.h): BRIEF tests
+	 * and refinement patch follow the viewpoint (docs/localisation.md,
+	 * "Patches that follow the viewpoint"). */
+	bool warp_patches = true;
+	/** After a solve, search the local map's unmatched landmarks by
+	 * projection with their patches and solve again with them
+	 * (docs/localisation.md, "Search by projection with patches"). */
+	bool patch_search = true;
+	int patch_search_radius_px = 2;	 //!< ... the patch climbs at most this far from the projection [px]
+	/** ... where the warp distorts pixel offsets by more than this share [-]. */
+	double warp_min_distortion = 0.1;
 
 	// ---- solve
 	double ransac_threshold_px = 3.0;  //!< inlier bound on |(duL, dv, duR)| [px]
@@ -253,6 +265,8 @@ struct TLocaliserResult
 	Eigen::Isometry3d T_kf_live = Eigen::Isometry3d::Identity();  //!< live left camera in the keyframe's [m]
 	geometry::Matrix6d cov = geometry::Matrix6d::Zero();  //!< of T_kf_live (scaled by cov_scale)
 	int matches = 0;  //!< correspondences after refinement
+	int warped = 0;	 //!< ... of them found through a landmark's warp (warp_patches)
+	int patch_matches = 0;	//!< ... of them found by the patch pass (patch_search)
 	int inliers = 0;
 	double rms_px = 0;
 	/** A posteriori variance factor of the solve: the inliers' whitened
@@ -318,7 +332,13 @@ class CStereoLocaliser
 	 * correspondences in ref's frame, each live measurement at most once. */
 	void searchLocalMap(
 		const TLocaliserInput& in, uint32_t ref, const TKeyframePose& pred, double gateScale,
-		vo::TKeyframeMatchOutput& out) const;
+		vo::TKeyframeMatchOutput& out, std::vector<uint32_t>& keyframeOf) const;
+	/** The second pass at a solved pose T_curr_ref: the window's landmarks
+	 * not yet matched (keyframeOf / out.landmark) searched by projection with
+	 * their patches (CKeyframeMatcher::searchPatches); appends to out. */
+	void searchLocalMapByPatches(
+		const TLocaliserInput& in, uint32_t ref, const Eigen::Isometry3d& T_curr_ref,
+		vo::TKeyframeMatchOutput& out, std::vector<uint32_t>& keyframeOf) const;
 	/** Search (once more with wider gates when the first finds too few) and
 	 * solve without the prior; fills r's search figures. */
 	LocaliserStatus searchAndSolve(
@@ -332,6 +352,7 @@ class CStereoLocaliser
 	vo::CKeyframeMatcher m_gateMatcher;	 //!< global search, second pass
 	vo::CKeyframeMatcher m_placeMatcher;  //!< global search, first pass (window around the keyframe's view)
 	vo::CRelativePoseEstimator m_estimator;
+	features::BriefExtractor m_brief;  //!< the map channel's BRIEF pattern (warped matching)
 	CFixAcceptance m_accept;  //!< the failure test and its state
 };
 

@@ -71,6 +71,11 @@ struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 	 * patches compress better. At equal size 4 bits localise best: 3 or 2
 	 * bits buy landmarks but lose more (docs/map.md, "Size against coverage"). */
 	int patch_bits = 4;
+	/** The survey stores a surface normal per landmark (features/SurfaceNormals.h),
+	 * so the localisers can warp its patch to the live viewpoint. */
+	bool surface_normals = true;
+	/** The plane of a normal is fitted to the (2r+1)^2 dense disparities around the landmark [px]. */
+	int normal_window_px = 8;
 	int compression_level = 9;  //!< zstd level, 1 (fast) .. 22 (small); 19 saves 3 % for 5x the time
 	double index_cell_m = 10.0;	 //!< cell size of the spatial hash grid [m]
 	bool draw_landmarks = false;  //!< getVisualizationInto draws landmarks, coloured by channel

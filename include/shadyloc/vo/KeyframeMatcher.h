@@ -13,6 +13,9 @@
  *   4. sub-pixel: the keyframe's stored patch correlated (ZNCC) in the
  *      current left image, climbing to the peak, parabola then Gauss-Newton
  *      (features::refinePatch2D).
+ * With `warp`, steps 3 and 4 see the current image through each landmark's
+ * plane-induced warp at the predicted pose (features/PatchWarp.h) wherever the
+ * landmark has a surface normal and the warp is far from the identity.
  * The output is a set of geometry::TStereoCorrespondence for the
  * relative-pose estimator (vo/RelativePoseEstimator.h).
  */
@@ -79,6 +82,21 @@ struct TKeyframeMatcherOptions
 	 * near_min_matches remain (0 = off) [px] (TStereoVOOptions::near_min_disparity). */
 	double near_min_disparity = 0.0;
 	int near_min_matches = 40;
+	/** Warp the BRIEF tests and the refinement patch of every landmark with a
+	 * surface normal by the plane it lies on, seen from the predicted pose
+	 * (needs TKeyframeMatchInput::brief). */
+	bool warp = false;
+	/** ... only where the warp moves a pixel offset by more than this share
+	 * of itself (warpDistortion): below it the unwarped tests agree anyway
+	 * and cost less. */
+	double warp_min_distortion = 0.1;
+	/** searchPatches: the patch climbs at most this far from the landmark's
+	 * projection [px]. */
+	int patch_search_radius_px = 2;
+	/** searchPatches: the right-image column is searched within this of the
+	 * predicted one [px] ... */
+	int patch_stereo_range_px = 2;
+	double patch_stereo_min_zncc = 0.8;	 //!< ... and must correlate this well (7x7 windows)
 };
 
 /** Input of one matching: the keyframe, the current frame and the prediction. */
@@ -101,6 +119,10 @@ struct TKeyframeMatchInput
 	/** Circle: start with search_radius_lost_px and do not retry (the VO sets
 	 * it after an untracked frame). */
 	bool wide = false;
+	/** The BRIEF pattern the landmarks' descriptors were made with: warped
+	 * matching (TKeyframeMatcherOptions::warp) maps it through each
+	 * landmark's warp; null = no warping. */
+	const features::BriefExtractor* brief = nullptr;
 };
 
 /** A landmark's predicted stereo measurement and its covariance. */
@@ -132,6 +154,7 @@ struct TKeyframeMatchOutput
 	int descriptor_matches = 0;	 //!< BRIEF matches of the last search (before refinement)
 	bool widened = false;  //!< Circle: the wide retry ran
 	bool near_only = false;	 //!< far landmarks were left out (near_min_disparity)
+	int warped = 0;	 //!< correspondences found through a warp (TKeyframeMatcherOptions::warp)
 	TGateStats gate;  //!< Gate region only
 };
 
@@ -145,6 +168,22 @@ class CKeyframeMatcher
 
 	/** All four steps. */
 	void match(const TKeyframeMatchInput& in, TKeyframeMatchOutput& out) const;
+
+	/** Search by projection with patches, for a pose already known to a few
+	 * pixels (a localiser's second pass, at its first solve): every landmark
+	 * whose `skip` flag is not set is projected at in.T_curr_kf_pred, its
+	 * patch (warped where warpOf says so) climbed to from there (at most
+	 * patch_search_radius_px, ZNCC >= refine_min_zncc), and its right-image
+	 * column found along the row near the predicted disparity
+	 * (features::matchAlongRow). No live corner is needed: on the simulator
+	 * a patch finds about three times the landmarks FAST re-detects
+	 * (docs/localisation.md, "Search by projection with patches").
+	 * `occupied` (one byte per live pixel, 0 = free) keeps two landmarks off
+	 * one live pixel; found pixels are marked. Appends to out, with
+	 * measurement -1. */
+	void searchPatches(
+		const TKeyframeMatchInput& in, const std::vector<uint8_t>& skip, cv::Mat& occupied,
+		TKeyframeMatchOutput& out) const;
 
 	/** Steps 1-3 with a given region: matchOf[j] = index of the measurement
 	 * matched to landmark j, or -1; returns the number of matches. For the
@@ -163,6 +202,11 @@ class CKeyframeMatcher
 	Eigen::Matrix3d gateMatrix(const Eigen::Matrix3d& S) const;
 
 	const TOptions& options() const { return m_opts; }
+
+	/** The warp of landmark `lm` at the input's predicted pose, when warping
+	 * applies to it (warp on, a BRIEF pattern given, a normal, a warp far
+	 * enough from the identity); false = compare it unwarped. */
+	bool warpOf(const TKeyframeMatchInput& in, const features::TStereoMeasurement& lm, Eigen::Matrix2d& A) const;
 
    private:
 	TOptions m_opts;

@@ -1,0 +1,105 @@
+/* ShadyLoc — patches that follow the viewpoint (PatchWarp.h). */
+#include <shadyloc/features/PatchWarp.h>
+
+#include <Eigen/SVD>
+
+#include <algorithm>
+#include <cmath>
+
+namespace shadyloc::features
+{
+namespace
+{
+Eigen::Matrix3d intrinsics(const geometry::TStereoCalib& c)
+{
+	Eigen::Matrix3d K;
+	K << c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1;
+	return K;
+}
+}  // namespace
+
+bool planeInducedAffine(
+	const geometry::TStereoCalib& calibKf, const geometry::TStereoCalib& calib, const Eigen::Isometry3d& T_curr_kf,
+	const Eigen::Vector3d& P_kf, const Eigen::Vector3d& n_kf, Eigen::Matrix2d& A, double max_stretch)
+{
+	const double rho = n_kf.dot(P_kf);
+	const Eigen::Vector3d P_c = T_curr_kf * P_kf;
+	if (!(P_kf.z() > 0.1 && P_c.z() > 0.1) || !(std::abs(rho) > 1e-6)) return false;
+	// X_curr = R X_kf + t = (R + t n^T / rho) X_kf on the plane n^T X_kf = rho.
+	const Eigen::Matrix3d H = intrinsics(calib) *
+							  (T_curr_kf.linear() + T_curr_kf.translation() * n_kf.transpose() / rho) *
+							  intrinsics(calibKf).inverse();
+	const Eigen::Vector3d x(calibKf.fx * P_kf.x() / P_kf.z() + calibKf.cx, calibKf.fy * P_kf.y() / P_kf.z() + calibKf.cy, 1);
+	const Eigen::Vector3d h = H * x;
+	if (!(h.z() > 1e-9)) return false;
+	// d(h1/h3, h2/h3) / d(u, v).
+	for (int r = 0; r < 2; r++)
+		for (int c = 0; c < 2; c++) A(r, c) = (H(r, c) * h.z() - h(r) * H(2, c)) / (h.z() * h.z());
+	const Eigen::Vector2d s = Eigen::JacobiSVD<Eigen::Matrix2d>(A).singularValues();
+	return A.allFinite() && s(0) <= max_stretch && s(1) >= 1.0 / max_stretch;
+}
+
+double warpDistortion(const Eigen::Matrix2d& A) { return (A - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff(); }
+
+CWarpedBriefPattern::CWarpedBriefPattern(const BriefExtractor& brief, const Eigen::Matrix2d& A)
+{
+	const auto& p = brief.pattern();
+	for (size_t i = 0; i < p.size() && i < m_pattern.size(); i++)
+		for (int k = 0; k < 2; k++)
+		{
+			const Eigen::Vector2d d = A * Eigen::Vector2d(p[i][2 * k], p[i][2 * k + 1]);
+			const long dx = std::lround(d.x()), dy = std::lround(d.y());
+			m_pattern[i][2 * k] = static_cast<int16_t>(std::clamp<long>(dx, -4096, 4096));
+			m_pattern[i][2 * k + 1] = static_cast<int16_t>(std::clamp<long>(dy, -4096, 4096));
+			m_reach = std::max({m_reach, std::abs(static_cast<int>(m_pattern[i][2 * k])),
+								std::abs(static_cast<int>(m_pattern[i][2 * k + 1]))});
+		}
+}
+
+bool CWarpedBriefPattern::compute(const cv::Mat& img, int x, int y, TBriefDescriptor& d) const
+{
+	if (x < m_reach || y < m_reach || x >= img.cols - m_reach || y >= img.rows - m_reach) return false;
+	const uint8_t* c = img.ptr<uint8_t>(y) + x;
+	const ptrdiff_t step = static_cast<ptrdiff_t>(img.step[0]);
+	d.w = {0, 0, 0, 0};
+	for (int i = 0; i < 256; i++)
+	{
+		const auto& t = m_pattern[i];
+		const bool bit = c[t[1] * step + t[0]] < c[t[3] * step + t[2]];
+		d.w[i >> 6] |= static_cast<uint64_t>(bit) << (i & 63);
+	}
+	return true;
+}
+
+bool locateWarpedPatch(
+	const std::array<uint8_t, kPatchSize * kPatchSize>& patch, const cv::Mat& img, int x0, int y0,
+	const Eigen::Matrix2d& A, int radius_px, float min_zncc, int iterations, float& x, float& y)
+{
+	// The keyframe's pixel grid around (x0, y0): the patch, its search
+	// radius and the margin refinePatch2D's cubic interpolation reads.
+	const int half = kPatchSize / 2 + radius_px + 4, side = 2 * half + 1;
+	cv::Mat local(side, side, CV_8UC1);
+	for (int r = 0; r < side; r++)
+	{
+		uint8_t* row = local.ptr<uint8_t>(r);
+		for (int c = 0; c < side; c++)
+		{
+			const Eigen::Vector2d p = Eigen::Vector2d(x0, y0) + A * Eigen::Vector2d(c - half, r - half);
+			const int ix = static_cast<int>(std::floor(p.x())), iy = static_cast<int>(std::floor(p.y()));
+			if (ix < 0 || iy < 0 || ix + 1 >= img.cols || iy + 1 >= img.rows) return false;
+			const double fx = p.x() - ix, fy = p.y() - iy;
+			const uint8_t* a = img.ptr<uint8_t>(iy) + ix;
+			const uint8_t* b = img.ptr<uint8_t>(iy + 1) + ix;
+			const double v = (1 - fy) * ((1 - fx) * a[0] + fx * a[1]) + fy * ((1 - fx) * b[0] + fx * b[1]);
+			row[c] = static_cast<uint8_t>(std::lround(v));
+		}
+	}
+	float xl, yl;
+	if (!locatePatch(patch, local, half, half, radius_px, min_zncc, iterations, xl, yl)) return false;
+	const Eigen::Vector2d p = Eigen::Vector2d(x0, y0) + A * Eigen::Vector2d(xl - half, yl - half);
+	x = static_cast<float>(p.x());
+	y = static_cast<float>(p.y());
+	return true;
+}
+
+}  // namespace shadyloc::features
