@@ -33,6 +33,8 @@ void TLocaliserOptions::load(const mrpt::config::CConfigFileBase& c, const std::
 	r.read("warp_min_distortion", warp_min_distortion);
 	r.read("patch_search", patch_search);
 	r.read("patch_search_radius_px", patch_search_radius_px);
+	r.read("patch_search_from_prediction", patch_search_from_prediction);
+	r.read("patch_min_zncc", patch_min_zncc);
 	r.read("match_ratio", match_ratio);
 	r.read("refine_min_zncc", refine_min_zncc);
 	r.read("refine_radius_px", refine_radius_px);
@@ -96,6 +98,8 @@ void TLocaliserOptions::dump(std::ostream& out) const
 	w.value("warp_min_distortion", warp_min_distortion, "... where it moves pixel offsets by more than this share");
 	w.value("patch_search", patch_search, "after a solve, search unmatched landmarks by projection with their patches, solve again");
 	w.value("patch_search_radius_px", patch_search_radius_px, "... the patch climbs at most this far from the projection [px]");
+	w.value("patch_min_zncc", patch_min_zncc, "... and must correlate this well there");
+	w.value("patch_search_from_prediction", patch_search_from_prediction, "... and at the prediction of a confirmed track when descriptors find too few");
 	w.value("match_ratio", match_ratio);
 	w.value("refine_min_zncc", refine_min_zncc);
 	w.value("refine_radius_px", refine_radius_px, "[px]");
@@ -147,6 +151,7 @@ void TLocaliserOptions::validate() const
 	need(retry_gate_scale >= 1, "retry_gate_scale", "must be >= 1");
 	need(window_px > 0, "window_px", "must be > 0");
 	need(max_hamming > 0 && max_hamming <= 256, "max_hamming", "must be in (0, 256]");
+	need(patch_min_zncc > 0 && patch_min_zncc <= 1, "patch_min_zncc", "must be in (0, 1]");
 	need(patch_search_radius_px >= 0 && patch_search_radius_px <= 10, "patch_search_radius_px", "must be in 0..10 [px]");
 	need(warp_min_distortion >= 0 && warp_min_distortion <= 10, "warp_min_distortion", "must be in [0, 10]");
 	need(match_ratio > 0 && match_ratio <= 1, "match_ratio", "must be in (0, 1]");

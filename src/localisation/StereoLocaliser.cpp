@@ -145,6 +145,7 @@ vo::TKeyframeMatcherOptions matcherOptionsFor(const TLocaliserOptions& o, Search
 	m.refine_radius = o.refine_radius_px;
 	m.refine_iterations = o.refine_iterations;
 	m.patch_search_radius_px = o.patch_search_radius_px;
+	m.patch_min_zncc = o.patch_min_zncc;
 	m.sigma_px = o.sigma_px;
 	m.min_matches = 0;	// never widen on its own: the localiser decides
 	switch (mode)
@@ -573,20 +574,28 @@ LocaliserStatus CStereoLocaliser::searchAndSolve(
 		r.inliers = first.inliers;
 		r.rms_px = first.rms_px;
 	}
-	if (status == LocaliserStatus::Ok && o.patch_search)
+	// The second pass: at the solved pose (or, when the descriptors found
+	// too little, at the prediction of a confirmed track) the unmatched
+	// landmarks are found by their patches alone, and the frame is solved again.
+	const bool solved = status == LocaliserStatus::Ok;
+	const bool fromPrediction = !solved && o.patch_search_from_prediction && in.track_confirmed &&
+								(status == LocaliserStatus::FewMatches || status == LocaliserStatus::FewInliers);
+	if (o.patch_search && (solved || fromPrediction))
 	{
-		// The second pass: at the solved pose the unmatched landmarks are
-		// found by their patches alone, and the frame is solved again.
+		// The prediction is taken in `ref`, as the first pass took it.
+		const Eigen::Isometry3d T_curr_ref = solved ? po.T_curr_ref : pred.T_kf_live.inverse();
 		vo::TKeyframeMatchOutput more = mo;
-		searchLocalMapByPatches(in, ref, po.T_curr_ref, more, keyframeOf);
+		searchLocalMapByPatches(in, ref, T_curr_ref, more, keyframeOf);
 		const int added = static_cast<int>(more.corr.size() - mo.corr.size());
 		vo::TRelativePoseOutput po2;
-		if (added > 0)
+		if (added > 0 && static_cast<int>(more.corr.size()) >= o.min_matches)
 		{
 			pi.corr = &more.corr;
 			m_estimator.estimate(pi, po2);
 		}
-		if (added > 0 && po2.ok() && po2.inliers >= po.inliers)
+		const bool better = solved ? po2.ok() && po2.inliers >= po.inliers
+								   : po2.ok() && static_cast<int>(po2.inliers) >= o.min_inliers;
+		if (better)
 		{
 			mo = std::move(more);
 			po = po2;
@@ -595,6 +604,7 @@ LocaliserStatus CStereoLocaliser::searchAndSolve(
 			r.patch_matches = added;
 			r.inliers = static_cast<int>(po.inliers);
 			r.rms_px = po.rms_px;
+			status = LocaliserStatus::Ok;
 		}
 	}
 	return status;
@@ -697,7 +707,26 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 			pi.corr = &mo2.corr;
 			m_estimator.estimate(pi, po2);
 		}
-		const vo::TRelativePoseOutput& best = po2.ok() && po2.inliers >= po.inliers ? po2 : po;
+		const bool second = po2.ok() && po2.inliers >= po.inliers;
+		vo::TRelativePoseOutput best = second ? po2 : po;
+		if (o.patch_search)
+		{
+			// The patch pass at the verified pose, as a tracked frame gets it.
+			TLocaliserInput li;
+			li.meas = &meas;
+			li.calib = calib;
+			vo::TKeyframeMatchOutput more = second ? mo2 : mo;
+			std::vector<uint32_t> keyframeOf(more.corr.size(), k);
+			const size_t before = more.corr.size();
+			searchLocalMapByPatches(li, k, best.T_curr_ref, more, keyframeOf);
+			vo::TRelativePoseOutput po3;
+			if (more.corr.size() > before)
+			{
+				pi.corr = &more.corr;
+				m_estimator.estimate(pi, po3);
+			}
+			if (po3.ok() && po3.inliers >= best.inliers) best = po3;
+		}
 		TVerified v;
 		v.kf = k;
 		v.inliers = static_cast<int>(best.inliers);

@@ -247,11 +247,11 @@ void CKeyframeMatcher::searchPatches(
 		const bool warped = warpOf(in, kfm[j], A);
 		float xs, ys;
 		if (warped ? !features::locateWarpedPatch(
-						 kfm[j].patch, fr.left, x0, y0, A, o.patch_search_radius_px, o.refine_min_zncc,
+						 kfm[j].patch, fr.left, x0, y0, A, o.patch_search_radius_px, static_cast<float>(o.patch_min_zncc),
 						 o.refine_iterations, xs, ys)
 				   : !features::locatePatch(
-						 kfm[j].patch, fr.left, x0, y0, o.patch_search_radius_px, o.refine_min_zncc, o.refine_iterations,
-						 xs, ys))
+						 kfm[j].patch, fr.left, x0, y0, o.patch_search_radius_px, static_cast<float>(o.patch_min_zncc),
+						 o.refine_iterations, xs, ys))
 			continue;
 		const int xi = static_cast<int>(std::lround(xs)), yi = static_cast<int>(std::lround(ys));
 		if (xi < 0 || yi < 0 || xi >= occupied.cols || yi >= occupied.rows || occupied.at<uint8_t>(yi, xi)) continue;

@@ -122,6 +122,12 @@ struct TLocaliserOptions
 	 * (docs/localisation.md, "Search by projection with patches"). */
 	bool patch_search = true;
 	int patch_search_radius_px = 2;	 //!< ... the patch climbs at most this far from the projection [px]
+	double patch_min_zncc = 0.8;  //!< ... and must correlate this well there (no descriptor vouches for it)
+	/** ... and when the descriptors find too few matches or inliers while
+	 * the system's track is confirmed, search by patches at the prediction
+	 * itself (a track known to centimetres predicts a near landmark to a
+	 * pixel or two). */
+	bool patch_search_from_prediction = true;
 	/** ... where the warp distorts pixel offsets by more than this share [-]. */
 	double warp_min_distortion = 0.1;
 

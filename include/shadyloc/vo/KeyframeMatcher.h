@@ -93,6 +93,9 @@ struct TKeyframeMatcherOptions
 	/** searchPatches: the patch climbs at most this far from the landmark's
 	 * projection [px]. */
 	int patch_search_radius_px = 2;
+	/** searchPatches: the patch must correlate this well where it is found
+	 * (no descriptor vouches for it, unlike refine_min_zncc's matches). */
+	double patch_min_zncc = 0.8;
 	/** searchPatches: the right-image column is searched within this of the
 	 * predicted one [px] ... */
 	int patch_stereo_range_px = 2;
@@ -173,7 +176,7 @@ class CKeyframeMatcher
 	 * pixels (a localiser's second pass, at its first solve): every landmark
 	 * whose `skip` flag is not set is projected at in.T_curr_kf_pred, its
 	 * patch (warped where warpOf says so) climbed to from there (at most
-	 * patch_search_radius_px, ZNCC >= refine_min_zncc), and its right-image
+	 * patch_search_radius_px, ZNCC >= patch_min_zncc), and its right-image
 	 * column found along the row near the predicted disparity
 	 * (features::matchAlongRow). No live corner is needed: on the simulator
 	 * a patch finds about three times the landmarks FAST re-detects
