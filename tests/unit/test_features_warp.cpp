@@ -2,9 +2,11 @@
  * normals they need (features/SurfaceNormals.h). */
 #include <shadyloc/features/PatchWarp.h>
 #include <shadyloc/features/SurfaceNormals.h>
+#include <shadyloc/vo/KeyframeMatcher.h>
 
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <cmath>
 #include <limits>
@@ -201,4 +203,95 @@ TEST(FeaturesWarp, NormalFromTheDisparityOfATiltedPlane)
 	ms[0].uR -= 3.f;
 	EXPECT_EQ(estimateNormals(disp, c, o, ms), 0u);
 	EXPECT_TRUE(ms[0].normal.isZero());
+}
+
+// The localiser's second pass (CKeyframeMatcher::searchPatches): landmarks of
+// a keyframe (its corners on the road surface) seen from half a lane aside
+// are found by their warped patches alone, with no live corner anywhere,
+// three quarters within 0.5 px in the left image and in the right one, all
+// within the solve's 3 px inlier bound (the strongest shear, at the image's
+// edge, takes one to 2.9 px); skipped landmarks are not searched, and a live pixel holds
+// one landmark at most.
+TEST(VoKeyframeMatcher, PatchSearchFindsLandmarksWithoutCorners)
+{
+	const auto c = calib();
+	const double h = 1.5;
+	Eigen::Isometry3d T_world_kf = Eigen::Isometry3d::Identity(), T_world_live = Eigen::Isometry3d::Identity();
+	T_world_live.translation() = Eigen::Vector3d(-1.75, 0, -0.3);
+	Eigen::Isometry3d rightOf = Eigen::Isometry3d::Identity();
+	rightOf.translation() = Eigen::Vector3d(c.baseline, 0, 0);
+	const cv::Mat kfImg = renderGround(c, T_world_kf, h);
+	features::TStereoFrame live;
+	live.left = renderGround(c, T_world_live, h);
+	live.right = renderGround(c, T_world_live * rightOf, h);
+	BriefExtractor::smooth(live.left, live.smoothed);
+	const Eigen::Isometry3d T_live_kf = T_world_live.inverse() * T_world_kf;
+	const Eigen::Vector3d n(0, -1, 0);
+	// The keyframe's landmarks are corners, as FAST gives them (a patch on
+	// an edge is ambiguous along it).
+	std::vector<cv::Point2f> corners;
+	cv::goodFeaturesToTrack(kfImg(cv::Rect(120, 262, 240, 80)), corners, 60, 0.05, 12);
+	std::vector<TStereoMeasurement> lms;
+	for (const auto& p : corners)
+	{
+		const int u = 120 + static_cast<int>(std::lround(p.x)), v = 262 + static_cast<int>(std::lround(p.y));
+		TStereoMeasurement m;
+		m.uL = static_cast<float>(u);
+		m.v = static_cast<float>(v);
+		m.P = onPlane(c, u, v, n, n.dot(Eigen::Vector3d(0, h, 0)));
+		m.uR = static_cast<float>(c.fx * (m.P.x() - c.baseline) / m.P.z() + c.cxR);
+		m.cov = Eigen::Matrix3d::Identity() * 1e-4;
+		m.normal = n.cast<float>();
+		for (int dy = -kPatchSize / 2; dy <= kPatchSize / 2; dy++)
+			for (int dx = -kPatchSize / 2; dx <= kPatchSize / 2; dx++)
+				m.patch[(dy + kPatchSize / 2) * kPatchSize + dx + kPatchSize / 2] = kfImg.at<uint8_t>(v + dy, u + dx);
+		lms.push_back(m);
+	}
+	vo::TKeyframeMatcherOptions o;
+	o.warp = true;
+	const vo::CKeyframeMatcher matcher(o);
+	const BriefExtractor brief(32, 0x5ad710c);
+	vo::TKeyframeMatchInput in;
+	in.landmarks = &lms;
+	in.calib_kf = in.calib = c;
+	in.frame = &live;
+	in.brief = &brief;
+	// A prediction a centimetre or two off, as a confirmed track gives.
+	in.T_curr_kf_pred = T_live_kf;
+	in.T_curr_kf_pred.translation() += Eigen::Vector3d(0.01, -0.005, 0.02);
+	std::vector<uint8_t> skip(lms.size(), 0);
+	skip[0] = skip[5] = 1;
+	cv::Mat occupied = cv::Mat::zeros(live.left.size(), CV_8UC1);
+	vo::TKeyframeMatchOutput out;
+	matcher.searchPatches(in, skip, occupied, out);
+	size_t visible = 0;
+	for (size_t j = 0; j < lms.size(); j++)
+	{
+		const Eigen::Vector3d X = T_live_kf * lms[j].P;
+		const double u = c.fx * X.x() / X.z() + c.cx, v = c.fy * X.y() / X.z() + c.cy;
+		visible += !skip[j] && u > 30 && v > 30 && u < live.left.cols - 30 && v < live.left.rows - 30;
+	}
+	ASSERT_GE(visible, 15u);
+	EXPECT_GE(out.corr.size(), visible * 8 / 10) << "of " << visible << " landmarks in view";
+	EXPECT_EQ(out.warped, static_cast<int>(out.corr.size()));
+	// A patch of a smooth surface's corner locates to a fraction of a pixel
+	// most of the time; the rest stay inside the solve's inlier bound.
+	size_t close = 0;
+	for (size_t i = 0; i < out.corr.size(); i++)
+	{
+		const size_t j = static_cast<size_t>(out.landmark[i]);
+		EXPECT_FALSE(skip[j]) << "a skipped landmark was searched";
+		EXPECT_EQ(out.measurement[i], -1);
+		const Eigen::Vector3d X = T_live_kf * lms[j].P;
+		const Eigen::Vector3d truth(
+			c.fx * X.x() / X.z() + c.cx, c.fy * X.y() / X.z() + c.cy, c.fx * (X.x() - c.baseline) / X.z() + c.cxR);
+		const double e = (out.corr[i].z_curr - truth).cwiseAbs().maxCoeff();
+		EXPECT_LT(e, 3.0) << "landmark " << j << ": " << out.corr[i].z_curr.transpose() << ", truth " << truth.transpose();
+		close += e < 0.5;
+	}
+	EXPECT_GE(close, out.corr.size() * 3 / 4);
+	// Searched again with the found pixels occupied: nothing more is found.
+	vo::TKeyframeMatchOutput again;
+	matcher.searchPatches(in, skip, occupied, again);
+	EXPECT_TRUE(again.corr.empty());
 }
