@@ -111,8 +111,9 @@ void setCounters(benchmark::State& st, const std::vector<double>& ms, const std:
 	st.counters[prefix + "p95_ms"] = percentile(ms, 0.95);
 }
 
-/** The combined system, one frame per iteration. */
-void BM_CombinedFrame(benchmark::State& st, int threads, bool fallbackVO = true)
+/** The combined system, one frame per iteration; `extra` config lines
+ * override the shipped ones (a later key wins). */
+void BM_CombinedFrame(benchmark::State& st, int threads, const char* extra = "")
 {
 	const auto& d = data();
 	if (!d.skip.empty())
@@ -120,8 +121,7 @@ void BM_CombinedFrame(benchmark::State& st, int threads, bool fallbackVO = true)
 		st.SkipWithError(d.skip.c_str());
 		return;
 	}
-	// Without the fallback VO: its cost is the difference (a later key overrides).
-	mrpt::config::CConfigFileMemory cfg(d.cfgText + (fallbackVO ? "" : "\n[localise]\nvo_fallback_channel =\n"));
+	mrpt::config::CConfigFileMemory cfg(d.cfgText + "\n" + extra);
 	auto sys = localisation::CLocalisationSystem::FromConfig(cfg, d.map, {}, threads, "vo_sim.ini + localise_sim.ini");
 	std::vector<double> ms, voMs;
 	size_t i = 0, fixes = 0;
@@ -148,7 +148,14 @@ void BM_CombinedFrame(benchmark::State& st, int threads, bool fallbackVO = true)
 }
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads2, 2)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(600);
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads1, 1)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(600);
-BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_fallback_vo, 2, false)
+// Without the fallback VO: its cost is the difference.
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_fallback_vo, 2, "[localise]\nvo_fallback_channel =\n")
+	->Unit(benchmark::kMillisecond)
+	->UseManualTime()
+	->Iterations(600);
+// Without the patch pass and the warped patches (docs/localisation.md,
+// "Patches that follow the viewpoint"): their cost is the difference.
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_patch_pass, 2, "[localiser]\npatch_search = false\nwarp_patches = false\n")
 	->Unit(benchmark::kMillisecond)
 	->UseManualTime()
 	->Iterations(600);

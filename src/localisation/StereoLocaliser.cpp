@@ -127,6 +127,13 @@ Matrix6d covarianceMax(const Matrix6d& A, const Matrix6d& B, int samples)
 	return L * es.eigenvectors() * d.asDiagonal() * es.eigenvectors().transpose() * L.transpose();
 }
 
+
+/** The largest standard deviation of a pose covariance's translation [m]. */
+double translationSigma(const Matrix6d& cov)
+{
+	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
+	return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
+}
 }  // namespace
 
 Matrix6d fixCovariance(const Matrix6d& solver, const Matrix6d& bootstrap, double cov_scale, int samples)
@@ -578,7 +585,10 @@ LocaliserStatus CStereoLocaliser::searchAndSolve(
 	// too little, at the prediction of a confirmed track) the unmatched
 	// landmarks are found by their patches alone, and the frame is solved again.
 	const bool solved = status == LocaliserStatus::Ok;
-	const bool fromPrediction = !solved && o.patch_search_from_prediction && in.track_confirmed &&
+	// A track known to centimetres predicts a near landmark to a pixel or
+	// two: a confirmed one, or a verified place just found.
+	const bool sharp = in.track_confirmed || translationSigma(in.prediction.cov) <= o.patch_prediction_max_sigma_m;
+	const bool fromPrediction = !solved && o.patch_search_from_prediction && sharp &&
 								(status == LocaliserStatus::FewMatches || status == LocaliserStatus::FewInliers);
 	if (o.patch_search && (solved || fromPrediction))
 	{

@@ -125,9 +125,12 @@ struct TLocaliserOptions
 	double patch_min_zncc = 0.8;  //!< ... and must correlate this well there (no descriptor vouches for it)
 	/** ... and when the descriptors find too few matches or inliers while
 	 * the system's track is confirmed, search by patches at the prediction
-	 * itself (a track known to centimetres predicts a near landmark to a
-	 * pixel or two). */
+	 * itself. */
 	bool patch_search_from_prediction = true;
+	/** ... or at a prediction whose position is this certain: a place the
+	 * global search has just verified (its solve, plus global_sigma_m of
+	 * the track options, 0.1 m) [m]. */
+	double patch_prediction_max_sigma_m = 0.15;
 	/** ... where the warp distorts pixel offsets by more than this share [-]. */
 	double warp_min_distortion = 0.1;
 
