@@ -603,8 +603,15 @@ LocaliserStatus CStereoLocaliser::searchAndSolve(
 			pi.corr = &more.corr;
 			m_estimator.estimate(pi, po2);
 		}
+		// At the prediction the patches are found where the prediction puts
+		// them, so they agree with it whether it is right or not: the solve
+		// must also hold descriptor matches, found without it (a wrong
+		// keyframe under the fault injection otherwise passed as a fix).
+		int descriptorInliers = 0;
+		for (size_t c = 0; c < mo.corr.size() && c < po2.inlier.size(); c++) descriptorInliers += po2.inlier[c] != 0;
 		const bool better = solved ? po2.ok() && po2.inliers >= po.inliers
-								   : po2.ok() && static_cast<int>(po2.inliers) >= o.min_inliers;
+								   : po2.ok() && static_cast<int>(po2.inliers) >= o.min_inliers &&
+										 descriptorInliers >= o.patch_prediction_min_descriptor_inliers;
 		if (better)
 		{
 			mo = std::move(more);

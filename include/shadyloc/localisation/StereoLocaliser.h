@@ -131,6 +131,10 @@ struct TLocaliserOptions
 	 * global search has just verified (its solve, plus global_sigma_m of
 	 * the track options, 0.1 m) [m]. */
 	double patch_prediction_max_sigma_m = 0.15;
+	/** ... and the solve after it must keep this many of the descriptor
+	 * matches as inliers: patches found at the prediction agree with it
+	 * whether it is right or not. */
+	int patch_prediction_min_descriptor_inliers = 6;
 	/** ... where the warp distorts pixel offsets by more than this share [-]. */
 	double warp_min_distortion = 0.1;
 
