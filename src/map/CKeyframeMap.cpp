@@ -194,8 +194,14 @@ void putChannel(ByteWriter& w, const map::TChannelParams& c)
 	w.put<uint32_t>(c.brief_seed);
 	w.put<double>(c.presmooth_sigma);
 	w.put<double>(c.sigma_px);
+	// version 4
+	w.put<uint8_t>(static_cast<uint8_t>(c.descriptor));
+	w.put<int32_t>(c.orb_levels);
+	w.put<double>(c.orb_scale_factor);
 }
-map::TChannelParams getChannel(ByteReader& r)
+/** A channel as stored by format `version`: before version 4 every map was
+ * FAST + BRIEF (the ORB fields keep their defaults). */
+map::TChannelParams getChannel(ByteReader& r, uint8_t version)
 {
 	map::TChannelParams c;
 	c.label = r.str();
@@ -205,6 +211,16 @@ map::TChannelParams getChannel(ByteReader& r)
 	c.brief_seed = r.get<uint32_t>();
 	c.presmooth_sigma = r.get<double>();
 	c.sigma_px = r.get<double>();
+	if (version >= 4)
+	{
+		const auto kind = r.get<uint8_t>();
+		if (kind > 1) r.fail("channel '" + c.label + "': descriptor kind " + std::to_string(kind) + " unknown");
+		c.descriptor = static_cast<features::DescriptorKind>(kind);
+		c.orb_levels = r.get<int32_t>();
+		c.orb_scale_factor = r.get<double>();
+		if (c.orb_levels < 1) r.fail("channel '" + c.label + "': ORB levels");
+		if (!(c.orb_scale_factor > 1) || !std::isfinite(c.orb_scale_factor)) r.fail("channel '" + c.label + "': ORB scale factor");
+	}
 	if (c.label.empty()) r.fail("channel without a label");
 	if (c.filter_class.empty()) r.fail("channel '" + c.label + "': no filter class");
 	if (c.brief_patch_size <= 0) r.fail("channel '" + c.label + "': BRIEF patch size");
@@ -705,7 +721,9 @@ static TBlocks encode(
 //    version 1 map reads as thinned by the strongest corners.
 // 3: each channel block's checksum covers its position (blockSum): blocks
 //    swapped between channels fail the load.
-uint8_t CKeyframeMap::serializeGetVersion() const { return 3; }
+// 4: each channel records its descriptor kind (FAST + BRIEF or ORB) and
+//    ORB's pyramid (levels, scale factor); older maps read as BRIEF.
+uint8_t CKeyframeMap::serializeGetVersion() const { return 4; }
 
 void CKeyframeMap::serializeTo(mrpt::serialization::CArchive& out) const
 {
@@ -734,6 +752,7 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 		case 1:
 		case 2:
 		case 3:
+		case 4:
 		{
 			// The stream's size is unknown here: the budget is the largest map
 			// (kMaxSerializedBytes); offsets count from the object's data.
@@ -776,7 +795,7 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 			if (setUp ? (w <= 0 || h <= 0 || w * kPixelQuantum > 65535 || h * kPixelQuantum > 65535) : (w != 0 || h != 0))
 				r.fail("image size " + std::to_string(w) + "x" + std::to_string(h));
 			std::vector<map::TChannelParams> channels;
-			for (int i = 0; i < nc; i++) channels.push_back(getChannel(r));
+			for (int i = 0; i < nc; i++) channels.push_back(getChannel(r, version));
 			const auto nr = r.get<uint16_t>();
 			std::vector<std::string> runs;
 			for (int i = 0; i < nr; i++) runs.push_back(r.str());
