@@ -301,7 +301,7 @@ TEST(MapFormat, OldVersionAndLyingBlockSizesAreRefused)
 	const std::string name = "shadyloc::CKeyframeMap";
 	const size_t ver = 1 + name.size();	 // MRPT's header: 0x80 | length, the name, the version
 	ASSERT_EQ(std::string(good.begin() + 1, good.begin() + 1 + name.size()), name);
-	ASSERT_EQ(good[ver], 3);
+	ASSERT_EQ(good[ver], 4);
 	// The loader on bytes in memory (the fuzz entry point) loads them as the file loader does.
 	EXPECT_EQ(CKeyframeMap::LoadFromBytes(good.data(), good.size())->keyframeCount(), 6u);
 	try
