@@ -579,6 +579,7 @@ int argMax(const std::vector<float>& v)
 }  // namespace
 
 // ---- stereo -------------------------------------------------------------------
+// The options are validated before the describer is built from them.
 StereoFeatureExtractor::StereoFeatureExtractor(const TOptions& o) : m_opts(o), m_corners((o.validate(), o)) {}
 
 namespace

@@ -1,8 +1,9 @@
 /* ShadyLoc — stereo measurements of one rectified grey stereo pair: FAST
- * corners spread over the image by grid buckets, stereo correspondence by
+ * corners (single-scale, or OpenCV's ORB on a scale pyramid with orientation:
+ * [features] descriptor) spread over the image by grid buckets, stereo correspondence by
  * ZNCC patch matching along the epipolar row (candidates: right-image FAST
  * corners within the disparity range), sub-pixel refinement (parabola),
- * left-right consistency and ambiguity rejection, a BRIEF descriptor, a pixel
+ * left-right consistency and ambiguity rejection, a BRIEF (or ORB) descriptor, a pixel
  * patch and a triangulated landmark with its covariance per measurement
  * (McManus et al. 2014, Section II-A).
  *
