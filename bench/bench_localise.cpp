@@ -13,8 +13,11 @@
  *
  * Needs rawlogs/generated (scripts/make-default-dataset.sh) and the built
  * `shadyloc` (the map is surveyed once into $TMPDIR/shadyloc_bench_localise);
- * skipped with a message otherwise.
- *   build/bench/bench_localise */
+ * skipped with a message otherwise. SHADYLOC_BENCH_VO_CONFIG=other.ini
+ * stands for config/vo_sim.ini in the survey and the live system alike (e.g.
+ * other [features]: FAST + BRIEF against ORB, docs/localisation.md).
+ *   build/bench/bench_localise
+ *   SHADYLOC_BENCH_VO_CONFIG=vo_sim_orb.ini build/bench/bench_localise */
 #include <shadyloc/filters/Channel.h>
 #include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
@@ -74,16 +77,24 @@ const TData& data()
 		const char* tmp = std::getenv("TMPDIR");
 		const fs::path dir = fs::path(tmp ? tmp : "/tmp") / "shadyloc_bench_localise";
 		fs::create_directories(dir);
-		const std::string mapPath = (dir / "noon.kfmap").string();
+		const char* voEnv = std::getenv("SHADYLOC_BENCH_VO_CONFIG");
+		const std::string voCfg = voEnv && *voEnv ? voEnv : src + "/config/vo_sim.ini";
+		if (!fs::is_regular_file(voCfg))
+		{
+			d.skip = "VO config '" + voCfg + "' (SHADYLOC_BENCH_VO_CONFIG) does not exist";
+			return d;
+		}
+		// One map per VO config: the survey must make what the live run expects.
+		const std::string mapPath = (dir / ("noon_" + fs::path(voCfg).stem().string() + ".kfmap")).string();
 		const std::string cmd = std::string("'") + SHADYLOC_APP + "' survey -q -i '" + gen + "/noon.rawlog' -o '" + mapPath +
-								"' -c '" + src + "/config/vo_sim.ini' --gt '" + gen + "/noon.tum' > /dev/null";
+								"' -c '" + voCfg + "' --gt '" + gen + "/noon.tum' > /dev/null";
 		if (std::system(cmd.c_str()) != 0)
 		{
 			d.skip = "the survey failed: " + cmd;
 			return d;
 		}
 		d.map = CKeyframeMap::LoadFromFile(mapPath);
-		d.cfgText = slurp(src + "/config/vo_sim.ini") + "\n" + slurp(src + "/config/localise_sim.ini");
+		d.cfgText = slurp(voCfg) + "\n" + slurp(src + "/config/localise_sim.ini");
 		io::TStereoFrameSourceOptions so;
 		so.sensorLabel = io::findStereoLabel(gen + "/overcast.rawlog", io::labelWithoutSuffixes({"_mono", "_inv", "_lin"}));
 		io::StereoFrameSource source(gen + "/overcast.rawlog", so);

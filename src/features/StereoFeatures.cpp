@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <ostream>
 #include <stdexcept>
 
@@ -30,6 +31,8 @@ double msSince(Clock::time_point t0)
 }  // namespace
 
 // ---- options ------------------------------------------------------------------
+const char* toString(DescriptorKind k) { return k == DescriptorKind::Orb ? "orb" : "brief"; }
+
 /** Keys renamed to carry their unit (the members keep their names). */
 static const std::vector<core::TRenamedKey> kRenamedFeatureKeys = {
 	{"min_disparity", "min_disparity_px"},
@@ -68,6 +71,9 @@ void TStereoFeatureOptions::loadFromConfigFile(
 	r.read("dense_check", dense_check);
 	r.read("shifted_window_check", shifted_window_check);
 	r.read("shifted_window_margin", shifted_window_margin);
+	r.readChoice<DescriptorKind>("descriptor", descriptor, {{"brief", DescriptorKind::Brief}, {"orb", DescriptorKind::Orb}});
+	r.read("orb_levels", orb_levels);
+	r.read("orb_scale_factor", orb_scale_factor);
 	r.finish();
 	try
 	{
@@ -106,6 +112,9 @@ void TStereoFeatureOptions::dumpToTextStream(std::ostream& o) const
 			"four corner-holding windows must agree (needs dense_check)");
 	w.value("shifted_window_margin", shifted_window_margin,
 			"ZNCC a shifted window's other peak may exceed the match by");
+	w.value("descriptor", toString(descriptor), "brief (single-scale FAST + BRIEF) or orb (OpenCV ORB: pyramid, orientation)");
+	w.value("orb_levels", orb_levels, "ORB pyramid levels, 1 = single scale");
+	w.value("orb_scale_factor", orb_scale_factor, "ORB size ratio of neighbouring levels");
 }
 
 void TStereoFeatureOptions::validate() const
@@ -124,17 +133,16 @@ void TStereoFeatureOptions::validate() const
 	if (!(presmooth_sigma >= 0 && presmooth_sigma <= 5)) bad("presmooth_sigma_px must be in [0,5]");
 	if (subpixel_iterations < 0 || subpixel_iterations > 20) bad("subpixel_iterations must be in [0,20]");
 	if (!(shifted_window_margin >= 0 && shifted_window_margin <= 2)) bad("shifted_window_margin must be in [0,2]");
+	if (orb_levels < 1 || orb_levels > 16) bad("orb_levels must be in [1,16]");
+	if (!(orb_scale_factor > 1 && orb_scale_factor <= 2)) bad("orb_scale_factor must be in (1,2]");
 }
 
 // ---- FAST on a grid -----------------------------------------------------------
-void detectFastGrid(
-	const cv::Mat& grey8, int threshold, int cols, int rows, int perCell, int border,
+void spreadOverGrid(
+	const std::vector<cv::KeyPoint>& all, int W, int H, int cols, int rows, int perCell, int border,
 	std::vector<cv::KeyPoint>& out)
 {
-	std::vector<cv::KeyPoint> all;
-	cv::FAST(grey8, all, threshold, true, cv::FastFeatureDetector::TYPE_9_16);
 	out.clear();
-	const int W = grey8.cols, H = grey8.rows;
 	std::vector<std::vector<cv::KeyPoint>> cells(static_cast<size_t>(cols * rows));
 	for (const auto& k : all)
 	{
@@ -153,6 +161,92 @@ void detectFastGrid(
 			c.resize(perCell);
 		}
 		out.insert(out.end(), c.begin(), c.end());
+	}
+}
+
+void detectFastGrid(
+	const cv::Mat& grey8, int threshold, int cols, int rows, int perCell, int border,
+	std::vector<cv::KeyPoint>& out)
+{
+	std::vector<cv::KeyPoint> all;
+	cv::FAST(grey8, all, threshold, true, cv::FastFeatureDetector::TYPE_9_16);
+	spreadOverGrid(all, grey8.cols, grey8.rows, cols, rows, perCell, border, out);
+}
+
+// ---- detection and description ---------------------------------------------------
+namespace
+{
+/** OpenCV's ORB as the options set it. FAST_SCORE: corners are ranked (by
+ * ORB within a level, by the grid, by the map's strongest-corner selection)
+ * by the same FAST score as single-scale FAST, which the map stores as a
+ * 16-bit integer; ORB's Harris scores are tiny fractions. `edge` is ORB's
+ * edge threshold: corners closer to a level's edge are not detected. */
+cv::Ptr<cv::ORB> makeOrb(const TStereoFeatureOptions& o, int nFeatures, int edge)
+{
+	return cv::ORB::create(
+		nFeatures, static_cast<float>(o.orb_scale_factor), o.orb_levels, edge, 0, 2, cv::ORB::FAST_SCORE,
+		kOrbPatchSize, o.fast_threshold);
+}
+}  // namespace
+
+CornerDescriber::CornerDescriber(const TStereoFeatureOptions& o) : m_opts(o), m_brief(o.brief_patch_size, o.brief_seed)
+{
+	// ORB's descriptor patch lies inside the image (ORB's own edge threshold);
+	// BRIEF's inside its S x S square.
+	const int descRadius = o.descriptor == DescriptorKind::Orb ? kOrbPatchSize : m_brief.radius() + 1;
+	m_border = std::max({descRadius, o.patch_radius + 4, kPatchSize / 2 + 3});
+}
+
+void CornerDescriber::detect(const cv::Mat& grey8, int perCell, int border, std::vector<cv::KeyPoint>& out) const
+{
+	const auto& o = m_opts;
+	if (o.descriptor == DescriptorKind::Brief)
+	{
+		detectFastGrid(grey8, o.fast_threshold, o.grid_cols, o.grid_rows, perCell, border, out);
+		return;
+	}
+	// ORB keeps its nFeatures best per level by score, not spread: ask for
+	// several times what the grid keeps and let the grid choose (all when
+	// perCell <= 0). Its edge threshold is the border, so no corner the grid
+	// would keep is lost before it (the right image's candidates reach closer
+	// to the edge than described corners).
+	const int cells = o.grid_cols * o.grid_rows;
+	const int nFeatures = perCell > 0 ? 4 * cells * perCell : 1 << 20;
+	std::vector<cv::KeyPoint> all;
+	makeOrb(o, nFeatures, std::max(border, 3))->detect(grey8, all);
+	spreadOverGrid(all, grey8.cols, grey8.rows, o.grid_cols, o.grid_rows, perCell, border, out);
+}
+
+void CornerDescriber::describe(
+	const cv::Mat& grey8, const std::vector<cv::KeyPoint>& kps, std::vector<TBriefDescriptor>& desc,
+	std::vector<uint8_t>& ok, cv::Mat* smoothedOut) const
+{
+	desc.assign(kps.size(), TBriefDescriptor());
+	ok.assign(kps.size(), 0);
+	if (smoothedOut) smoothedOut->release();
+	if (m_opts.descriptor == DescriptorKind::Brief)
+	{
+		cv::Mat smoothed;
+		BriefExtractor::smooth(grey8, smoothed);
+		if (smoothedOut) *smoothedOut = smoothed;
+		for (size_t i = 0; i < kps.size(); i++)
+			ok[i] = m_brief.compute(
+				smoothed, static_cast<int>(std::floor(kps[i].pt.x)), static_cast<int>(std::floor(kps[i].pt.y)), desc[i]);
+		return;
+	}
+	// ORB's compute drops corners near the edges and regroups the rest by
+	// level: class_id carries each corner's index through it. The angle and
+	// octave are the detector's (compute keeps given keypoints' angles).
+	std::vector<cv::KeyPoint> tagged(kps);
+	for (size_t i = 0; i < tagged.size(); i++) tagged[i].class_id = static_cast<int>(i);
+	cv::Mat d;
+	makeOrb(m_opts, static_cast<int>(std::max<size_t>(1, kps.size())), kOrbPatchSize)->compute(grey8, tagged, d);
+	for (size_t j = 0; j < tagged.size(); j++)
+	{
+		const int i = tagged[j].class_id;
+		if (i < 0 || static_cast<size_t>(i) >= kps.size()) continue;
+		std::memcpy(desc[i].w.data(), d.ptr<uint8_t>(static_cast<int>(j)), 32);
+		ok[i] = 1;
 	}
 }
 
@@ -505,11 +599,8 @@ int argMax(const std::vector<float>& v)
 }  // namespace
 
 // ---- stereo -------------------------------------------------------------------
-StereoFeatureExtractor::StereoFeatureExtractor(const TOptions& o)
-	: m_opts(o), m_brief(o.brief_patch_size, o.brief_seed)
-{
-	m_opts.validate();
-}
+// The options are validated before the describer is built from them.
+StereoFeatureExtractor::StereoFeatureExtractor(const TOptions& o) : m_opts(o), m_corners((o.validate(), o)) {}
 
 namespace
 {
@@ -578,11 +669,10 @@ void StereoFeatureExtractor::process(
 	out.left = left;  // what the patches come from: later frames correlate against this
 	out.right = right;
 	const int r = o.patch_radius;
-	const int borderL = std::max({m_brief.radius() + 1, r + 4, kPatchSize / 2 + 3});
 	const int borderR = r + 3;
 	std::vector<cv::KeyPoint> kl, kr;
-	detectFastGrid(left, o.fast_threshold, o.grid_cols, o.grid_rows, o.max_per_cell, borderL, kl);
-	detectFastGrid(right, o.fast_threshold, o.grid_cols, o.grid_rows, o.max_per_cell_right, borderR, kr);
+	m_corners.detect(left, o.max_per_cell, m_corners.border(), kl);
+	m_corners.detect(right, o.max_per_cell_right, borderR, kr);
 	out.cornersLeft = kl.size();
 	out.cornersRight = kr.size();
 	out.timings.detect_ms = msSince(t0);
@@ -721,13 +811,19 @@ void StereoFeatureExtractor::process(
 	out.timings.stereo_ms = msSince(t0);
 
 	t0 = Clock::now();
-	cv::Mat smoothed;
-	BriefExtractor::smooth(left, smoothed);
+	std::vector<cv::KeyPoint> matched;
+	matched.reserve(pairs.size());
+	for (const auto& p : pairs) matched.push_back(kl[p.kp]);
+	std::vector<TBriefDescriptor> desc;
+	std::vector<uint8_t> described;
+	m_corners.describe(left, matched, desc, described, &out.smoothed);
 	out.meas.reserve(pairs.size());
 	const int ph = kPatchSize / 2;
-	for (const auto& p : pairs)
+	for (size_t i = 0; i < pairs.size(); i++)
 	{
+		const auto& p = pairs[i];
 		const auto& k = kl[p.kp];
+		if (!described[i]) continue;
 		TStereoMeasurement m;
 		m.uL = std::floor(k.pt.x);
 		m.v = std::floor(k.pt.y);
@@ -737,7 +833,7 @@ void StereoFeatureExtractor::process(
 		Eigen::Matrix3d J;
 		if (!calib.triangulate(m.uL, m.v, m.uR, m.P, &J) || m.P.z() > o.max_depth) continue;
 		m.cov = calib.triangulationCovariance(J, o.sigma_px);
-		if (!m_brief.compute(smoothed, static_cast<int>(m.uL), static_cast<int>(m.v), m.desc)) continue;
+		m.desc = desc[i];
 		for (int dy = -ph; dy <= ph; dy++)
 		{
 			const uint8_t* row = left.ptr<uint8_t>(static_cast<int>(m.v) + dy) + static_cast<int>(m.uL) - ph;
@@ -745,7 +841,6 @@ void StereoFeatureExtractor::process(
 		}
 		out.meas.push_back(m);
 	}
-	out.smoothed = smoothed;
 	out.timings.describe_ms = msSince(t0);
 }
 

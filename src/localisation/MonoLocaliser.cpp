@@ -93,24 +93,25 @@ void extractImageFeatures(
 		throw std::invalid_argument("extractImageFeatures: needs a non-empty CV_8UC1 image");
 	out.feats.clear();
 	// As StereoFeatureExtractor::process does for the left image: the same
-	// smoothing, detector and border, BRIEF on the same smoothed image.
+	// smoothing, detector, border and descriptor (features::CornerDescriber).
 	cv::Mat img = grey8;
 	if (fo.presmooth_sigma > 0) cv::GaussianBlur(grey8, img, cv::Size(), fo.presmooth_sigma);
 	out.image = img;
-	const features::BriefExtractor brief(fo.brief_patch_size, fo.brief_seed);
-	const int border = std::max({brief.radius() + 1, fo.patch_radius + 4, features::kPatchSize / 2 + 3});
+	const features::CornerDescriber corners(fo);
 	std::vector<cv::KeyPoint> kp;
-	features::detectFastGrid(img, fo.fast_threshold, fo.grid_cols, fo.grid_rows, perCell, border, kp);
-	cv::Mat smoothed;
-	features::BriefExtractor::smooth(img, smoothed);
+	corners.detect(img, perCell, corners.border(), kp);
+	std::vector<features::TBriefDescriptor> desc;
+	std::vector<uint8_t> ok;
+	corners.describe(img, kp, desc, ok);
 	out.feats.reserve(kp.size());
-	for (const auto& k : kp)
+	for (size_t i = 0; i < kp.size(); i++)
 	{
+		if (!ok[i]) continue;
 		TImageFeature f;
-		f.u = std::floor(k.pt.x);
-		f.v = std::floor(k.pt.y);
-		f.response = k.response;
-		if (!brief.compute(smoothed, static_cast<int>(f.u), static_cast<int>(f.v), f.desc)) continue;
+		f.u = std::floor(kp[i].pt.x);
+		f.v = std::floor(kp[i].pt.y);
+		f.response = kp[i].response;
+		f.desc = desc[i];
 		out.feats.push_back(f);
 	}
 }

@@ -247,6 +247,12 @@ CStereoLocaliser::CStereoLocaliser(const CKeyframeMap& map, const std::string& c
 
 void CStereoLocaliser::reset() { m_accept.reset(); }
 
+const features::BriefExtractor* CStereoLocaliser::briefPattern() const
+{
+	return m_map.channels()[m_map.channelIndex(m_channel)].descriptor == features::DescriptorKind::Brief ? &m_brief
+																										   : nullptr;
+}
+
 TPoseWithCov CStereoLocaliser::between(uint32_t a, uint32_t b) const
 {
 	TPoseWithCov r;
@@ -370,7 +376,7 @@ void CStereoLocaliser::searchLocalMapByPatches(
 		mi.frame = in.meas;
 		mi.calib = in.calib;
 		mi.T_curr_kf_pred = T_curr_ref * T_ref_k;
-		mi.brief = &m_brief;
+		mi.brief = briefPattern();
 		vo::TKeyframeMatchOutput mo;
 		m_gateMatcher.searchPatches(mi, skip, occupied, mo);
 		for (size_t c = 0; c < mo.corr.size(); c++)
@@ -410,7 +416,7 @@ void CStereoLocaliser::searchLocalMap(
 		mi.calib = in.calib;
 		mi.T_curr_kf_pred = pinv.T;
 		mi.cov_T_curr_kf_pred = pinv.cov * (gateScale * gateScale);
-		mi.brief = &m_brief;
+		mi.brief = briefPattern();
 		vo::TKeyframeMatchOutput mo;
 		m_matcher.match(mi, mo);
 		if (k == ref) out.gate = mo.gate;  // the lost test reads the reference keyframe's gates
@@ -715,7 +721,7 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 		p1.cov = geometry::invertCovariance(po.T_curr_ref.inverse(), o.cov_scale * po.cov_T_ref_curr);
 		mi.T_curr_kf_pred = p1.T;
 		mi.cov_T_curr_kf_pred = p1.cov;
-		mi.brief = &m_brief;  // a pose now: the second pass may warp
+		mi.brief = briefPattern();  // a pose now: the second pass may warp
 		vo::TKeyframeMatchOutput mo2;
 		m_gateMatcher.match(mi, mo2);
 		vo::TRelativePoseOutput po2;

@@ -215,8 +215,14 @@ void putChannel(ByteWriter& w, const map::TChannelParams& c)
 	w.put<uint32_t>(c.brief_seed);
 	w.put<double>(c.presmooth_sigma);
 	w.put<double>(c.sigma_px);
+	// version 4
+	w.put<uint8_t>(static_cast<uint8_t>(c.descriptor));
+	w.put<int32_t>(c.orb_levels);
+	w.put<double>(c.orb_scale_factor);
 }
-map::TChannelParams getChannel(ByteReader& r)
+/** A channel as stored by format `version`: before version 4 every map was
+ * FAST + BRIEF (the ORB fields keep their defaults). */
+map::TChannelParams getChannel(ByteReader& r, uint8_t version)
 {
 	map::TChannelParams c;
 	c.label = r.str();
@@ -226,6 +232,16 @@ map::TChannelParams getChannel(ByteReader& r)
 	c.brief_seed = r.get<uint32_t>();
 	c.presmooth_sigma = r.get<double>();
 	c.sigma_px = r.get<double>();
+	if (version >= 4)
+	{
+		const auto kind = r.get<uint8_t>();
+		if (kind > 1) r.fail("channel '" + c.label + "': descriptor kind " + std::to_string(kind) + " unknown");
+		c.descriptor = static_cast<features::DescriptorKind>(kind);
+		c.orb_levels = r.get<int32_t>();
+		c.orb_scale_factor = r.get<double>();
+		if (c.orb_levels < 1) r.fail("channel '" + c.label + "': ORB levels");
+		if (!(c.orb_scale_factor > 1) || !std::isfinite(c.orb_scale_factor)) r.fail("channel '" + c.label + "': ORB scale factor");
+	}
 	if (c.label.empty()) r.fail("channel without a label");
 	if (c.filter_class.empty()) r.fail("channel '" + c.label + "': no filter class");
 	if (c.brief_patch_size <= 0) r.fail("channel '" + c.label + "': BRIEF patch size");
@@ -738,7 +754,9 @@ static TBlocks encode(
 // 3: each channel block's checksum covers its position (blockSum): blocks
 //    swapped between channels fail the load.
 // 4: a surface normal per measurement (3 x int8 after the patches), for
-//    warped matching; maps of versions 1-3 load without normals.
+//    warped matching; each channel records its descriptor kind (FAST +
+//    BRIEF or ORB) and ORB's pyramid (levels, scale factor). Maps of
+//    versions 1-3 load without normals, as BRIEF.
 uint8_t CKeyframeMap::serializeGetVersion() const { return 4; }
 
 void CKeyframeMap::serializeTo(mrpt::serialization::CArchive& out) const
@@ -811,7 +829,7 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 			if (setUp ? (w <= 0 || h <= 0 || w * kPixelQuantum > 65535 || h * kPixelQuantum > 65535) : (w != 0 || h != 0))
 				r.fail("image size " + std::to_string(w) + "x" + std::to_string(h));
 			std::vector<map::TChannelParams> channels;
-			for (int i = 0; i < nc; i++) channels.push_back(getChannel(r));
+			for (int i = 0; i < nc; i++) channels.push_back(getChannel(r, version));
 			const auto nr = r.get<uint16_t>();
 			std::vector<std::string> runs;
 			for (int i = 0; i < nr; i++) runs.push_back(r.str());

@@ -20,6 +20,9 @@ TChannelParams TChannelParams::From(
 	p.brief_patch_size = fo.brief_patch_size;
 	p.brief_seed = fo.brief_seed;
 	p.presmooth_sigma = fo.presmooth_sigma;
+	p.descriptor = fo.descriptor;
+	p.orb_levels = fo.orb_levels;
+	p.orb_scale_factor = fo.orb_scale_factor;
 	p.sigma_px = fo.sigma_px;
 	return p;
 }
@@ -63,8 +66,11 @@ std::string TChannelParams::asString() const
 	s << "'" << label << "': " << filter_class;
 	const std::string o = filterOptionsLine();
 	if (!o.empty()) s << " (" << o << ")";
-	s << ", BRIEF patch " << brief_patch_size << " px seed " << brief_seed << ", presmooth "
-	  << presmooth_sigma << " px";
+	if (descriptor == features::DescriptorKind::Orb)
+		s << ", ORB " << orb_levels << " levels scale " << orb_scale_factor;
+	else
+		s << ", BRIEF patch " << brief_patch_size << " px seed " << brief_seed;
+	s << ", presmooth " << presmooth_sigma << " px";
 	return s.str();
 }
 
@@ -81,8 +87,20 @@ std::string TChannelParams::differences(const TChannelParams& o) const
 		const auto ia = a.find(k), ib = b.find(k);
 		if (ia == a.end() || ib == b.end() || ia->second != ib->second) d.push_back("filter option " + k);
 	}
-	if (brief_patch_size != o.brief_patch_size) d.push_back("BRIEF patch size");
-	if (brief_seed != o.brief_seed) d.push_back("BRIEF pattern seed");
+	// BRIEF's pattern shapes BRIEF descriptors only, ORB's pyramid ORB's only.
+	using features::DescriptorKind;
+	if (descriptor != o.descriptor)
+		d.push_back(std::string("descriptor: map ") + features::toString(descriptor) + ", live " + features::toString(o.descriptor));
+	else if (descriptor == DescriptorKind::Brief)
+	{
+		if (brief_patch_size != o.brief_patch_size) d.push_back("BRIEF patch size");
+		if (brief_seed != o.brief_seed) d.push_back("BRIEF pattern seed");
+	}
+	else
+	{
+		if (orb_levels != o.orb_levels) d.push_back("ORB pyramid levels");
+		if (std::abs(orb_scale_factor - o.orb_scale_factor) > 1e-9) d.push_back("ORB scale factor");
+	}
 	if (std::abs(presmooth_sigma - o.presmooth_sigma) > 1e-9) d.push_back("pre-smoothing");
 	std::string out;
 	for (const auto& x : d) out += (out.empty() ? "" : ", ") + x;
@@ -93,7 +111,8 @@ bool TChannelParams::operator==(const TChannelParams& o) const
 {
 	return label == o.label && filter_class == o.filter_class && filter_options == o.filter_options &&
 		   brief_patch_size == o.brief_patch_size && brief_seed == o.brief_seed &&
-		   presmooth_sigma == o.presmooth_sigma && sigma_px == o.sigma_px;
+		   presmooth_sigma == o.presmooth_sigma && descriptor == o.descriptor && orb_levels == o.orb_levels &&
+		   orb_scale_factor == o.orb_scale_factor && sigma_px == o.sigma_px;
 }
 
 }  // namespace shadyloc::map

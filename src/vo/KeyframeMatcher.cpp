@@ -54,7 +54,7 @@ CKeyframeMatcher::CKeyframeMatcher(const TOptions& o) : m_opts(o) {}
 bool CKeyframeMatcher::warpOf(
 	const TKeyframeMatchInput& in, const features::TStereoMeasurement& lm, Eigen::Matrix2d& A) const
 {
-	if (!m_opts.warp || !in.brief || in.frame->smoothed.empty() || lm.normal.isZero()) return false;
+	if (!m_opts.warp || lm.normal.isZero()) return false;
 	return features::planeInducedAffine(
 			   in.calib_kf, in.calib, in.T_curr_kf_pred, lm.P, lm.normal.cast<double>(), A) &&
 		   features::warpDistortion(A) > m_opts.warp_min_distortion;
@@ -170,7 +170,8 @@ int CKeyframeMatcher::searchDescriptors(
 		// again with the warped tests (features/PatchWarp.h).
 		Eigen::Matrix2d A;
 		std::optional<features::CWarpedBriefPattern> warped;
-		if (warpOf(in, kfm[j], A)) warped.emplace(*in.brief, A);
+		// BRIEF tests only: ORB's are oriented, and a map says which it holds.
+		if (in.brief && !in.frame->smoothed.empty() && warpOf(in, kfm[j], A)) warped.emplace(*in.brief, A);
 		features::TBriefDescriptor wd;
 		for (int rr = r0; rr <= r1; rr++)
 			for (int cc = c0; cc <= c1; cc++)

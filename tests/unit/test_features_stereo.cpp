@@ -17,6 +17,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <random>
 #include <regex>
 #include <sstream>
@@ -443,5 +444,128 @@ TEST(FeaturesStereo, StereoCheckOptionsLoadAndValidate)
 	{
 		EXPECT_NE(std::string(e.what()).find("shifted_window_margin"), std::string::npos) << e.what();
 		EXPECT_NE(std::string(e.what()).find("[f]"), std::string::npos) << e.what();
+	}
+}
+
+namespace
+{
+/** Mean Hamming distance between the descriptors of corners found at the
+ * same image point in the corridor image and in that image turned by 90
+ * degrees (level-0 corners only: their positions map exactly), and how many
+ * pairs there were. */
+std::pair<double, size_t> hammingUnderQuarterTurn(const features::TStereoFeatureOptions& fo)
+{
+	const sim::SyntheticCorridor corridor;
+	cv::Mat l, r, g, gt;
+	corridor.render(sim::SyntheticCorridor::examplePose(0), l, r, 0);
+	image::toMonochrome(l, g, image::ChannelOrder::BGR);
+	cv::rotate(g, gt, cv::ROTATE_90_CLOCKWISE);	 // (x, y) -> (H - 1 - y, x)
+	const features::CornerDescriber cd(fo);
+	std::vector<cv::KeyPoint> ka, kb;
+	cd.detect(g, 0, cd.border(), ka);
+	cd.detect(gt, 0, cd.border(), kb);
+	std::vector<features::TBriefDescriptor> da, db;
+	std::vector<uint8_t> oka, okb;
+	cd.describe(g, ka, da, oka);
+	cd.describe(gt, kb, db, okb);
+	std::map<std::pair<int, int>, size_t> at;
+	for (size_t j = 0; j < kb.size(); j++)
+		if (kb[j].octave == 0 && okb[j]) at[{static_cast<int>(kb[j].pt.x), static_cast<int>(kb[j].pt.y)}] = j;
+	double sum = 0;
+	size_t n = 0;
+	for (size_t i = 0; i < ka.size(); i++)
+	{
+		if (ka[i].octave != 0 || !oka[i]) continue;
+		const auto it = at.find({g.rows - 1 - static_cast<int>(ka[i].pt.y), static_cast<int>(ka[i].pt.x)});
+		if (it == at.end()) continue;
+		sum += features::hamming(da[i], db[it->second]);
+		n++;
+	}
+	return {n ? sum / n : 256.0, n};
+}
+}  // namespace
+
+TEST(FeaturesOrb, OrientedDescriptorsSurviveAQuarterTurnWhereBriefDoesNot)
+{
+	// The same corners seen in an image turned by 90 degrees: ORB measures
+	// each corner's orientation and turns its tests with it, BRIEF does not
+	// (its descriptors of a turned patch are as good as unrelated, ~128 bits).
+	features::TStereoFeatureOptions brief, orb;
+	orb.descriptor = features::DescriptorKind::Orb;
+	const auto [hb, nb] = hammingUnderQuarterTurn(brief);
+	const auto [ho, no] = hammingUnderQuarterTurn(orb);
+	std::printf("[orb-quarter-turn] BRIEF %.1f bits over %zu corners, ORB %.1f bits over %zu\n", hb, nb, ho, no);
+	ASSERT_GT(nb, 50u);
+	ASSERT_GT(no, 50u);
+	EXPECT_GT(hb, 90.0);
+	EXPECT_LT(ho, 40.0);
+}
+
+TEST(FeaturesOrb, StereoMeasurementsFromThePyramid)
+{
+	// ORB through the one stereo pipeline: corners from every pyramid level,
+	// matched at their level-0 positions, disparities as good as with FAST,
+	// each measurement carrying ORB's descriptor of its own corner.
+	const sim::SyntheticCorridor corridor;
+	const Eigen::Isometry3d T = sim::SyntheticCorridor::examplePose(0);
+	cv::Mat l, r, l8, r8;
+	corridor.render(T, l, r, 0);
+	image::toMonochrome(l, l8, image::ChannelOrder::BGR);
+	image::toMonochrome(r, r8, image::ChannelOrder::BGR);
+	features::TStereoFeatureOptions fo;
+	fo.descriptor = features::DescriptorKind::Orb;
+	const features::StereoFeatureExtractor ex(fo), fast;
+	features::TStereoFrame fr, ff;
+	ex.process(l8, r8, corridor.calib(), fr);
+	fast.process(l8, r8, corridor.calib(), ff);
+	std::vector<double> err;
+	for (const auto& m : fr.meas)
+	{
+		const double Z = corridor.depth(T, m.uL, m.v);
+		if (Z > 0) err.push_back(std::abs(corridor.calib().disparity(m.uL, m.uR) - corridor.calib().fx * corridor.calib().baseline / Z));
+		EXPECT_GE(m.uL, features::kOrbPatchSize);
+	}
+	ASSERT_GT(err.size(), 200u);
+	std::sort(err.begin(), err.end());
+	EXPECT_LT(err[err.size() / 2], 0.25);
+	// The left corners are ORB's (not FAST's at level 0): some lie where no
+	// level-0 corner does, and descriptors at a shared corner differ.
+	std::vector<cv::KeyPoint> kl;
+	ex.corners().detect(fr.left, fo.max_per_cell, ex.corners().border(), kl);
+	int coarse = 0;
+	for (const auto& k : kl) coarse += k.octave > 0;
+	EXPECT_GT(coarse, 20);
+	size_t same = 0, shared = 0;
+	for (const auto& a : fr.meas)
+		for (const auto& b : ff.meas)
+			if (a.uL == b.uL && a.v == b.v)
+			{
+				shared++;
+				same += a.desc == b.desc;
+			}
+	EXPECT_GT(shared, 10u);
+	EXPECT_EQ(same, 0u);
+	// A bad pyramid names its key.
+	mrpt::config::CConfigFileMemory bad("[f]\ndescriptor = orb\norb_scale_factor = 1\n");
+	try
+	{
+		features::TStereoFeatureOptions o;
+		o.loadFromConfigFile(bad, "f");
+		ADD_FAILURE() << "orb_scale_factor = 1 accepted";
+	}
+	catch (const std::invalid_argument& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("orb_scale_factor"), std::string::npos) << e.what();
+	}
+	mrpt::config::CConfigFileMemory kind("[f]\ndescriptor = sift\n");
+	try
+	{
+		features::TStereoFeatureOptions o;
+		o.loadFromConfigFile(kind, "f");
+		ADD_FAILURE() << "descriptor = sift accepted";
+	}
+	catch (const std::invalid_argument& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("descriptor"), std::string::npos) << e.what();
 	}
 }

@@ -399,11 +399,11 @@ TEST(MapFormat, Version1MapsStillLoad)
 	EXPECT_EQ(m->channels()[1].label, "inv9");
 	EXPECT_EQ(m->runs(), (std::vector<std::string>{"dawn", "dusk"}));
 	EXPECT_EQ(m->keyframe(2).channels[1].size(), 3u);
-	const auto v3 = bytesOf(*m);
-	EXPECT_EQ(v3[1 + name.size()], 4);
-	const auto back = CKeyframeMap::LoadFromBytes(v3.data(), v3.size());
+	const auto v4 = bytesOf(*m);
+	EXPECT_EQ(v4[1 + name.size()], 4);
+	const auto back = CKeyframeMap::LoadFromBytes(v4.data(), v4.size());
 	EXPECT_TRUE(back->options == m->options);
-	EXPECT_EQ(bytesOf(*back), v3);
+	EXPECT_EQ(bytesOf(*back), v4);
 }
 
 // tests/golden/CKeyframeMap_v2.bin: the format-test map as version 2 wrote it
@@ -412,13 +412,42 @@ TEST(MapFormat, Version1MapsStillLoad)
 TEST(MapFormat, Version2MapsStillLoad)
 {
 	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
-	const auto v2 = fileBytes(golden + "CKeyframeMap_v2.bin"), v3 = fileBytes(golden + "CKeyframeMap.bin");
+	const auto v2 = fileBytes(golden + "CKeyframeMap_v2.bin"), v4 = fileBytes(golden + "CKeyframeMap.bin");
 	const std::string name = "shadyloc::CKeyframeMap";
 	ASSERT_GT(v2.size(), 2 + name.size());
 	ASSERT_EQ(v2[1 + name.size()], 2) << "the fixture is not a version 2 map";
-	ASSERT_EQ(v3[1 + name.size()], 4);
+	ASSERT_EQ(v4[1 + name.size()], 4);
 	const auto m = CKeyframeMap::LoadFromBytes(v2.data(), v2.size(), "CKeyframeMap_v2.bin");
-	EXPECT_EQ(bytesOf(*m), v3);
+	EXPECT_EQ(bytesOf(*m), v4);
+}
+
+// tests/golden/CKeyframeMap_v3.bin: the format-test map as version 3 wrote
+// it, before channels recorded their descriptor kind. It loads with every
+// channel FAST + BRIEF, to the content the current golden file holds.
+TEST(MapFormat, Version3MapsStillLoadAsBrief)
+{
+	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
+	const auto v3 = fileBytes(golden + "CKeyframeMap_v3.bin"), v4 = fileBytes(golden + "CKeyframeMap.bin");
+	const std::string name = "shadyloc::CKeyframeMap";
+	ASSERT_GT(v3.size(), 2 + name.size());
+	ASSERT_EQ(v3[1 + name.size()], 3) << "the fixture is not a version 3 map";
+	const auto m = CKeyframeMap::LoadFromBytes(v3.data(), v3.size(), "CKeyframeMap_v3.bin");
+	for (const auto& c : m->channels()) EXPECT_EQ(c.descriptor, features::DescriptorKind::Brief) << c.label;
+	EXPECT_EQ(bytesOf(*m), v4);
+}
+
+TEST(MapFormat, DescriptorKindRoundTrips)
+{
+	// An ORB channel with its pyramid comes back as such (version 4).
+	const auto m = test::makeSyntheticMap(4, 3, 0, test::kChannelDescriptor);
+	auto b = bytesOf(*m);
+	auto back = CKeyframeMap::LoadFromBytes(b.data(), b.size());
+	EXPECT_EQ(back->channels()[1].descriptor, features::DescriptorKind::Orb);
+	EXPECT_TRUE(back->channels()[1] == m->channels()[1]);
+	const auto s = test::makeSyntheticMap(4, 3, 0, test::kChannelOrbScale);
+	b = bytesOf(*s);
+	back = CKeyframeMap::LoadFromBytes(b.data(), b.size());
+	EXPECT_EQ(back->channels()[1].orb_scale_factor, 1.3);
 }
 
 // tests/golden/CKeyframeMap_v3.bin: the format-test map as version 3 wrote it

@@ -167,6 +167,47 @@ TEST(MapQueries, MeasurementsByChannelAndDescriptorCheck)
 	EXPECT_NO_THROW(m->checkCompatible(live));
 }
 
+TEST(MapQueries, DescriptorKindAndPyramidAreDescriptorDefining)
+{
+	// A map of FAST + BRIEF refuses live ORB and the other way round, naming
+	// both kinds; between two ORB channels the pyramid counts, BRIEF's pattern
+	// does not (and the other way round between two BRIEF channels).
+	const auto brief = test::makeSyntheticMap(4, 3, 0), orb = test::makeSyntheticMap(4, 3, 0, test::kChannelDescriptor);
+	ASSERT_EQ(brief->channels()[1].descriptor, features::DescriptorKind::Brief);
+	ASSERT_EQ(orb->channels()[1].descriptor, features::DescriptorKind::Orb);
+	const auto refused = [](const CKeyframeMap& m, const map::TChannelParams& live) -> std::string {
+		try
+		{
+			m.checkCompatible(live);
+		}
+		catch (const std::runtime_error& e)
+		{
+			return e.what();
+		}
+		return "";
+	};
+	std::string w = refused(*brief, orb->channels()[1]);
+	EXPECT_NE(w.find("descriptor: map brief, live orb"), std::string::npos) << w;
+	EXPECT_NE(w.find("ORB 8 levels scale 1.2"), std::string::npos) << w;	// the live set, in full
+	EXPECT_NE(w.find("BRIEF patch 32"), std::string::npos) << w;	// the map's
+	w = refused(*orb, brief->channels()[1]);
+	EXPECT_NE(w.find("descriptor: map orb, live brief"), std::string::npos) << w;
+	auto live = orb->channels()[1];
+	live.orb_levels = 4;
+	w = refused(*orb, live);
+	EXPECT_NE(w.find("ORB pyramid levels"), std::string::npos) << w;
+	live = orb->channels()[1];
+	live.orb_scale_factor = 1.5;
+	w = refused(*orb, live);
+	EXPECT_NE(w.find("ORB scale factor"), std::string::npos) << w;
+	live = orb->channels()[1];
+	live.brief_seed ^= 1;
+	EXPECT_EQ(refused(*orb, live), "");
+	live = brief->channels()[1];
+	live.orb_levels = 3;
+	EXPECT_EQ(refused(*brief, live), "");
+}
+
 TEST(MapQueries, MeaninglessMetricMapCallsThrowNamingTheClass)
 {
 	const auto m = test::makeSyntheticMap(4, 3, 0);

@@ -30,6 +30,9 @@ enum Mutation
 	kInvariantAlpha,
 	kInvariantScale,
 	kChannelFilterClass,
+	kChannelDescriptor,
+	kChannelOrbLevels,
+	kChannelOrbScale,
 	kRunName,
 	kKfTimestamp,
 	kKfFrame,
@@ -79,6 +82,9 @@ inline CKeyframeMap::Ptr makeSyntheticMap(int n = 24, int perKf = 40, int breakA
 	if (mutate == kChannelSeed) fmono.brief_seed = 7;
 	finv.presmooth_sigma = mutate == kChannelPresmooth ? 1.5 : 1.0;
 	if (mutate == kChannelSigma) finv.sigma_px = 0.6;
+	if (mutate == kChannelDescriptor) finv.descriptor = features::DescriptorKind::Orb;
+	if (mutate == kChannelOrbLevels) finv.orb_levels = 4;
+	if (mutate == kChannelOrbScale) finv.orb_scale_factor = 1.3;
 	CFilterMonochrome monoFilter;
 	CFilterInvariant invFilter;
 	auto ip = image::InvariantParams::FromWavelengths(470, 540, 620);

@@ -448,6 +448,9 @@ TEST(Settings, FeatureOptionsRoundTripWithEveryFieldChanged)
 	o.dense_check = false;
 	o.shifted_window_check = false;
 	o.shifted_window_margin = 0.15;
+	o.descriptor = features::DescriptorKind::Orb;
+	o.orb_levels = 5;
+	o.orb_scale_factor = 1.35;
 	std::ostringstream dump;
 	o.dumpToTextStream(dump);
 	mrpt::config::CConfigFileMemory c("[features]\n" + dump.str());
@@ -458,6 +461,7 @@ TEST(Settings, FeatureOptionsRoundTripWithEveryFieldChanged)
 	SAME(max_ambiguity); SAME(lr_tolerance_px); SAME(min_zncc_shifted); SAME(brief_patch_size);
 	SAME(brief_seed); SAME(sigma_px); SAME(max_depth); SAME(presmooth_sigma); SAME(subpixel_iterations);
 	SAME(dense_check); SAME(shifted_window_check); SAME(shifted_window_margin);
+	SAME(descriptor); SAME(orb_levels); SAME(orb_scale_factor);
 	// And the defaults (dense_check and shifted_window_check true) come back too.
 	features::TStereoFeatureOptions d, d2;
 	std::ostringstream dd;

@@ -1,8 +1,9 @@
 /* ShadyLoc — stereo measurements of one rectified grey stereo pair: FAST
- * corners spread over the image by grid buckets, stereo correspondence by
+ * corners (single-scale, or OpenCV's ORB on a scale pyramid with orientation:
+ * [features] descriptor) spread over the image by grid buckets, stereo correspondence by
  * ZNCC patch matching along the epipolar row (candidates: right-image FAST
  * corners within the disparity range), sub-pixel refinement (parabola),
- * left-right consistency and ambiguity rejection, a BRIEF descriptor, a pixel
+ * left-right consistency and ambiguity rejection, a BRIEF (or ORB) descriptor, a pixel
  * patch and a triangulated landmark with its covariance per measurement
  * (McManus et al. 2014, Section II-A).
  *
@@ -27,6 +28,24 @@ namespace shadyloc::features
 {
 /** Side of the stored pixel patch (for sub-pixel refinement against later frames). */
 constexpr int kPatchSize = 9;
+
+/** What detects the left corners and describes them. Both give 256-bit
+ * descriptors compared by Hamming distance; they do not compare with each
+ * other (a map records which one made it). */
+enum class DescriptorKind : uint8_t
+{
+	/** Single-scale FAST, BRIEF without orientation (McManus et al. 2014, Section II-A). */
+	Brief = 0,
+	/** OpenCV's ORB (Rublee et al., ICCV 2011): FAST on a scale pyramid,
+	 * intensity-centroid orientation, rotated learned BRIEF tests. */
+	Orb = 1,
+};
+/** "brief" / "orb". */
+const char* toString(DescriptorKind k);
+
+/** Side of ORB's descriptor patch at its level [px]: OpenCV's default, the
+ * size its learned test pattern was made for; also its edge threshold. */
+constexpr int kOrbPatchSize = 31;
 
 /** One stereo measurement: a left-right correspondence and what follows from it. */
 struct TStereoMeasurement
@@ -61,9 +80,14 @@ struct TStereoFrame
 	cv::Mat smoothed;  //!< left as BRIEF sees it (BriefExtractor::smooth): warped descriptors sample it
 };
 
-/** FAST corners (OpenCV) spread by a grid: the image is cut into cols x rows
+/** Corners spread by a grid: the image (W x H) is cut into cols x rows
  * cells and each keeps its `perCell` strongest corners (all if perCell <= 0).
  * Corners closer than `border` px to an edge are dropped. */
+void spreadOverGrid(
+	const std::vector<cv::KeyPoint>& all, int W, int H, int cols, int rows, int perCell, int border,
+	std::vector<cv::KeyPoint>& out);
+
+/** FAST corners (OpenCV) spread by a grid (spreadOverGrid). */
 void detectFastGrid(
 	const cv::Mat& grey8, int threshold, int cols, int rows, int perCell, int border,
 	std::vector<cv::KeyPoint>& out);
@@ -176,11 +200,49 @@ struct TStereoFeatureOptions : public mrpt::config::CLoadableOptions
 	 * the match only when its ZNCC exceeds the window's own score at the match
 	 * (+-1 px) by more than this [ZNCC units]; 0 = any better shift rejects. */
 	double shifted_window_margin = 0.0;
+	/** Detector and descriptor of the left corners (and detector of the
+	 * right-image candidates): FAST + BRIEF, or ORB. Descriptor-defining. */
+	DescriptorKind descriptor = DescriptorKind::Brief;
+	/** ORB: pyramid levels (1 = single scale, orientation only). Descriptor-defining. */
+	int orb_levels = 8;
+	/** ORB: size ratio of neighbouring pyramid levels (> 1). Descriptor-defining. */
+	double orb_scale_factor = 1.2;
 
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
 	/** Throws std::invalid_argument naming the bad option. */
 	void validate() const;
+};
+
+/** Detection and description of one image's corners as the options say
+ * (FAST + BRIEF, or ORB): the one place both stereo frames and single images
+ * (the image localiser) get their features from. */
+class CornerDescriber
+{
+   public:
+	explicit CornerDescriber(const TStereoFeatureOptions& o);
+
+	/** Smallest distance of a described corner to an image edge [px]. */
+	int border() const { return m_border; }
+
+	/** Corners of grey8 spread by the options' grid, `perCell` per cell, at
+	 * least `border` px from the edges. BRIEF: single-scale FAST. ORB: FAST
+	 * on ORB's pyramid (positions in level-0 pixels, octave and angle set),
+	 * ranked by FAST score so the map's 16-bit response keeps its meaning. */
+	void detect(const cv::Mat& grey8, int perCell, int border, std::vector<cv::KeyPoint>& out) const;
+
+	/** Descriptors at corners of grey8 (as detect() returned them).
+	 * desc[i] is valid where ok[i]; a corner whose patch does not fit is not.
+	 * BRIEF: the smoothed image its tests read goes to `smoothed` when given
+	 * (warped descriptors sample it later); ORB leaves it empty. */
+	void describe(
+		const cv::Mat& grey8, const std::vector<cv::KeyPoint>& kps, std::vector<TBriefDescriptor>& desc,
+		std::vector<uint8_t>& ok, cv::Mat* smoothed = nullptr) const;
+
+   private:
+	TStereoFeatureOptions m_opts;
+	BriefExtractor m_brief;
+	int m_border = 0;
 };
 
 class StereoFeatureExtractor
@@ -197,11 +259,11 @@ class StereoFeatureExtractor
 		const cv::Mat& left8, const cv::Mat& right8, const geometry::TStereoCalib& calib,
 		TStereoFrame& out) const;
 
-	const BriefExtractor& brief() const { return m_brief; }
+	const CornerDescriber& corners() const { return m_corners; }
 
    private:
 	TOptions m_opts;
-	BriefExtractor m_brief;
+	CornerDescriber m_corners;
 };
 
 }  // namespace shadyloc::features

@@ -358,6 +358,10 @@ class CStereoLocaliser
 		const TLocaliserInput& in, uint32_t ref, const TKeyframePose& pred, vo::TKeyframeMatchOutput& mo,
 		vo::TRelativePoseOutput& po, TLocaliserResult& r) const;
 
+	/** The map channel's BRIEF pattern, for warped descriptors; null when
+	 * the channel holds ORB descriptors (oriented tests: not warped). */
+	const features::BriefExtractor* briefPattern() const;
+
 	const CKeyframeMap& m_map;
 	std::string m_channel;
 	TLocaliserOptions m_opts;

@@ -25,7 +25,8 @@ namespace shadyloc::map
 {
 /** The parameters that define a channel's descriptors: the observation
  * filter that made its images (filters/Channel.h: a channel is that filter)
- * and the feature options that shape BRIEF. A live run whose values differ
+ * and the feature options that shape the descriptor (its kind, BRIEF's
+ * pattern or ORB's pyramid). A live run whose values differ
  * produces descriptors that do not compare with the map's. The map knows the
  * filter by class name and image options only (it does not depend on the
  * filters): the filter can be rebuilt from them through the class factory. */
@@ -41,6 +42,10 @@ struct TChannelParams
 	int brief_patch_size = 32;	//!< BRIEF patch side [px]
 	uint32_t brief_seed = 0x5ad710c;  //!< BRIEF test pattern seed
 	double presmooth_sigma = 0;	 //!< Gaussian pre-smoothing before detection [px], 0 = off
+	/** Detector and descriptor (map format 4; older maps are all BRIEF). */
+	features::DescriptorKind descriptor = features::DescriptorKind::Brief;
+	int orb_levels = 8;	 //!< ORB pyramid levels (descriptor-defining with ORB only)
+	double orb_scale_factor = 1.2;	//!< ORB level size ratio (descriptor-defining with ORB only)
 	/** Pixel noise of (uL, v, uR) behind the landmark covariances [px] (not
 	 * descriptor-defining: landmark covariances are recomputed with it on load). */
 	double sigma_px = 0.5;
@@ -57,7 +62,9 @@ struct TChannelParams
 	std::string asString() const;
 	/** Names of the descriptor-defining fields that differ ("" when none):
 	 * filter class, each filter option that differs or is missing on one
-	 * side ("filter option alpha"), BRIEF patch size and seed, pre-smoothing. */
+	 * side ("filter option alpha"), the descriptor kind ("descriptor: map
+	 * brief, live orb"), BRIEF patch size and seed (both BRIEF), ORB levels
+	 * and scale factor (both ORB), pre-smoothing. */
 	std::string differences(const TChannelParams& o) const;
 	bool operator==(const TChannelParams& o) const;
 };

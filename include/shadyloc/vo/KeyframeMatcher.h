@@ -124,7 +124,8 @@ struct TKeyframeMatchInput
 	bool wide = false;
 	/** The BRIEF pattern the landmarks' descriptors were made with: warped
 	 * matching (TKeyframeMatcherOptions::warp) maps it through each
-	 * landmark's warp; null = no warping. */
+	 * landmark's warp; null = descriptors compared unwarped (ORB's oriented
+	 * tests; the patches are still warped). */
 	const features::BriefExtractor* brief = nullptr;
 };
 
@@ -207,8 +208,9 @@ class CKeyframeMatcher
 	const TOptions& options() const { return m_opts; }
 
 	/** The warp of landmark `lm` at the input's predicted pose, when warping
-	 * applies to it (warp on, a BRIEF pattern given, a normal, a warp far
-	 * enough from the identity); false = compare it unwarped. */
+	 * applies to it (warp on, a normal, a warp far enough from the
+	 * identity); false = compare it unwarped. Descriptors are warped only
+	 * with a BRIEF pattern (TKeyframeMatchInput::brief). */
 	bool warpOf(const TKeyframeMatchInput& in, const features::TStereoMeasurement& lm, Eigen::Matrix2d& A) const;
 
    private:
