@@ -422,8 +422,9 @@ TEST(MapFormat, Version2MapsStillLoad)
 }
 
 // tests/golden/CKeyframeMap_v3.bin: the format-test map as version 3 wrote
-// it, before channels recorded their descriptor kind. It loads with every
-// channel FAST + BRIEF, to the content the current golden file holds.
+// it, before channels recorded their descriptor kind and landmarks their
+// normals. It loads with every channel FAST + BRIEF and no normals, to the
+// content the current golden file holds.
 TEST(MapFormat, Version3MapsStillLoadAsBrief)
 {
 	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
@@ -433,6 +434,10 @@ TEST(MapFormat, Version3MapsStillLoadAsBrief)
 	ASSERT_EQ(v3[1 + name.size()], 3) << "the fixture is not a version 3 map";
 	const auto m = CKeyframeMap::LoadFromBytes(v3.data(), v3.size(), "CKeyframeMap_v3.bin");
 	for (const auto& c : m->channels()) EXPECT_EQ(c.descriptor, features::DescriptorKind::Brief) << c.label;
+	// ... and without surface normals (its landmarks are matched unwarped).
+	for (const auto& k : m->keyframes())
+		for (const auto& ch : k.channels)
+			for (const auto& meas : ch) EXPECT_TRUE(meas.normal.isZero());
 	EXPECT_EQ(bytesOf(*m), v4);
 }
 
@@ -448,24 +453,6 @@ TEST(MapFormat, DescriptorKindRoundTrips)
 	b = bytesOf(*s);
 	back = CKeyframeMap::LoadFromBytes(b.data(), b.size());
 	EXPECT_EQ(back->channels()[1].orb_scale_factor, 1.3);
-}
-
-// tests/golden/CKeyframeMap_v3.bin: the format-test map as version 3 wrote it
-// (no surface normals). It loads, without normals, to the content the
-// current golden file (version 4, whose map has none either) holds.
-TEST(MapFormat, Version3MapsStillLoad)
-{
-	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
-	const auto v3 = fileBytes(golden + "CKeyframeMap_v3.bin"), v4 = fileBytes(golden + "CKeyframeMap.bin");
-	const std::string name = "shadyloc::CKeyframeMap";
-	ASSERT_GT(v3.size(), 2 + name.size());
-	ASSERT_EQ(v3[1 + name.size()], 3) << "the fixture is not a version 3 map";
-	ASSERT_EQ(v4[1 + name.size()], 4);
-	const auto m = CKeyframeMap::LoadFromBytes(v3.data(), v3.size(), "CKeyframeMap_v3.bin");
-	for (const auto& k : m->keyframes())
-		for (const auto& ch : k.channels)
-			for (const auto& meas : ch) EXPECT_TRUE(meas.normal.isZero());
-	EXPECT_EQ(bytesOf(*m), v4);
 }
 
 // Version 4 stores a surface normal per landmark (3 x int8): a map built
