@@ -10,7 +10,14 @@
  *            prediction sigma 0.1 m, 1 deg), and how many are right (< 3 px);
  *   refined  correspondences after patch refinement, and how many are right;
  *   inliers  RANSAC + solve inliers; status of a fresh localiser seeded by
- *            the truth; the global search's verdict for the frame.
+ *            the truth; the global search's verdict for the frame;
+ *   with_normal, brief_ok_warped, patch_ok_warped, hamming, hamming_warped
+ *            the detected landmarks with a surface normal, and BRIEF and
+ *            the patch through their plane's warp at the truth against as
+ *            they are (mean Hamming distances);
+ *   patch_all, patch_all_warped  landmarks whose patch, climbed to from the
+ *            true projection whether a corner was detected there or not,
+ *            is found within 1.5 px, unwarped and warped.
  * Per bin of the landmarks' scale change s = depth in keyframe / depth in
  * live frame (s > 1: the live view is closer, the patch looks larger) it
  * adds up detected, brief_ok and refined-right landmarks.
@@ -151,9 +158,6 @@ int main(int argc, char** argv)
 			features::TStereoFrame meas;
 			extractor.process(gl, gr, fr.calib, meas);
 			const auto& lms = map->measurements(kf.id, channel);
-			if (std::getenv("PROBE_NORMALS") && fr.index == 0)
-				for (const auto& l : lms)
-					std::printf("N %.0f %.0f %.1f %.2f %.2f %.2f\n", l.uL, l.v, l.P.z(), l.normal.x(), l.normal.y(), l.normal.z());
 
 			// ---- per landmark, with the truth
 			int visible = 0, detected = 0, briefOk = 0, patchOk = 0, withNormal = 0, briefOkW = 0, patchOkW = 0;
