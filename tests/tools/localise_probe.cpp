@@ -94,6 +94,7 @@ int main(int argc, char** argv)
 		if (!cs) throw std::runtime_error("no channel '" + channel + "' in the config");
 		const auto& lo = cs->localiser;
 		features::StereoFeatureExtractor extractor(cs->features);
+		const features::BriefExtractor brief(cs->features.brief_patch_size, cs->features.brief_seed);
 		const size_t ch = map->channelIndex(channel);
 		(void)ch;
 
@@ -222,7 +223,7 @@ int main(int argc, char** argv)
 				{
 					withNormal++;
 					features::TBriefDescriptor wd;
-					const features::CWarpedBriefPattern wp(extractor.brief(), A);
+					const features::CWarpedBriefPattern wp(brief, A);
 					const int hw = wp.compute(meas.smoothed, static_cast<int>(near.uL), static_cast<int>(near.v), wd)
 									   ? features::hamming(lms[j].desc, wd)
 									   : 256;
@@ -251,7 +252,7 @@ int main(int argc, char** argv)
 			mi.calib = fr.calib;
 			mi.T_curr_kf_pred = T_live_kf;
 			mi.cov_T_curr_kf_pred = predCov;
-			mi.brief = &extractor.brief();
+			mi.brief = &brief;
 			std::vector<int> matchOf;
 			matcher.searchDescriptors(mi, 0, matchOf);
 			int gateMatches = 0, gateRight = 0;
