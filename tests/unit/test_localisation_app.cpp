@@ -216,16 +216,16 @@ TEST(LocalisationApp, BadInputFailsCleanlyOrGivesNoFix)
 	};
 
 	// 1. A map made with other descriptor parameters than the live run's:
-	// the invariant channel's descriptor kind differs (the map's FAST +
-	// BRIEF, live ORB). Refused, naming both kinds and both sets.
+	// the invariant channel's descriptor kind differs (the map's ORB, live
+	// FAST + BRIEF). Refused, naming both kinds and both sets.
 	{
 		std::string ini = contents(src("config/vo_sim.ini"));
 		const auto at = ini.find("[features.invariant]\n");
 		ASSERT_NE(at, std::string::npos);
-		const auto kind = ini.find("\ndescriptor = brief", at);
-		ASSERT_NE(kind, std::string::npos) << "config/vo_sim.ini: the invariant channel is no longer FAST + BRIEF";
-		ini.replace(kind, std::string("\ndescriptor = brief").size(), "\ndescriptor = orb");
-		const std::string cfg = d.dir + "/vo_sim_orb.ini";
+		const auto kind = ini.find("\ndescriptor = orb", at);
+		ASSERT_NE(kind, std::string::npos) << "config/vo_sim.ini: the invariant channel is no longer ORB";
+		ini.replace(kind, std::string("\ndescriptor = orb").size(), "\ndescriptor = brief");
+		const std::string cfg = d.dir + "/vo_sim_brief.ini";
 		writeText(cfg, ini);
 		const int rc = test::runCommand(
 			test::appPath() + " localise -q -m " + d.map + " -i " + d.overcast + " -o " + outDir + " -c " + cfg + " -c " +
@@ -233,7 +233,7 @@ TEST(LocalisationApp, BadInputFailsCleanlyOrGivesNoFix)
 			&out);
 		EXPECT_NE(rc, 0) << out;
 		EXPECT_NE(out.find("invariant"), std::string::npos) << out;
-		EXPECT_NE(out.find("descriptor: map brief, live orb"), std::string::npos) << out;
+		EXPECT_NE(out.find("descriptor: map orb, live brief"), std::string::npos) << out;
 		EXPECT_NE(out.find(d.map), std::string::npos) << out;
 		expectUntouched("other descriptor parameters");
 	}
