@@ -47,6 +47,30 @@ void checkInput(const TKeyframeMatchInput& in)
 	if (in.frame->left.type() != CV_8UC1 || in.frame->left.empty())
 		throw std::invalid_argument("CKeyframeMatcher: the frame's left image must be a non-empty CV_8UC1");
 }
+
+/** Where is landmark lm's patch in img near (x0, y0): through the warp A
+ * when given (features/PatchWarp.h), else as it is. */
+bool locateLandmark(
+	const features::TStereoMeasurement& lm, const cv::Mat& img, int x0, int y0, const Eigen::Matrix2d* A, int radius,
+	float minZncc, int iterations, float& x, float& y)
+{
+	return A ? features::locateWarpedPatch(lm.patch, img, x0, y0, *A, radius, minZncc, iterations, x, y)
+			 : features::locatePatch(lm.patch, img, x0, y0, radius, minZncc, iterations, x, y);
+}
+
+/** The correspondence of landmark lm with the current measurement z_curr
+ * (uL, v, uR); false when z_curr does not triangulate. */
+bool correspondenceOf(
+	const features::TStereoMeasurement& lm, const TKeyframeMatchInput& in, const Eigen::Vector3d& z_curr,
+	geometry::TStereoCorrespondence& k)
+{
+	k.P_ref = lm.P;
+	k.cov_ref = lm.cov;
+	k.z_ref = Eigen::Vector3d(lm.uL, lm.v, lm.uR);
+	k.calib_ref = in.calib_kf;
+	k.z_curr = z_curr;
+	return in.calib.triangulate(z_curr.x(), z_curr.y(), z_curr.z(), k.P_curr);
+}
 }  // namespace
 
 CKeyframeMatcher::CKeyframeMatcher(const TOptions& o) : m_opts(o) {}
@@ -247,12 +271,9 @@ void CKeyframeMatcher::searchPatches(
 		Eigen::Matrix2d A;
 		const bool warped = warpOf(in, kfm[j], A);
 		float xs, ys;
-		if (warped ? !features::locateWarpedPatch(
-						 kfm[j].patch, fr.left, x0, y0, A, o.patch_search_radius_px, static_cast<float>(o.patch_min_zncc),
-						 o.refine_iterations, xs, ys)
-				   : !features::locatePatch(
-						 kfm[j].patch, fr.left, x0, y0, o.patch_search_radius_px, static_cast<float>(o.patch_min_zncc),
-						 o.refine_iterations, xs, ys))
+		if (!locateLandmark(
+				kfm[j], fr.left, x0, y0, warped ? &A : nullptr, o.patch_search_radius_px,
+				static_cast<float>(o.patch_min_zncc), o.refine_iterations, xs, ys))
 			continue;
 		const int xi = static_cast<int>(std::lround(xs)), yi = static_cast<int>(std::lround(ys));
 		if (xi < 0 || yi < 0 || xi >= occupied.cols || yi >= occupied.rows || occupied.at<uint8_t>(yi, xi)) continue;
@@ -264,12 +285,7 @@ void CKeyframeMatcher::searchPatches(
 				static_cast<float>(o.patch_stereo_min_zncc), o.refine_iterations, uR))
 			continue;
 		geometry::TStereoCorrespondence k;
-		k.P_ref = kfm[j].P;
-		k.cov_ref = kfm[j].cov;
-		k.z_ref = Eigen::Vector3d(kfm[j].uL, kfm[j].v, kfm[j].uR);
-		k.calib_ref = in.calib_kf;
-		k.z_curr = Eigen::Vector3d(xs, ys, uR + (xs - xi));
-		if (!in.calib.triangulate(k.z_curr.x(), k.z_curr.y(), k.z_curr.z(), k.P_curr)) continue;
+		if (!correspondenceOf(kfm[j], in, Eigen::Vector3d(xs, ys, uR + (xs - xi)), k)) continue;
 		occupied.at<uint8_t>(yi, xi) = 1;
 		out.corr.push_back(k);
 		out.warped += warped;
@@ -312,20 +328,13 @@ void CKeyframeMatcher::match(const TKeyframeMatchInput& in, TKeyframeMatchOutput
 		Eigen::Matrix2d A;
 		const bool warped = warpOf(in, kfm[j], A);
 		const int x0 = static_cast<int>(m.uL), y0 = static_cast<int>(m.v);
-		if (warped ? !features::locateWarpedPatch(
-						 kfm[j].patch, img, x0, y0, A, o.refine_radius, o.refine_min_zncc, o.refine_iterations, xs, ys)
-				   : !features::locatePatch(
-						 kfm[j].patch, img, x0, y0, o.refine_radius, o.refine_min_zncc, o.refine_iterations, xs, ys))
+		if (!locateLandmark(
+				kfm[j], img, x0, y0, warped ? &A : nullptr, o.refine_radius, o.refine_min_zncc, o.refine_iterations, xs,
+				ys))
 			continue;
-		geometry::TStereoCorrespondence k;
-		k.P_ref = kfm[j].P;
-		k.cov_ref = kfm[j].cov;
-		k.z_ref = Eigen::Vector3d(kfm[j].uL, kfm[j].v, kfm[j].uR);
-		k.calib_ref = in.calib_kf;
 		// The disparity measured at the corner carries over to the refined position.
-		const double du = xs - m.uL;
-		k.z_curr = Eigen::Vector3d(xs, ys, m.uR + du);
-		if (!calib.triangulate(k.z_curr.x(), k.z_curr.y(), k.z_curr.z(), k.P_curr)) continue;
+		geometry::TStereoCorrespondence k;
+		if (!correspondenceOf(kfm[j], in, Eigen::Vector3d(xs, ys, m.uR + static_cast<double>(xs - m.uL)), k)) continue;
 		out.corr.push_back(k);
 		out.warped += warped;
 		out.landmark.push_back(static_cast<int>(j));
