@@ -1,5 +1,6 @@
 /* ShadyLoc — stereo pose: 3-point RANSAC and robust Gauss-Newton. */
 #include <shadyloc/geometry/PoseSolver.h>
+#include <shadyloc/geometry/PoseCovariance.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -229,13 +230,40 @@ TRansacResult ransacStereoPose(
 	return res;
 }
 
+namespace
+{
+/** One correspondence's robust normal-equation terms at T (the residual's
+ * covariance: pixel noise plus the landmark's, seen through the projection;
+ * Huber IRLS weight); false when it does not project. */
+bool normalTerms(
+	const TStereoCalib& calib, const Eigen::Isometry3d& T, const TStereoCorrespondence& c, const TPoseSolverOptions& o,
+	Matrix6d& H, Vector6d& g, double& sqNorm)
+{
+	Eigen::Vector3d r;
+	Matrix36d J;
+	if (!stereoResidual(calib, T, c.P_ref, c.z_curr, r, &J)) return false;
+	Eigen::Matrix3d S = o.sigma_px * o.sigma_px * Eigen::Matrix3d::Identity();
+	if (o.use_landmark_covariance)
+	{
+		const Eigen::Matrix3d JP = J.leftCols<3>() * T.linear();  // d r / d P_ref
+		S += JP * c.cov_ref * JP.transpose();
+	}
+	const Eigen::Matrix3d W = S.inverse();
+	const double e = std::sqrt(std::max(0.0, r.dot(W * r)));  // whitened norm
+	const double w = e <= o.huber_k ? 1.0 : o.huber_k / e;
+	H = w * J.transpose() * W * J;
+	g = w * J.transpose() * W * r;
+	sqNorm = r.squaredNorm();
+	return true;
+}
+}  // namespace
+
 TPoseSolution solveStereoPose(
 	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c,
 	const std::vector<uint8_t>& use, const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o)
 {
 	TPoseSolution sol;
 	Eigen::Isometry3d T = T_init;
-	const double s2 = o.sigma_px * o.sigma_px;
 	Matrix6d H = Matrix6d::Zero();
 	double sumSq = 0;
 	int used = 0;
@@ -248,23 +276,13 @@ TPoseSolution solveStereoPose(
 		for (size_t i = 0; i < c.size(); i++)
 		{
 			if (!use.empty() && !use[i]) continue;
-			Eigen::Vector3d r;
-			Matrix36d J;
-			if (!stereoResidual(calib, T, c[i].P_ref, c[i].z_curr, r, &J)) continue;
-			// Residual covariance: pixel noise plus the reference landmark's
-			// uncertainty seen through the projection (J_P = d r / d P_ref).
-			Eigen::Matrix3d S = s2 * Eigen::Matrix3d::Identity();
-			if (o.use_landmark_covariance)
-			{
-				const Eigen::Matrix3d JP = J.leftCols<3>() * T.linear();
-				S += JP * c[i].cov_ref * JP.transpose();
-			}
-			const Eigen::Matrix3d W = S.inverse();
-			const double e = std::sqrt(std::max(0.0, r.dot(W * r)));  // whitened norm
-			const double w = e <= o.huber_k ? 1.0 : o.huber_k / e;	// Huber IRLS weight
-			H += w * J.transpose() * W * J;
-			g += w * J.transpose() * W * r;
-			sumSq += r.squaredNorm();
+			Matrix6d Hi;
+			Vector6d gi;
+			double sq;
+			if (!normalTerms(calib, T, c[i], o, Hi, gi, sq)) continue;
+			H += Hi;
+			g += gi;
+			sumSq += sq;
 			used++;
 		}
 		if (used < 3) return sol;
@@ -284,6 +302,51 @@ TPoseSolution solveStereoPose(
 	sol.rms_px = std::sqrt(sumSq / std::max(1, used) / 3.0);
 	sol.ok = sol.cov_T_ref_curr.allFinite();
 	return sol;
+}
+
+Matrix6d bootstrapStereoPoseCovariance(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const std::vector<uint8_t>& use,
+	const Eigen::Isometry3d& T_curr_ref, const TPoseSolverOptions& o, int samples, uint32_t seed)
+{
+	// Every used correspondence's terms, once, at the solution.
+	std::vector<Matrix6d, Eigen::aligned_allocator<Matrix6d>> Hs;
+	std::vector<Vector6d, Eigen::aligned_allocator<Vector6d>> gs;
+	for (size_t i = 0; i < c.size(); i++)
+	{
+		if (i < use.size() && !use[i]) continue;
+		Matrix6d H;
+		Vector6d g;
+		double sq;
+		if (!normalTerms(calib, T_curr_ref, c[i], o, H, g, sq)) continue;
+		Hs.push_back(H);
+		gs.push_back(g);
+	}
+	const size_t n = Hs.size();
+	if (n < 4 || samples < 2) return Matrix6d::Zero();
+	std::mt19937 rng(seed);
+	std::uniform_int_distribution<size_t> pick(0, n - 1);
+	const Eigen::Isometry3d T_ref_curr = T_curr_ref.inverse();
+	Matrix6d C = Matrix6d::Zero();
+	int solved = 0;
+	for (int b = 0; b < samples; b++)
+	{
+		Matrix6d H = Matrix6d::Zero();
+		Vector6d g = Vector6d::Zero();
+		for (size_t k = 0; k < n; k++)
+		{
+			const size_t i = pick(rng);
+			H += Hs[i];
+			g += gs[i];
+		}
+		const Eigen::LDLT<Matrix6d> ldlt(H);
+		if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) continue;
+		const Vector6d dx = ldlt.solve(-g);
+		if (!dx.allFinite()) continue;
+		const Vector6d xi = localLeft(retractLeft(dx, T_curr_ref).inverse(), T_ref_curr);
+		C += xi * xi.transpose();
+		solved++;
+	}
+	return solved >= 2 ? Matrix6d(C / (solved - 1)) : Matrix6d::Zero();
 }
 
 }  // namespace shadyloc::geometry

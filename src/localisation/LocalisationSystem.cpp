@@ -92,6 +92,7 @@ void TSystemOptions::load(const mrpt::config::CConfigFileBase& c, const std::str
 	r.read("confirmed_max_sigma_m", track.confirmed_max_sigma_m);
 	r.read("relocalise_after_frames", track.relocalise_after_frames);
 	r.read("relocalise_window_m", track.relocalise_window_m);
+	r.read("relocalise_max_angle_deg", track.relocalise_max_angle_deg);
 	r.read("global_search_after_frames", track.global_search_after_frames);
 	r.read("seed_with_unconfirmed", track.seed_with_unconfirmed);
 	r.read("global_sigma_m", track.global_sigma_m);
@@ -125,7 +126,8 @@ void TSystemOptions::dump(std::ostream& out) const
 	w.value("vo_sigma_deg_per_m", track.drift_deg_per_m, "[deg/m]");
 	w.value("confirmed_max_sigma_m", track.confirmed_max_sigma_m, "the track is a confirmed place while sigma is below [m]");
 	w.value("relocalise_after_frames", track.relocalise_after_frames, "without a fix this long, search around dead reckoning [frames]");
-	w.value("relocalise_window_m", track.relocalise_window_m, "... this far along the chain on both sides [m]");
+	w.value("relocalise_window_m", track.relocalise_window_m, "... this far along the chain on both sides, and as near in the map frame [m]");
+	w.value("relocalise_max_angle_deg", track.relocalise_max_angle_deg, "... a keyframe of another segment facing within this [deg]");
 	w.value("global_search_after_frames", track.global_search_after_frames, "... and the whole map after this [frames]");
 	w.value("seed_with_unconfirmed", track.seed_with_unconfirmed,
 			"a consistent but unconfirmed solve narrows the next search (never a fix, never validates)");
@@ -153,6 +155,7 @@ void TSystemOptions::validate() const
 	need(track.confirmed_max_sigma_m > 0, "confirmed_max_sigma_m", "must be > 0");
 	need(track.relocalise_after_frames >= 1, "relocalise_after_frames", "must be >= 1");
 	need(track.relocalise_window_m > 0, "relocalise_window_m", "must be > 0");
+	need(track.relocalise_max_angle_deg > 0 && track.relocalise_max_angle_deg <= 180, "relocalise_max_angle_deg", "must be in (0, 180] [deg]");
 	need(track.global_search_after_frames >= track.relocalise_after_frames, "global_search_after_frames",
 		 "must be >= relocalise_after_frames");
 	need(track.global_sigma_m >= 0, "global_sigma_m", "must be >= 0");
@@ -455,16 +458,30 @@ void CLocalisationSystem::forLocalisers(F&& fn)
 	both(par, runFirst, runRest);
 }
 
+std::vector<uint32_t> CLocalisationSystem::relocalisationWindow(const TKeyframePose& deadReckoning) const
+{
+	const double w = m_opts.track.relocalise_window_m;
+	std::vector<uint32_t> among = m_map->keyframesAlongChain(deadReckoning.kf, w, w);
+	// At a VO break of the survey the chain ends but the road goes on in
+	// another segment, whose map pose is the survey's dead reckoning: also
+	// every keyframe that near the dead-reckoned camera in the map frame.
+	map::TNearestQuery q;
+	q.max_distance_m = w;
+	q.max_angle_deg = m_opts.track.relocalise_max_angle_deg;
+	q.max_results = m_map->keyframeCount();
+	const Eigen::Isometry3d T_map_live = m_map->keyframe(deadReckoning.kf).T_map_kf * deadReckoning.T_kf_live;
+	for (const auto& h : m_map->nearestKeyframes(T_map_live, q))
+		if (std::find(among.begin(), among.end(), h.id) == among.end()) among.push_back(h.id);
+	std::sort(among.begin(), among.end());
+	return among;
+}
+
 void CLocalisationSystem::searchPlace(
 	SearchScope scope, const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib,
 	const std::vector<size_t>& order, TLocalisationUpdate& u)
 {
 	std::vector<uint32_t> among = m_searchAmong;
-	if (scope == SearchScope::Window && m_track.estimate().valid)
-	{
-		const double w = m_opts.track.relocalise_window_m;
-		among = m_map->keyframesAlongChain(m_track.estimate().kf, w, w);
-	}
+	if (scope == SearchScope::Window && m_track.estimate().valid) among = relocalisationWindow(m_track.estimate());
 	const auto seed = static_cast<uint32_t>(u.frame * 7919u + 3);
 	std::vector<TGlobalPlace> places(m_pipes.size());
 	std::vector<double> ms(m_pipes.size(), 0);

@@ -224,6 +224,8 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	template <typename F>
 	void forLocalisers(F&& fn);
 	/** Searches for the place (scope) and adopts the first verified one in policy order. */
+	/** The keyframes a relocalisation searches around dead reckoning. */
+	std::vector<uint32_t> relocalisationWindow(const TKeyframePose& deadReckoning) const;
 	void searchPlace(
 		SearchScope scope, const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib,
 		const std::vector<size_t>& order, TLocalisationUpdate& u);

@@ -15,7 +15,8 @@
  *    search, never the track a solve is validated against;
  *  - relocalisation: after relocalise_after_frames without a fix (or when
  *    every localiser is lost) the place is searched for around dead
- *    reckoning, within relocalise_window_m along the map's chain, on the
+ *    reckoning, within relocalise_window_m along the map's chain or in
+ *    the map frame (the next segment after a VO break of the survey), on the
  *    same frame; after global_search_after_frames, in the whole map.
  */
 #pragma once
@@ -37,7 +38,8 @@ struct TTrackOptions
 	 * standard deviation is below this [m]. */
 	double confirmed_max_sigma_m = 0.5;
 	int relocalise_after_frames = 2;  //!< frames without a fix before the windowed search [frames]
-	double relocalise_window_m = 20.0;	//!< ... along the chain on both sides of dead reckoning [m]
+	double relocalise_window_m = 20.0;	//!< ... along the chain on both sides of dead reckoning, and as near in the map frame (any segment) [m]
+	double relocalise_max_angle_deg = 45.0;	 //!< ... a keyframe of another segment there facing within this of dead reckoning [deg]
 	int global_search_after_frames = 30;  //!< frames without a fix before the whole map is searched [frames]
 	/** Added to a global-search place's covariance (one frame's solve) [m], [deg]. */
 	double global_sigma_m = 0.1;
