@@ -1,0 +1,142 @@
+/* Issue #23, "accepted silently, or a message that does not help": each case
+ * as the newer commands see it. Every test here failed before its fix (run
+ * against an older build with SHADYLOC_TEST_APP and LD_LIBRARY_PATH).
+ *  - NewerChecks.*: synthetic data, fast (label cli; Settings.* unit);
+ *  - NewerChecksSim.*: a map surveyed from two short simulator traversals
+ *    (label slow cli). */
+#include "../support/TestSupport.h"
+
+#include <shadyloc/core/Settings.h>
+#include <shadyloc/eval/RunList.h>
+#include <shadyloc/features/StereoFeatures.h>
+
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <fstream>
+#include <sstream>
+
+#include <sys/resource.h>
+#include <sys/wait.h>
+
+using namespace shadyloc;
+namespace fs = std::filesystem;
+
+namespace
+{
+std::string src(const std::string& rel) { return std::string(SHADYLOC_SOURCE_DIR) + "/" + rel; }
+
+void writeText(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
+
+void writeRun(const std::string& path, int frames, int w = 160, int h = 120)
+{
+	mrpt::io::CFileGZOutputStream f(path);
+	auto arch = mrpt::serialization::archiveFrom(f);
+	for (int i = 0; i < frames; i++) arch << *test::syntheticStereoFrame(i, w, h);
+}
+
+/** The error of loading [features] from `ini`, "" if it loads. */
+std::string featureError(const std::string& ini)
+{
+	try
+	{
+		features::TStereoFeatureOptions o;
+		o.loadFromConfigFile(mrpt::config::CConfigFileMemory(ini), "features");
+	}
+	catch (const std::exception& e)
+	{
+		return e.what();
+	}
+	return "";
+}
+
+/** The error of reading a run list, "(no error)" if it reads. */
+std::string runListError(const std::string& path)
+{
+	try
+	{
+		eval::readRunList(path);
+	}
+	catch (const std::exception& e)
+	{
+		return e.what();
+	}
+	return "(no error)";
+}
+
+/** Peak resident memory [kB] of `shadyloc args` (its exit status in *rc). */
+long peakKb(const std::string& args, int* rc)
+{
+	const pid_t pid = fork();
+	if (pid == 0)
+	{
+		const std::string cmd = "exec " + test::appPath() + " " + args + " >/dev/null 2>&1";
+		execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+		_exit(127);
+	}
+	int status = 0;
+	rusage ru{};
+	wait4(pid, &status, 0, &ru);
+	*rc = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+	return ru.ru_maxrss;
+}
+}  // namespace
+
+// max_per_cell <= 0 meant "no limit" without a word; a BRIEF patch size of
+// 0 was refused by the describer, naming neither key nor file.
+TEST(Settings, FeatureCountsAndBriefPatchRefusedNamingTheKey)
+{
+	EXPECT_NE(featureError("[features]\nmax_per_cell = 0\n").find("[features] option max_per_cell must be >= 1"), std::string::npos)
+		<< featureError("[features]\nmax_per_cell = 0\n");
+	EXPECT_NE(featureError("[features]\nmax_per_cell_right = -1\n").find("max_per_cell_right must be >= 1"), std::string::npos);
+	EXPECT_NE(featureError("[features]\nbrief_patch_size_px = 0\n").find("[features] option brief_patch_size_px"), std::string::npos)
+		<< featureError("[features]\nbrief_patch_size_px = 0\n");
+	EXPECT_EQ(featureError("[features]\nmax_per_cell = 1\nbrief_patch_size_px = 8\n"), "");
+}
+
+// ---- with a map surveyed from the simulator --------------------------------
+namespace
+{
+struct TSimData
+{
+	std::string dir, sim, noonMap, overcastMap, cfg;
+};
+
+/** noon and overcast, 8 frames each, and both surveyed into maps. */
+const TSimData& simData()
+{
+	static const TSimData d = [] {
+		TSimData t;
+		t.dir = test::tempDir(std::string("newer_sim_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
+		t.sim = t.dir + "/sim";
+		t.cfg = " -c " + src("config/vo_sim.ini") + " -c " + src("config/localise_sim.ini");
+		std::string out;
+		if (test::runCommand(
+				test::appPath() + " sim -q -c " + src("config/sim.ini") + " -o " + t.sim + " --traversals noon,overcast --frames 8",
+				&out) != 0)
+			throw std::runtime_error(out);
+		for (const char* run : {"noon", "overcast"})
+			if (test::runCommand(
+					test::appPath() + " survey -q -i " + t.sim + "/" + run + ".rawlog -o " + t.dir + "/" + run + ".kfmap -c " +
+						src("config/vo_sim.ini") + " --gt " + t.sim + "/" + run + ".tum",
+					&out) != 0)
+				throw std::runtime_error(out);
+		t.noonMap = t.dir + "/noon.kfmap";
+		t.overcastMap = t.dir + "/overcast.kfmap";
+		return t;
+	}();
+	return d;
+}
+
+std::string localise(const TSimData& d, const std::string& map, const std::string& live, const std::string& out, const std::string& extra = "")
+{
+	std::string log;
+	const int rc = test::runCommand(
+		test::appPath() + " localise -q -m " + map + " -i " + d.sim + "/" + live + ".rawlog -o " + out + d.cfg + extra, &log);
+	if (rc != 0) throw std::runtime_error(log);
+	return out;
+}
+}  // namespace
+
+
