@@ -95,6 +95,23 @@ TEST(Settings, FeatureCountsAndBriefPatchRefusedNamingTheKey)
 	EXPECT_EQ(featureError("[features]\nmax_per_cell = 1\nbrief_patch_size_px = 8\n"), "");
 }
 
+TEST(NewerChecks, LocaliseConfigErrorNamesFileAndLine)
+{
+	const std::string dir = test::tempDir("newer_localise_cfg");
+	fs::copy_file(src("tests/golden/CKeyframeMap.bin"), dir + "/map.kfmap");
+	writeRun(dir + "/live.rawlog", 2);
+	writeText(dir + "/typo.ini", "[localiser]\nmin_inliers = 12\nmin_inlier = 3\n");
+	writeText(dir + "/cells.ini", "; corners\n[features]\nmax_per_cell = 0\n");
+	std::string out;
+	const std::string base = test::appPath() + " localise -q -m " + dir + "/map.kfmap -i " + dir + "/live.rawlog -o " + dir + "/o -c " +
+							 src("config/vo_sim.ini") + " -c " + src("config/localise_sim.ini");
+	EXPECT_EQ(test::runCommand(base + " -c " + dir + "/typo.ini", &out), 1) << out;
+	EXPECT_NE(out.find(dir + "/typo.ini:3: [localiser] min_inlier: unknown key"), std::string::npos) << out;
+	EXPECT_EQ(test::runCommand(base + " -c " + dir + "/cells.ini", &out), 1) << out;
+	EXPECT_NE(out.find(dir + "/cells.ini:3: [features] option max_per_cell must be >= 1"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(dir + "/o"));
+}
+
 // ---- with a map surveyed from the simulator --------------------------------
 namespace
 {
@@ -139,4 +156,18 @@ std::string localise(const TSimData& d, const std::string& map, const std::strin
 }
 }  // namespace
 
-
+// A live run of another camera localised to 0 fixes with exit 0.
+TEST(NewerChecksSim, LocaliseRefusesALiveRunOfAnotherCamera)
+{
+	const auto& d = simData();
+	writeRun(d.dir + "/other_camera.rawlog", 3, 320, 240);
+	std::string out;
+	EXPECT_EQ(
+		test::runCommand(
+			test::appPath() + " localise -q -m " + d.noonMap + " -i " + d.dir + "/other_camera.rawlog -o " + d.dir + "/o" + d.cfg, &out),
+		1)
+		<< out;
+	EXPECT_NE(out.find("live rawlog '" + d.dir + "/other_camera.rawlog' (camera 'CAMERA': 320x240 px"), std::string::npos) << out;
+	EXPECT_NE(out.find("is not of the camera of map '" + d.noonMap + "' (512x384 px"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(d.dir + "/o"));
+}
