@@ -112,6 +112,30 @@ TEST(NewerChecks, LocaliseConfigErrorNamesFileAndLine)
 	EXPECT_FALSE(fs::exists(dir + "/o"));
 }
 
+// A damaged map with a valid header was held twice in memory (the file's
+// bytes and a copy) before it was refused.
+TEST(NewerChecks, DamagedMapCostsItsSizeOnceInMemory)
+{
+	const std::string dir = test::tempDir("newer_map_memory");
+	std::ifstream g(src("tests/golden/CKeyframeMap.bin"), std::ios::binary);
+	std::string bytes((std::istreambuf_iterator<char>(g)), std::istreambuf_iterator<char>());
+	int rc = 0;
+	const long intact = peakKb("map-info " + src("tests/golden/CKeyframeMap.bin"), &rc);
+	ASSERT_EQ(rc, 0);
+	const size_t size = 150u << 20;
+	{
+		std::ofstream f(dir + "/big.kfmap", std::ios::binary);
+		f << bytes.substr(0, 64);
+		std::string junk(1 << 20, '\x5a');
+		for (size_t n = 64; n < size; n += junk.size()) f << junk;
+	}
+	const long damaged = peakKb("map-info " + dir + "/big.kfmap", &rc);
+	EXPECT_EQ(rc, 1);
+	EXPECT_LT(damaged, intact + static_cast<long>(1.5 * (size >> 10)))
+		<< "peak " << damaged << " kB, intact map " << intact << " kB, file " << (size >> 10) << " kB";
+	fs::remove(dir + "/big.kfmap");
+}
+
 // ---- with a map surveyed from the simulator --------------------------------
 namespace
 {
