@@ -95,6 +95,33 @@ TEST(Settings, FeatureCountsAndBriefPatchRefusedNamingTheKey)
 	EXPECT_EQ(featureError("[features]\nmax_per_cell = 1\nbrief_patch_size_px = 8\n"), "");
 }
 
+// The same rawlog twice in a run list was accepted (a run localised against
+// its own map); a path with spaces was refused as "5 fields" with no hint.
+TEST(EvalRunList, SameRawlogTwiceRefusedAndQuotedPathsWithSpaces)
+{
+	const std::string dir = test::tempDir("runlist_newer");
+	fs::create_directories(dir + "/my runs");
+	writeText(dir + "/a.rawlog", "x");
+	writeText(dir + "/my runs/b.rawlog", "x");
+	writeText(dir + "/runs.txt", "a a.rawlog\nb ./a.rawlog\n");
+	EXPECT_NE(
+		runListError(dir + "/runs.txt").find("runs.txt:2: run 'b': rawlog '" + dir + "/a.rawlog' is run 'a''s (line 1)"),
+		std::string::npos)
+		<< runListError(dir + "/runs.txt");
+	const std::string hint = "(a path with spaces must be in double quotes: \"my runs/a.rawlog\")";
+	writeText(dir + "/runs.txt", "a a.rawlog\nb my runs/b.rawlog gt.tum\n");
+	EXPECT_NE(runListError(dir + "/runs.txt").find("runs.txt:2: 4 fields; a run is 'name rawlog [ground_truth.tum]' " + hint),
+		std::string::npos)
+		<< runListError(dir + "/runs.txt");
+	writeText(dir + "/runs.txt", "a a.rawlog\nb my runs/b.rawlog\n");
+	EXPECT_NE(runListError(dir + "/runs.txt").find("runs.txt:2: run 'b': rawlog '" + dir + "/my' does not exist " + hint),
+		std::string::npos)
+		<< runListError(dir + "/runs.txt");
+	writeText(dir + "/runs.txt", "a a.rawlog\nb \"my runs/b.rawlog\"\n");
+	ASSERT_EQ(runListError(dir + "/runs.txt"), "(no error)");
+	EXPECT_EQ(eval::readRunList(dir + "/runs.txt")[1].rawlogPath, dir + "/my runs/b.rawlog");
+}
+
 TEST(NewerChecks, LocaliseConfigErrorNamesFileAndLine)
 {
 	const std::string dir = test::tempDir("newer_localise_cfg");
