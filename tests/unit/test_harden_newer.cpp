@@ -222,3 +222,22 @@ TEST(NewerChecksSim, LocaliseRefusesALiveRunOfAnotherCamera)
 	EXPECT_NE(out.find("is not of the camera of map '" + d.noonMap + "' (512x384 px"), std::string::npos) << out;
 	EXPECT_FALSE(fs::exists(d.dir + "/o"));
 }
+
+// eval --merge merged the jobs of a damaged map with exit 0.
+TEST(NewerChecksSim, EvalMergeRefusesADamagedMap)
+{
+	const auto& d = simData();
+	writeText(d.sim + "/runs.txt", "noon noon.rawlog noon.tum\novercast overcast.rawlog overcast.tum\n");
+	const std::string o = d.dir + "/eval", eval = test::appPath() + " eval -q --runs " + d.sim + "/runs.txt -o " + o + d.cfg;
+	std::string out;
+	ASSERT_EQ(test::runCommand(eval, &out), 0) << out;
+	const std::string map = o + "/jobs/map_overcast/map.kfmap";
+	std::fstream f(map, std::ios::in | std::ios::out | std::ios::binary);
+	f.seekp(static_cast<std::streamoff>(fs::file_size(map) / 2));
+	f.put('\x00').put('\x01').put('\x02');
+	f.close();
+	fs::remove(o + "/table1.md");
+	EXPECT_EQ(test::runCommand(eval + " --merge", &out), 1) << out;
+	EXPECT_NE(out.find("job 1 (map of run 'overcast'): keyframe map '" + map + "'"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(o + "/table1.md"));
+}
