@@ -163,6 +163,28 @@ TEST(NewerChecks, DamagedMapCostsItsSizeOnceInMemory)
 	fs::remove(dir + "/big.kfmap");
 }
 
+// The renderer named its own temporary output: "'.one.tmp-7799.png':
+// nothing to draw".
+TEST(NewerChecks, RenderOfOneKeyframeMapNamesTheMap)
+{
+	const std::string dir = test::tempDir("newer_render_one");
+	std::string out;
+	ASSERT_EQ(
+		test::runCommand(
+			test::appPath() + " sim -q -c " + src("config/sim.ini") + " -o " + dir + " --traversals noon --frames 1", &out),
+		0)
+		<< out;
+	ASSERT_EQ(
+		test::runCommand(
+			test::appPath() + " survey -q -i " + dir + "/noon.rawlog -o " + dir + "/one.kfmap -c " + src("config/vo_sim.ini"), &out),
+		0)
+		<< out;
+	EXPECT_EQ(test::runCommand(test::appPath() + " render -m " + dir + "/one.kfmap -o " + dir + "/one.png", &out), 1) << out;
+	EXPECT_NE(out.find("keyframe map '" + dir + "/one.kfmap': a single keyframe"), std::string::npos) << out;
+	EXPECT_EQ(out.find(".tmp-"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(dir + "/one.png"));
+}
+
 // ---- with a map surveyed from the simulator --------------------------------
 namespace
 {
@@ -221,6 +243,26 @@ TEST(NewerChecksSim, LocaliseRefusesALiveRunOfAnotherCamera)
 	EXPECT_NE(out.find("live rawlog '" + d.dir + "/other_camera.rawlog' (camera 'CAMERA': 320x240 px"), std::string::npos) << out;
 	EXPECT_NE(out.find("is not of the camera of map '" + d.noonMap + "' (512x384 px"), std::string::npos) << out;
 	EXPECT_FALSE(fs::exists(d.dir + "/o"));
+}
+
+// render --localised drew a run over a map, or a ground truth, it never met.
+TEST(NewerChecksSim, RenderLocalisedRefusesAnotherMapOrAnotherRunsTruth)
+{
+	const auto& d = simData();
+	const std::string withGt = localise(d, d.noonMap, "overcast", d.dir + "/loc_gt", " --gt " + d.sim + "/overcast.tum");
+	const std::string noGt = localise(d, d.noonMap, "overcast", d.dir + "/loc");
+	std::string out;
+	const std::string render = test::appPath() + " render -o " + d.dir + "/r.png --localised ";
+	EXPECT_EQ(test::runCommand(render + noGt + " -m " + d.overcastMap, &out), 1) << out;
+	EXPECT_NE(out.find("was localised against map"), std::string::npos) << out;
+	EXPECT_NE(out.find("not against -m '" + d.overcastMap + "'"), std::string::npos) << out;
+	EXPECT_EQ(test::runCommand(render + withGt + " -m " + d.noonMap + " --gt " + d.sim + "/noon.tum", &out), 1) << out;
+	EXPECT_NE(out.find("--gt '" + d.sim + "/noon.tum' is not the ground truth"), std::string::npos) << out;
+	EXPECT_EQ(test::runCommand(render + noGt + " -m " + d.noonMap + " --gt " + d.sim + "/noon.tum", &out), 1) << out;
+	EXPECT_NE(out.find("shares no time with the run of --localised '" + noGt + "'"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(d.dir + "/r.png"));
+	// The right ones still draw.
+	EXPECT_EQ(test::runCommand(render + noGt + " -m " + d.noonMap + " --gt " + d.sim + "/overcast.tum", &out), 0) << out;
 }
 
 // eval --merge merged the jobs of a damaged map with exit 0.
