@@ -265,6 +265,33 @@ TEST(NewerChecksSim, RenderLocalisedRefusesAnotherMapOrAnotherRunsTruth)
 	EXPECT_EQ(test::runCommand(render + noGt + " -m " + d.noonMap + " --gt " + d.sim + "/overcast.tum", &out), 0) << out;
 }
 
+// figures labelled a pair with names that match nothing, and took a
+// baseline and a combined run of different pairs as one.
+TEST(NewerChecksSim, FiguresRefuseMismatchedRunsAndWarnOfNamesThatMatchNothing)
+{
+	const auto& d = simData();
+	const std::string base = localise(d, d.noonMap, "overcast", d.dir + "/base", " --localisers mono");
+	const std::string comb = localise(d, d.noonMap, "overcast", d.dir + "/comb");
+	const std::string otherBase = localise(d, d.overcastMap, "noon", d.dir + "/obase", " --localisers mono");
+	const std::string otherComb = localise(d, d.overcastMap, "noon", d.dir + "/ocomb");
+	const std::string otherMap = localise(d, d.overcastMap, "overcast", d.dir + "/omap");  // the same live run
+	fs::create_directories(d.dir + "/figs");
+	const std::string figs = test::appPath() + " figures -o " + d.dir + "/figs";
+	std::string out;
+	EXPECT_EQ(test::runCommand(figs + " -p overcast,noon," + base + "," + otherMap, &out), 1) << out;
+	EXPECT_NE(out.find("the baseline run used map '" + d.noonMap + "', the combined run map '" + d.overcastMap + "'"), std::string::npos)
+		<< out;
+	EXPECT_NE(out.find("not one pair"), std::string::npos) << out;
+	EXPECT_EQ(test::runCommand(figs + " -p overcast,noon," + base + "," + comb + " -p overcast,x," + otherBase + "," + otherComb, &out), 1)
+		<< out;
+	EXPECT_NE(out.find("live run name 'overcast' is given to two different live runs"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(d.dir + "/figs/figure7.png"));
+	EXPECT_EQ(test::runCommand(figs + " -p foo,bar," + base + "," + comb, &out), 0) << out;
+	EXPECT_NE(out.find("warning: --pair 'foo,bar,"), std::string::npos) << out;
+	EXPECT_NE(out.find("live run name 'foo' matches nothing"), std::string::npos) << out;
+	EXPECT_NE(out.find("map name 'bar' matches nothing"), std::string::npos) << out;
+}
+
 // eval --merge merged the jobs of a damaged map with exit 0.
 TEST(NewerChecksSim, EvalMergeRefusesADamagedMap)
 {
