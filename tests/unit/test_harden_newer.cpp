@@ -139,6 +139,29 @@ TEST(NewerChecks, LocaliseConfigErrorNamesFileAndLine)
 	EXPECT_FALSE(fs::exists(dir + "/o"));
 }
 
+TEST(NewerChecks, CalibrateAlphaRefusesRunsOfTwoCamerasAndGammaWithoutGammaCurve)
+{
+	const std::string dir = test::tempDir("newer_calib");
+	writeRun(dir + "/a.rawlog", 2);
+	writeRun(dir + "/b.rawlog", 2);
+	writeRun(dir + "/wide.rawlog", 2, 200, 120);
+	std::string out;
+	const std::string base = test::appPath() + " calibrate-alpha --no-plot --bootstrap 0 --max-frames 2 -o " + dir + "/cam";
+	EXPECT_EQ(test::runCommand(base + " --linearise none --runs " + dir + "/a.rawlog," + dir + "/wide.rawlog", &out), 1) << out;
+	EXPECT_NE(out.find("the runs are of different cameras"), std::string::npos) << out;
+	EXPECT_NE(out.find("200x120 px"), std::string::npos) << out;
+	EXPECT_EQ(
+		test::runCommand(
+			base + " --linearise none --runs " + dir + "/a.rawlog," + dir + "/b.rawlog --runs " + dir + "/wide.rawlog," + dir + "/wide.rawlog",
+			&out),
+		1)
+		<< out;
+	EXPECT_NE(out.find("must be of one camera"), std::string::npos) << out;
+	EXPECT_EQ(test::runCommand(base + " --linearise srgb --gamma 2 --runs " + dir + "/a.rawlog," + dir + "/b.rawlog", &out), 2) << out;
+	EXPECT_NE(out.find("--gamma is used only with --linearise gamma"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(dir + "/cam.ini"));
+}
+
 // A damaged map with a valid header was held twice in memory (the file's
 // bytes and a copy) before it was refused.
 TEST(NewerChecks, DamagedMapCostsItsSizeOnceInMemory)
