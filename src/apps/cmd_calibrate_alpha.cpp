@@ -81,7 +81,18 @@ std::vector<TShadowPair> pairsInDir(const std::string& dir)
 	return pairs;
 }
 
-std::vector<cv::Mat> framesOfRawlog(const std::string& path, const std::string& label, int maxFrames, int every)
+/** "WxH px, fx=.. fy=.. cx=.. cy=.." of a camera observation's (left) camera. */
+std::string describeCamera(const cv::Mat& m, const mrpt::img::TCamera& c)
+{
+	std::ostringstream s;
+	s << m.cols << "x" << m.rows << " px, fx=" << c.fx() << " fy=" << c.fy() << " cx=" << c.cx() << " cy=" << c.cy();
+	return s.str();
+}
+
+/** The colour frames of a rawlog (left eye); `camera`, if given, gets the
+ * first frame's camera (describeCamera). */
+std::vector<cv::Mat> framesOfRawlog(
+	const std::string& path, const std::string& label, int maxFrames, int every, std::string* camera = nullptr)
 {
 	std::vector<cv::Mat> out;
 	shadyloc::io::RawlogReader reader(path);
@@ -92,10 +103,11 @@ std::vector<cv::Mat> framesOfRawlog(const std::string& path, const std::string& 
 		{
 			if (!label.empty() && obs->sensorLabel != label) continue;
 			std::vector<const mrpt::img::CImage*> eyes;
+			const mrpt::img::TCamera* cam = nullptr;
 			if (auto* st = dynamic_cast<mrpt::obs::CObservationStereoImages*>(obs.get()))
-				eyes.push_back(&st->imageLeft);
+				eyes.push_back(&st->imageLeft), cam = &st->leftCamera;
 			else if (auto* im = dynamic_cast<mrpt::obs::CObservationImage*>(obs.get()))
-				eyes.push_back(&im->image);
+				eyes.push_back(&im->image), cam = &im->cameraParams;
 			else
 				continue;
 			if (seen++ % every != 0) continue;
@@ -105,6 +117,7 @@ std::vector<cv::Mat> framesOfRawlog(const std::string& path, const std::string& 
 				throw std::runtime_error(reader.where(
 					"sensor '" + obs->sensorLabel + "': needs 8-bit colour images, this one has " +
 					std::to_string(m.channels()) + " channel(s)"));
+			if (camera && out.empty()) *camera = describeCamera(m, *cam);
 			out.push_back(m.clone());
 			if (maxFrames > 0 && int(out.size()) >= maxFrames) return out;
 		}
@@ -271,6 +284,7 @@ int run(int argc, char** argv)
 	TCLAP::SwitchArg noPlot("", "no-plot", "do not draw OUT_curve.png (no gnuplot needed)", cmd);
 	TCLAP::ValueArg<std::string> out("o", "output", "output prefix: OUT.ini, OUT_curve.csv, OUT_curve.png", true, "", "OUT", cmd);
 	if (const auto rc = cli.parse(argc, argv)) return *rc;
+	if (gamma.isSet() && lin.getValue() != "gamma") return cli.usageError("--gamma is used only with --linearise gamma");
 
 	TCalibrationInput in;
 	in.linearisation = parseLinearisation(lin.getValue());
@@ -342,11 +356,25 @@ int run(int argc, char** argv)
 	// Two runs: A's frames (every --every-th) against all of B's, both limited by --max-frames.
 	std::vector<TChromaChanges> runChanges;
 	std::vector<cv::Mat> runFrames;
+	std::string runsCamera, runsFirst;
 	for (const auto& s : runs.getValue())
 	{
 		const auto [a, b] = splitComma(s, "--runs");
-		auto fa = framesOfRawlog(a, sensor.getValue(), maxFrames.getValue(), every.getValue());
-		auto fb = framesOfRawlog(b, sensor.getValue(), maxFrames.getValue(), 1);
+		std::string camA, camB;
+		auto fa = framesOfRawlog(a, sensor.getValue(), maxFrames.getValue(), every.getValue(), &camA);
+		auto fb = framesOfRawlog(b, sensor.getValue(), maxFrames.getValue(), 1, &camB);
+		// Matching across cameras compares chromaticities of two sensors, not
+		// of two lights: the estimate would be of the cameras' difference.
+		if (camA != camB)
+			throw std::invalid_argument(
+				"--runs " + s + ": the runs are of different cameras ('" + a + "': " + camA + "; '" + b + "': " + camB +
+				"); two runs of one camera are needed");
+		// Every --runs pair goes into one estimate: one camera for all of them.
+		if (runsCamera.empty()) runsCamera = camA, runsFirst = s;
+		else if (camA != runsCamera)
+			throw std::invalid_argument(
+				"--runs " + s + ": its camera (" + camA + ") is not that of --runs " + runsFirst + " (" + runsCamera +
+				"); the estimate pools every pair, so they must be of one camera");
 		std::cout << "--runs " << s << ": matching " << fa.size() << " frames of '" << a << "' in the " << fb.size()
 				  << " of '" << b << "'\n";
 		size_t done = 0;

@@ -2,6 +2,7 @@
  * output folders (docs/figures.md). */
 #include "Command.h"
 #include "CommandLine.h"
+#include "LocaliseOutput.h"
 
 #include <shadyloc/eval/Figures.h>
 #include <shadyloc/io/OutputTransaction.h>
@@ -20,6 +21,7 @@ namespace fs = std::filesystem;
 struct TPairSpec
 {
 	std::string live, map, baselineDir, combinedDir;
+	std::string liveHash, mapHash;	//!< from summary.json ("" without one)
 	std::string baselineCsv() const { return (fs::path(baselineDir) / "frames.csv").string(); }
 	std::string combinedCsv() const { return (fs::path(combinedDir) / "frames.csv").string(); }
 };
@@ -37,16 +39,68 @@ std::vector<std::string> splitCommas(const std::string& s)
 	}
 }
 
+/** The names are labels the user chooses, but one that names neither the
+ * run's rawlog nor its map (by file or folder name) is likely a slip:
+ * said, not refused (eval's run names need not be file names). */
+void warnUnmatchedNames(const TPairSpec& p, const std::string& spec)
+{
+	const std::string live = apps::localiseProvenance(p.baselineDir, "live"),
+					  map = apps::localiseProvenance(p.baselineDir, "map");
+	const auto names = [](const std::string& path, const std::string& name) {
+		const fs::path q(path);
+		return q.stem() == name || q.parent_path().filename() == name || q.parent_path().filename() == "map_" + name;
+	};
+	if (!live.empty() && !names(live, p.live))
+		std::cerr << "shadyloc figures: warning: --pair '" << spec << "': live run name '" << p.live
+				  << "' matches nothing in its summary.json (live rawlog '" << live << "'); labelled as given\n";
+	if (!map.empty() && !names(map, p.map))
+		std::cerr << "shadyloc figures: warning: --pair '" << spec << "': map name '" << p.map
+				  << "' matches nothing in its summary.json (map '" << map << "'); labelled as given\n";
+}
+
 TPairSpec parsePair(const std::string& s)
 {
 	const auto f = splitCommas(s);
 	if (f.size() != 4 || std::any_of(f.begin(), f.end(), [](const std::string& x) { return x.empty(); }))
 		throw std::invalid_argument("--pair '" + s + "': expected LIVE,MAP,BASELINE_DIR,COMBINED_DIR");
-	TPairSpec p{f[0], f[1], f[2], f[3]};
+	TPairSpec p{f[0], f[1], f[2], f[3], "", ""};
 	for (const auto& csv : {p.baselineCsv(), p.combinedCsv()})
 		if (!fs::is_regular_file(csv))
 			throw std::runtime_error("--pair '" + s + "': '" + csv + "' does not exist (a shadyloc localise OUTDIR?)");
+	// The two runs of one pair: the same live run against the same map.
+	for (const char* key : {"live", "map"})
+	{
+		const std::string b = apps::localiseProvenance(p.baselineDir, std::string(key) + "_fnv1a64"),
+						  c = apps::localiseProvenance(p.combinedDir, std::string(key) + "_fnv1a64");
+		if (!b.empty() && !c.empty() && b != c)
+			throw std::invalid_argument(
+				"--pair '" + s + "': the baseline run used " + key + " '" + apps::localiseProvenance(p.baselineDir, key) +
+				"', the combined run " + key + " '" + apps::localiseProvenance(p.combinedDir, key) +
+				"' (their summary.json): not one pair");
+	}
+	warnUnmatchedNames(p, s);
+	p.liveHash = apps::localiseProvenance(p.baselineDir, "live_fnv1a64");
+	p.mapHash = apps::localiseProvenance(p.baselineDir, "map_fnv1a64");
 	return p;
+}
+
+/** A name must mean one thing: the same LIVE (or MAP) name for two
+ * different live runs (maps), or two names for one, would pool or label
+ * the figures wrongly. */
+void checkNames(const TPairSpec& a, const TPairSpec& b)
+{
+	const auto check = [](const std::string& what, const std::string& nameA, const std::string& hashA,
+						   const std::string& nameB, const std::string& hashB) {
+		if (hashA.empty() || hashB.empty()) return;
+		if (nameA == nameB && hashA != hashB)
+			throw std::invalid_argument(
+				"--pair: " + what + " name '" + nameA + "' is given to two different " + what + "s (their summary.json)");
+		if (nameA != nameB && hashA == hashB)
+			throw std::invalid_argument(
+				"--pair: the same " + what + " is named both '" + nameA + "' and '" + nameB + "' (their summary.json)");
+	};
+	check("live run", a.live, a.liveHash, b.live, b.liveHash);
+	check("map", a.map, a.mapHash, b.map, b.mapHash);
 }
 
 int run(int argc, char** argv)
@@ -78,8 +132,11 @@ int run(int argc, char** argv)
 	{
 		specs.push_back(parsePair(s));
 		for (size_t i = 0; i + 1 < specs.size(); i++)
+		{
 			if (specs[i].live == specs.back().live && specs[i].map == specs.back().map)
 				throw std::invalid_argument("--pair: " + specs.back().live + " against " + specs.back().map + " given twice");
+			checkNames(specs[i], specs.back());
+		}
 	}
 	const TPairSpec* p7 = &specs.front();
 	if (fig7.isSet())

@@ -3,7 +3,9 @@
 #include "Command.h"
 #include "CommandLine.h"
 
+#include <shadyloc/core/ConfigLocation.h>
 #include <shadyloc/core/Settings.h>
+#include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/io/Tum.h>
@@ -41,6 +43,37 @@ std::vector<std::string> splitList(const std::string& s)
 		else
 			w += c;
 	return out;
+}
+
+std::string describeCamera(const geometry::TStereoCalib& c, int w, int h)
+{
+	return std::to_string(w) + "x" + std::to_string(h) + " px, " + c.asString();
+}
+
+bool sameCamera(const geometry::TStereoCalib& a, const geometry::TStereoCalib& b)
+{
+	const auto eq = [](double x, double y) { return std::abs(x - y) <= 1e-9 * std::max(1.0, std::abs(x)); };
+	return eq(a.fx, b.fx) && eq(a.fy, b.fy) && eq(a.cx, b.cx) && eq(a.cy, b.cy) && eq(a.cxR, b.cxR) &&
+		   eq(a.baseline, b.baseline);
+}
+
+/** The live run's camera (its first frame) must be the map's: landmarks
+ * projected with another calibration find nothing, and the run would end
+ * with no fix and exit 0 (eval refuses such pairs too). */
+void checkLiveCamera(const CKeyframeMap& map, const std::string& mapPath, const std::string& livePath, const std::string& label)
+{
+	io::TStereoFrameSourceOptions so;
+	so.sensorLabel = label;
+	io::StereoFrameSource src(livePath, so);
+	io::TStereoFrame f;
+	if (!src.next(f)) throw std::runtime_error(src.noFramesMessage());
+	if (sameCamera(f.calib, map.calibration()) && f.left.cols == map.imageWidth() && f.left.rows == map.imageHeight())
+		return;
+	throw std::runtime_error(
+		"live rawlog '" + livePath + "' (camera '" + label + "': " + describeCamera(f.calib, f.left.cols, f.left.rows) +
+		") is not of the camera of map '" + mapPath + "' (" +
+		describeCamera(map.calibration(), map.imageWidth(), map.imageHeight()) +
+		"): a map localises runs of the camera that surveyed it");
 }
 
 int run(int argc, char** argv)
@@ -92,6 +125,16 @@ int run(int argc, char** argv)
 	mrpt::config::CConfigFileMemory cfg(cfgText);
 	std::optional<io::Trajectory> gt;
 	if (gtArg.isSet()) gt = io::readTum(gtArg.getValue());
+	// Every options struct the run reads, before any work; an error names
+	// the file and line of the setting at fault, as eval's do.
+	try
+	{
+		checkLocaliseConfig(cfg, locArg.isSet() ? splitList(locArg.getValue()) : std::vector<std::string>{}, cfgWhat);
+	}
+	catch (const std::exception& e)
+	{
+		throw std::runtime_error(core::configError(cfgArgs.getValue(), cfgWhat, e.what()));
+	}
 
 	// The output folder is checked before the run: it may hold no input and
 	// replaces only an earlier localise output.
@@ -130,6 +173,7 @@ int run(int argc, char** argv)
 			std::to_string(map->keyframeCount() - 1));
 	ro.startKf = startKf.isSet() ? startKf.getValue() : -1;
 	CLocaliseRun lrun(cfg, map, mapPath, livePath, ro);
+	checkLiveCamera(*map, mapPath, livePath, lrun.sensorLabel());
 	auto& sys = lrun.system();
 	if (debug.getValue()) sys.setMinLoggingLevel(mrpt::system::LVL_DEBUG);
 	if (talk)

@@ -3,12 +3,14 @@
  * render command; `render-traj` is its old name. */
 #include "Command.h"
 #include "CommandLine.h"
+#include "LocaliseOutput.h"
 
 #include <shadyloc/eval/Figures.h>
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/io/ImageFile.h>
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Tum.h>
+#include <shadyloc/localisation/LocaliseRun.h>
 #include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/render/TrajectorySnapshot.h>
 
@@ -77,6 +79,33 @@ render::TrajectoryLayer localisedLayer(const std::string& dir, const std::string
 	return l;
 }
 
+/** --localised DIR must have been localised against the first -m map, and
+ * --gt must be its live run's ground truth: drawn otherwise, the picture
+ * shows a run against a map (or a truth) it never met, with nothing said. */
+void checkLocalisedInputs(const std::string& dir, const std::string& mapFile, const std::string& gtFile)
+{
+	const std::string mapHash = apps::localiseProvenance(dir, "map_fnv1a64");
+	if (!mapHash.empty() && mapHash != localisation::fnv1a64File(mapFile))
+		throw std::invalid_argument(
+			"--localised '" + dir + "' was localised against map '" + apps::localiseProvenance(dir, "map") +
+			"' (its summary.json), not against -m '" + mapFile + "' (another file): give the run's own map first");
+	if (gtFile.empty()) return;
+	const std::string gtHash = apps::localiseProvenance(dir, "gt_fnv1a64");
+	if (!gtHash.empty() && gtHash != localisation::fnv1a64File(gtFile))
+		throw std::invalid_argument(
+			"--gt '" + gtFile + "' is not the ground truth '" + apps::localiseProvenance(dir, "gt") + "' that --localised '" + dir +
+			"' was localised with (its summary.json)");
+	// Without a recorded truth, its times must at least meet the run's.
+	auto gt = io::readTum(gtFile), live = io::readTum((std::filesystem::path(dir) / "trajectory.tum").string());
+	io::sortByTime(gt);
+	io::sortByTime(live);
+	if (!gt.empty() && !live.empty() && (gt.back().t < live.front().t || gt.front().t > live.back().t))
+		throw std::invalid_argument(
+			"--gt '" + gtFile + "' (" + std::to_string(gt.front().t) + ".." + std::to_string(gt.back().t) +
+			" s) shares no time with the run of --localised '" + dir + "' (" + std::to_string(live.front().t) + ".." +
+			std::to_string(live.back().t) + " s): the ground truth of another run?");
+}
+
 int run(int argc, char** argv)
 {
 	shadyloc::apps::CommandLine cli(
@@ -132,6 +161,10 @@ int run(int argc, char** argv)
 	if (liveGt.isSet()) outputs.addInput(liveGt.getValue(), "ground truth");
 	const std::string outTmp = outputs.addFile(out.getValue(), "output image");
 	io::checkImageWritable(out.getValue());
+	if (localised.isSet() && !maps.getValue().empty())
+		checkLocalisedInputs(
+			fileAndName(localised.getValue()).first, fileAndName(maps.getValue().front()).first,
+			liveGt.isSet() ? liveGt.getValue() : "");
 
 	// The first trajectory's frame is the picture's, for --align.
 	io::Trajectory reference;
@@ -165,12 +198,14 @@ int run(int argc, char** argv)
 	}
 
 	std::vector<render::TObjectLayer> objects;
+	std::string singleKeyframe;	// maps of one keyframe: a single point
 	std::vector<render::TrajectoryLayer> underneath;  // --localised: the maps' keyframes, under every path
 	for (const auto& spec : maps.getValue())
 	{
 		const auto [file, name] = fileAndName(spec);
 		const CKeyframeMap::Ptr m = CKeyframeMap::LoadFromFile(file);
 		if (m->isEmpty()) throw std::runtime_error("keyframe map '" + file + "': no keyframes to draw");
+		if (m->keyframeCount() == 1) singleKeyframe += (singleKeyframe.empty() ? "" : ", ") + ("'" + file + "'");
 		if (localised.isSet())
 		{
 			// The map's own drawing is blue and orange, the colours of the
@@ -271,6 +306,14 @@ int run(int argc, char** argv)
 	o.width = width.getValue();
 	o.height = height.getValue();
 	o.upAxis = up.getValue()[0];
+	// The renderer knows only its temporary output: name the inputs here.
+	size_t points = 0;
+	for (const auto& l : layers) points += l.points.size();
+	for (const auto& l : objects) points += l.extent.size();
+	if (points < 2)
+		throw std::runtime_error(
+			"nothing to draw: fewer than two points" +
+			(singleKeyframe.empty() ? std::string() : " (keyframe map " + singleKeyframe + ": a single keyframe)"));
 	render::renderTrajectories(layers, o, outTmp, objects);
 	outputs.commit();
 	std::cout << "wrote " << out.getValue() << "\n";

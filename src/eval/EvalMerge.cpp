@@ -7,6 +7,7 @@
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/localisation/Evaluation.h>
 #include <shadyloc/localisation/LocaliseRun.h>
+#include <shadyloc/map/CKeyframeMap.h>
 
 #include "EvalRecords.h"
 
@@ -104,6 +105,18 @@ std::string readJobWall(const std::string& path)
 	const std::string t = s.str();
 	return std::regex_search(t, m, re) ? std::string(m[1]) : std::string("null");
 }
+
+/** "" if the map job's map loads (every block's checksum) and holds the
+ * keyframes its record counts; else why not. The merge publishes the map
+ * and its hash: a damaged one would go out as the evaluation's. */
+std::string checkMapFile(const std::string& path, const TMapRecord& rec)
+{
+	const auto m = CKeyframeMap::LoadFromFile(path);
+	if (m->keyframeCount() != rec.keyframes)
+		return "'" + path + "' holds " + std::to_string(m->keyframeCount()) + " keyframes, its record map.tsv " +
+			   std::to_string(rec.keyframes) + " (a map replaced after its job ran)";
+	return "";
+}
 }  // namespace
 
 TMergeResult merge(const std::string& outDir, const TEvalInputs& in, const std::vector<TEvalJob>& jobs, double wall_s)
@@ -127,7 +140,11 @@ TMergeResult merge(const std::string& outDir, const TEvalInputs& in, const std::
 			else if (j.isMap)
 			{
 				if (!fs::exists(dir / "map.kfmap")) why = "no map.kfmap in '" + dir.string() + "'";
-				else maps[j.run] = readMapRecord((dir / "map.tsv").string());
+				else
+				{
+					maps[j.run] = readMapRecord((dir / "map.tsv").string());
+					why = checkMapFile((dir / "map.kfmap").string(), maps[j.run]);
+				}
 			}
 			else
 			{

@@ -1,5 +1,6 @@
 /* ShadyLoc — the leave-one-out evaluation: inputs, plan, jobs, the worker
  * pool (docs/evaluation.md). The merge is in EvalMerge.cpp. */
+#include <shadyloc/core/ConfigLocation.h>
 #include <shadyloc/core/Settings.h>
 #include <shadyloc/eval/LeaveOneOut.h>
 #include <shadyloc/io/OutputTransaction.h>
@@ -39,45 +40,6 @@ std::vector<std::string> localisersOf(EvalSystem s)
 
 namespace
 {
-/** "file:line" of `[section]` (key empty) or of `key = ...` in it, among
- * the config files; "" if not found. */
-std::string locateSetting(const std::vector<std::string>& files, const std::string& section, const std::string& key)
-{
-	for (const auto& file : files)
-	{
-		std::ifstream in(file);
-		std::string line, cur;
-		for (int n = 1; std::getline(in, line); n++)
-		{
-			const auto b = line.find_first_not_of(" \t");
-			if (b == std::string::npos || line[b] == ';' || line[b] == '#') continue;
-			if (line[b] == '[')
-			{
-				const auto e = line.find(']', b);
-				cur = e == std::string::npos ? "" : line.substr(b + 1, e - b - 1);
-				if (key.empty() && cur == section) return file + ":" + std::to_string(n);
-				continue;
-			}
-			if (key.empty() || cur != section) continue;
-			const auto eq = line.find('=', b);
-			std::string k = line.substr(b, eq == std::string::npos ? std::string::npos : eq - b);
-			while (!k.empty() && (k.back() == ' ' || k.back() == '\t')) k.pop_back();
-			if (k == key) return file + ":" + std::to_string(n);
-		}
-	}
-	return "";
-}
-
-/** The config error with the file and line of the setting it names. */
-std::string configError(const std::vector<std::string>& files, const std::string& what, const std::string& msg)
-{
-	static const std::regex setting(R"(\[([A-Za-z0-9_.\-]+)\](?: ([A-Za-z0-9_]+))?:)");
-	std::smatch m;
-	std::string where;
-	if (std::regex_search(msg, m, setting)) where = locateSetting(files, m[1], m[2].matched ? std::string(m[2]) : "");
-	return (where.empty() ? "config " + what : where) + ": " + msg;
-}
-
 bool sameCalib(const geometry::TStereoCalib& a, const geometry::TStereoCalib& b)
 {
 	const auto eq = [](double x, double y) { return std::abs(x - y) <= 1e-9 * std::max(1.0, std::abs(x)); };
@@ -313,7 +275,7 @@ TEvalInputs TEvalInputs::Load(
 	}
 	catch (const std::exception& e)
 	{
-		throw std::runtime_error(configError(configPaths, cfgNames, e.what()));
+		throw std::runtime_error(core::configError(configPaths, cfgNames, e.what()));
 	}
 	if (checkCameras)
 	{

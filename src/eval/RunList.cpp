@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <iomanip>
 #include <map>
 #include <sstream>
 #include <cctype>
@@ -16,6 +17,18 @@ std::string runWhere(const std::string& listPath, const TRun& r)
 {
 	return listPath + ":" + std::to_string(r.line) + ": run '" + r.name + "'";
 }
+
+namespace
+{
+const char* const kQuoteHint = " (a path with spaces must be in double quotes: \"my runs/a.rawlog\")";
+
+/** The same file, through any link or relative path. */
+bool sameFile(const std::string& a, const std::string& b)
+{
+	std::error_code ec;
+	return fs::equivalent(a, b, ec) && !ec;
+}
+}  // namespace
 
 std::vector<TRun> readRunList(const std::string& path)
 {
@@ -36,14 +49,15 @@ std::vector<TRun> readRunList(const std::string& path)
 		const std::string at = path + ":" + std::to_string(n) + ": ";
 		if (const auto h = line.find('#'); h != std::string::npos) line.erase(h);
 		if (!line.empty() && line.back() == '\r') line.pop_back();
+		// A path with spaces is written in double quotes ("my runs/a.rawlog").
 		std::istringstream fields(line);
 		std::vector<std::string> f;
-		for (std::string w; fields >> w;) f.push_back(w);
+		for (std::string w; fields >> std::quoted(w);) f.push_back(w);
 		if (f.empty()) continue;
 		if (f.size() < 2 || f.size() > 3)
 			throw std::runtime_error(
 				at + std::to_string(f.size()) + " field" + (f.size() == 1 ? "" : "s") +
-				"; a run is 'name rawlog [ground_truth.tum]'");
+				"; a run is 'name rawlog [ground_truth.tum]'" + (f.size() > 3 ? kQuoteHint : ""));
 		TRun r;
 		r.name = f[0];
 		r.line = n;
@@ -66,9 +80,15 @@ std::vector<TRun> readRunList(const std::string& path)
 		if (!fs::is_regular_file(r.rawlogPath))
 			throw std::runtime_error(
 				at + "run '" + r.name + "': rawlog '" + r.rawlogPath + "' does not exist" +
-				(fs::exists(r.rawlogPath) ? " as a file" : ""));
+				(fs::exists(r.rawlogPath) ? " as a file" : "") + (f.size() == 3 ? kQuoteHint : ""));
 		if (r.hasGt() && !fs::is_regular_file(r.gtPath))
 			throw std::runtime_error(at + "run '" + r.name + "': ground truth '" + r.gtPath + "' does not exist");
+		// The same traversal twice would be localised against its own map.
+		for (const auto& o : runs)
+			if (sameFile(o.rawlogPath, r.rawlogPath))
+				throw std::runtime_error(
+					at + "run '" + r.name + "': rawlog '" + r.rawlogPath + "' is run '" + o.name + "''s (line " +
+					std::to_string(o.line) + "): each run must be a traversal of its own");
 		runs.push_back(std::move(r));
 	}
 	if (runs.size() < 2)

@@ -122,6 +122,12 @@ void TStereoFeatureOptions::validate() const
 	auto bad = [](const std::string& what) { throw std::invalid_argument("option " + what); };
 	if (fast_threshold < 1 || fast_threshold > 254) bad("fast_threshold must be in [1,254]");
 	if (grid_cols < 1 || grid_rows < 1) bad("grid_cols/grid_rows must be >= 1");
+	// 0 or less used to mean "no limit" without saying so.
+	if (max_per_cell < 1) bad("max_per_cell must be >= 1 (corners kept per bucket)");
+	if (max_per_cell_right < 1) bad("max_per_cell_right must be >= 1 (corners kept per bucket)");
+	// The describer's own check would name neither the key nor the file.
+	if (brief_patch_size < 8 || brief_patch_size > 250 || brief_patch_size % 2)
+		bad("brief_patch_size_px must be even and in [8,250]");
 	if (!(min_disparity > 0) || !(max_disparity > min_disparity))
 		bad("min_disparity_px must be > 0 and < max_disparity_px");
 	if (row_tolerance < 0 || row_tolerance > 3) bad("row_tolerance_px must be in [0,3]");

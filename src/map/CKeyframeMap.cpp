@@ -1043,9 +1043,9 @@ CKeyframeMap::Ptr CKeyframeMap::LoadFromFile(const std::string& path)
 CKeyframeMap::Ptr CKeyframeMap::LoadFromBytes(const uint8_t* data, size_t size, const std::string& path)
 {
 	checkObjectHeader(data, size, path);
-	const std::vector<uint8_t> bytes(data, data + size);
+	// Read in place: a copy cost a damaged file twice its size in memory.
 	mrpt::io::CMemoryStream mem;
-	mem.assignMemoryNotOwn(bytes.data(), bytes.size());
+	mem.assignMemoryNotOwn(data, size);
 	auto ar = mrpt::serialization::archiveFrom(mem);
 	auto map = CKeyframeMap::Create();
 	try
@@ -1061,9 +1061,9 @@ CKeyframeMap::Ptr CKeyframeMap::LoadFromBytes(const uint8_t* data, size_t size, 
 		throw std::runtime_error(
 			"keyframe map '" + path + "': cannot be read (damaged, or not a " + kClass + " file): " + why);
 	}
-	if (mem.getPosition() != bytes.size())
+	if (mem.getPosition() != size)
 		throw std::runtime_error(
-			"keyframe map '" + path + "': " + std::to_string(bytes.size() - mem.getPosition()) +
+			"keyframe map '" + path + "': " + std::to_string(size - mem.getPosition()) +
 			" unexpected bytes after the map");
 	return map;
 }

@@ -5,7 +5,9 @@
  *   sensory frames, gzip and plain, external images, filtered);
  * OUT_DIR/image: tiny PNG/JPEG/PPM/PGM/BMP/TIFF files in the formats read;
  * OUT_DIR/settings: the .ini files of config/; OUT_DIR/tum: TUM trajectories;
- * OUT_DIR/map: keyframe maps (empty, and the golden populated one). */
+ * OUT_DIR/map: keyframe maps (empty, and the golden populated one) and, for
+ *   the header-first check, the golden header with absurd sizes, cut short,
+ *   of another class, and files that are no map. */
 #include <shadyloc/core/Registration.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/map/CKeyframeMap.h>
@@ -22,6 +24,8 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <iostream>
 
 namespace fs = std::filesystem;
@@ -46,6 +50,42 @@ mrpt::obs::CObservationStereoImages::Ptr frame(int i, int w, int h)
 	o->rightCamera = o->leftCamera;
 	o->rightCameraPose = mrpt::poses::CPose3DQuat(mrpt::poses::CPose3D(0.12, 0, 0, 0, 0, 0));
 	return o;
+}
+}  // namespace
+
+namespace
+{
+void writeBytes(const fs::path& p, const std::string& bytes)
+{
+	std::ofstream f(p, std::ios::binary);
+	f << bytes;
+}
+
+/** Seeds for the map loader's header-first check: the golden map's header
+ * with absurd block sizes, cut inside and just after the header, another
+ * class's name, and files that are no map (a rawlog, an image, text). */
+void writeMapHeaderSeeds(const fs::path& src, const fs::path& dir)
+{
+	std::ifstream in(src / "tests/golden/CKeyframeMap.bin", std::ios::binary);
+	const std::string golden((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+	if (golden.size() < 64) return;
+	const size_t head = 1 + (static_cast<unsigned char>(golden[0]) & 0x7f) + 1;  // tag, class name, version
+	for (const size_t at : {head + 1, head + 9})  // the first block's size and the next field
+	{
+		std::string huge = golden;
+		for (size_t i = at; i < at + 8; i++) huge[i] = '\xff';
+		writeBytes(dir / ("huge_size_at_" + std::to_string(at) + ".kfmap"), huge);
+	}
+	writeBytes(dir / "header_only.kfmap", golden.substr(0, head));
+	writeBytes(dir / "cut_in_header.kfmap", golden.substr(0, head / 2));
+	std::string other = golden;
+	other[head - 2] = 'X';	// "shadyloc::CKeyframeMaX": another class
+	writeBytes(dir / "other_class.kfmap", other);
+	writeBytes(dir / "text.kfmap", "[map]\nkf_spacing_m = 1.5\n");
+	for (const char* f : {"rawlog/plain.rawlog", "image/c.png"})
+		if (fs::exists(dir.parent_path() / f))
+			fs::copy_file(dir.parent_path() / f, dir / ("not_a_map_" + fs::path(f).filename().string()),
+						  fs::copy_options::overwrite_existing);
 }
 }  // namespace
 
@@ -139,6 +179,7 @@ int main(int argc, char** argv)
 	CKeyframeMap::Create()->saveToFile((out / "map/empty.kfmap").string());
 	if (fs::exists(src / "tests/golden/CKeyframeMap.bin"))
 		fs::copy_file(src / "tests/golden/CKeyframeMap.bin", out / "map/golden.kfmap", fs::copy_options::overwrite_existing);
+	writeMapHeaderSeeds(src, out / "map");
 	std::cout << "fuzz seeds written to " << out.string() << "\n";
 	return 0;
 }

@@ -59,7 +59,13 @@ std::vector<mrpt::obs::CObservationStereoImages::Ptr> readStereoFrames(const std
 	return out;
 }
 
-std::string appPath() { return SHADYLOC_APP; }
+// SHADYLOC_TEST_APP runs the command-line tests against another build (an
+// older one, to see a regression test fail without its fix).
+std::string appPath()
+{
+	const char* other = std::getenv("SHADYLOC_TEST_APP");
+	return other && *other ? other : SHADYLOC_APP;
+}
 std::string pluginPath() { return SHADYLOC_PLUGIN; }
 
 mrpt::obs::CObservationStereoImages stereoObservation(

@@ -72,10 +72,11 @@ TEST(EvalRunList, ParsesCommentsBlankLinesAndRelativePaths)
 	writeText(dir + "/data/a.rawlog", "x");
 	writeText(dir + "/data/b.rawlog", "x");
 	writeText(dir + "/data/b.tum", "");
+	writeText(dir + "/data/c.rawlog", "x");	 // a rawlog of its own: the same one twice is refused
 	writeText(
 		dir + "/runs.txt",
 		"# name rawlog gt\n\n  a\tdata/a.rawlog   # no ground truth\nb data/b.rawlog data/b.tum\r\n" + std::string("c ") +
-			dir + "/data/a.rawlog\n");
+			dir + "/data/c.rawlog\n");
 	const auto runs = eval::readRunList(dir + "/runs.txt");
 	ASSERT_EQ(runs.size(), 3u);
 	EXPECT_EQ(runs[0].name, "a");
@@ -85,7 +86,7 @@ TEST(EvalRunList, ParsesCommentsBlankLinesAndRelativePaths)
 	EXPECT_EQ(fs::path(runs[0].rawlogPath), fs::path(dir) / "data/a.rawlog");  // resolved against the list's folder
 	EXPECT_EQ(runs[1].gt, "data/b.tum");
 	EXPECT_EQ(fs::path(runs[1].gtPath), fs::path(dir) / "data/b.tum");
-	EXPECT_EQ(runs[2].rawlogPath, dir + "/data/a.rawlog");	// absolute stays
+	EXPECT_EQ(runs[2].rawlogPath, dir + "/data/c.rawlog");	// absolute stays
 	EXPECT_EQ(runs[2].line, 5);
 }
 
