@@ -49,6 +49,11 @@ int run(int argc, char** argv)
 	TCLAP::ValueArg<std::string> chArg(
 		"", "channels", "channels to store, comma-separated; the first one's VO makes the keyframe chain", false,
 		"mono,invariant", "mono,invariant", cmd);
+	TCLAP::ValueArg<std::string> bridgeArg(
+		"", "bridge",
+		"channel whose VO bridges the chain VO's breaks (its motion links the segment on): a stored channel after "
+		"the first, 'auto' (the second) or 'none'",
+		false, "auto", "channel", cmd);
 	TCLAP::ValueArg<std::string> gtArg("", "gt", "ground truth (TUM), stored beside the keyframes", false, "", "run.tum", cmd);
 	TCLAP::ValueArg<std::string> runName("", "run-name", "survey run name (default: the rawlog's stem): letters, digits, '_', '-' and '.' only", false, "", "name", cmd);
 	TCLAP::ValueArg<std::string> label(
@@ -70,6 +75,7 @@ int run(int argc, char** argv)
 	}
 	mrpt::system::tokenize(chArg.getValue(), ", ", so.channels);
 	so.sensorLabel = label.getValue();
+	so.bridgeChannel = bridgeArg.getValue();
 	if (runName.isSet()) so.runName = runName.getValue();
 	const bool talk = !quiet.getValue();
 
@@ -96,7 +102,8 @@ int run(int argc, char** argv)
 	const double msSave = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tSave).count();
 	const double sWall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 	std::cout << kfmap.asString() << "\n"
-			  << std::fixed << std::setprecision(2) << "frames: " << nFrames << ", VO breaks: " << st.breaks
+			  << std::fixed << std::setprecision(2) << "frames: " << nFrames << ", VO breaks: " << st.breaks << " ("
+			  << st.bridged << " bridged)"
 			  << ", build " << st.msTotal / nFrames << " ms/frame (reading, filters, VO, every channel's features), save "
 			  << msSave << " ms, wall " << sWall << " s; map -> " << outPath << "\n";
 	if (!st.meanKeptReobservations.empty())

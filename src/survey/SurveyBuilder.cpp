@@ -164,19 +164,18 @@ bool CSurveyBuilder::offer(
 		p.T_ref_f = res.T_kf_curr;
 		p.cov_ref_f = res.cov_kf_curr;
 	}
-	if (restart || !m_segmentOpen)
+	// T_last_f along the VO chain, unless a break lies between.
+	const auto along = restart || !m_segmentOpen
+						   ? std::nullopt
+						   : vo::poseAlongChain(voKfs, m_lastRef, {m_T_ref_last, m_cov_ref_last}, p.ref, {p.T_ref_f, p.cov_ref_f});
+	if (!along)
 	{
 		p.newSegment = true;
 		if (res.status == vo::FrameStatus::Reinit && m_haveOrigin) m_breaks++;
 	}
 	else
 	{
-		// T_last_f along the VO chain: inv(T_a_last) * T_a_b * T_b_f, a = last's
-		// reference VO keyframe, b = this frame's.
-		geometry::TPoseWithCov T = geometry::inverse({m_T_ref_last, m_cov_ref_last});
-		for (size_t k = m_lastRef + 1; k <= p.ref; k++)
-			T = geometry::compose(T, {voKfs[k].T_prevkf_kf, voKfs[k].cov});
-		T = geometry::compose(T, {p.T_ref_f, p.cov_ref_f});
+		const geometry::TPoseWithCov& T = *along;
 		p.T_prev_f = T.T;
 		p.cov_prev_f = T.cov;
 		const auto& o = m_map.options;
@@ -206,7 +205,16 @@ void CSurveyBuilder::addKeyframe(
 		m_haveOrigin = true;
 	}
 	kf.T_map_kf = m_T_world_map.inverse() * p.res.T_world_curr;
-	if (p.newSegment)
+	if (p.bridged)
+	{
+		// The chain VO's world after its break is its own dead reckoning:
+		// re-anchored so that this keyframe sits where the bridge puts it.
+		kf.T_map_kf = m_T_map_last * p.T_prev_f;
+		m_T_world_map = p.res.T_world_curr * kf.T_map_kf.inverse();
+		kf.T_prev_kf = p.T_prev_f;
+		kf.cov_prev_kf = p.cov_prev_f;
+	}
+	else if (p.newSegment)
 	{
 		if (m_segmentOpen) m_segment++;
 		// After a break (or a second survey run) the segment's map pose is a
@@ -247,6 +255,20 @@ void CSurveyBuilder::addKeyframe(
 	}
 	m_waiting.push_back(std::move(w));
 	flush(false);
+}
+
+bool CSurveyBuilder::bridgeable() const
+{
+	return m_pending.valid && m_pending.newSegment && m_segmentOpen && !m_pending.bridged;
+}
+
+void CSurveyBuilder::bridge(const geometry::TPoseWithCov& T_last_f)
+{
+	if (!bridgeable()) throw std::logic_error("CSurveyBuilder::bridge: no accepted frame opening a segment after a break");
+	m_pending.bridged = true;
+	m_pending.T_prev_f = T_last_f.T;
+	m_pending.cov_prev_f = T_last_f.cov;
+	m_bridged++;
 }
 
 bool CSurveyBuilder::needsFrames() const

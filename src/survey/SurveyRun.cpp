@@ -36,6 +36,31 @@ bool sameCalib(const geometry::TStereoCalib& a, const geometry::TStereoCalib& b)
 	return eq(a.fx, b.fx) && eq(a.fy, b.fy) && eq(a.cx, b.cx) && eq(a.cy, b.cy) && eq(a.cxR, b.cxR) &&
 		   eq(a.baseline, b.baseline);
 }
+/** A VO's view of one frame: its reference keyframe and pose there (for
+ * vo::poseAlongChain); ok only for a tracked frame. */
+struct TChainRef
+{
+	bool ok = false;
+	size_t ref = 0;
+	geometry::TPoseWithCov T_ref_f;
+};
+
+TChainRef chainRefOf(const vo::TFrameResult& r, const std::vector<vo::TKeyframe>& keyframes, size_t keyframesBefore)
+{
+	TChainRef c;
+	if (!vo::isTracked(r.status) || keyframes.empty()) return c;
+	c.ok = true;
+	if (r.status == vo::FrameStatus::First || r.status == vo::FrameStatus::Reinit)
+	{
+		c.ref = keyframes.size() - 1;  // the frame itself
+		c.T_ref_f.cov.setZero();
+		return c;
+	}
+	if (keyframesBefore == 0) return TChainRef();
+	c.ref = keyframesBefore - 1;
+	c.T_ref_f = {r.T_kf_curr, r.cov_kf_curr};
+	return c;
+}
 }  // namespace
 
 struct CSurveyRun::TImpl
@@ -46,6 +71,8 @@ struct CSurveyRun::TImpl
 	std::vector<TSurveyChannel> channels;
 	vo::TStereoVOOptions voOptions;	 //!< of the chain's VO (its matcher re-finds landmarks)
 	std::unique_ptr<vo::StereoVO> voChain;
+	size_t bridgeIndex = 0;	 //!< the bridge VO's channel (0: none)
+	std::unique_ptr<vo::StereoVO> voBridge;
 	bool ran = false;
 };
 
@@ -60,6 +87,21 @@ void checkRunName(const std::string& name, const std::string& what)
 		throw std::invalid_argument(
 			what + ": a run name may hold only letters, digits, '_', '-' and '.' (it is written unquoted into "
 			"frames.csv); give another with --run-name");
+}
+
+/** Index of the channel named by `name` (TSurveyRunOptions::bridgeChannel)
+ * among the survey's; 0 for none. */
+size_t bridgeChannelIndex(const std::vector<TSurveyChannel>& channels, const std::string& name)
+{
+	if (name == "none") return 0;
+	if (name == "auto") return channels.size() > 1 ? 1 : 0;
+	for (size_t i = 1; i < channels.size(); i++)
+		if (channels[i].channel.label == name) return i;
+	std::string have;
+	for (size_t i = 1; i < channels.size(); i++) have += (have.empty() ? "" : ", ") + channels[i].channel.label;
+	throw std::invalid_argument(
+		"--bridge '" + name + "': not one of the stored channels after the chain's (" +
+		(have.empty() ? std::string("none") : have) + "), nor 'auto' or 'none'");
 }
 }  // namespace
 
@@ -108,6 +150,12 @@ CSurveyRun::CSurveyRun(const std::string& inPath, const mrpt::config::CConfigFil
 	}
 	I.voOptions = vo::voOptionsFor(cfg, I.channels[0].channel.label);
 	I.voChain = std::make_unique<vo::StereoVO>(I.voOptions, I.channels[0].extractor.options());
+	I.bridgeIndex = bridgeChannelIndex(I.channels, o.bridgeChannel);
+	if (I.bridgeIndex > 0)
+	{
+		const auto& b = I.channels[I.bridgeIndex];
+		I.voBridge = std::make_unique<vo::StereoVO>(vo::voOptionsFor(cfg, b.channel.label), b.extractor.options());
+	}
 	m_runName = o.runName.empty() ? std::filesystem::path(inPath).stem().string() : o.runName;
 	checkRunName(m_runName, o.runName.empty() ? "run name '" + m_runName + "' (the stem of '" + inPath + "')"
 											  : "--run-name '" + m_runName + "'");
@@ -127,7 +175,9 @@ void CSurveyRun::describe(std::ostream& out) const
 								 : "filtered on the fly from the colour camera" +
 									   (c.input.sensorLabel.empty() ? std::string() : " '" + c.input.sensorLabel + "'"))
 			<< "\n";
-	out << "keyframe chain: the " << I.channels[0].channel.label << " VO\n[map]\n";
+	out << "keyframe chain: the " << I.channels[0].channel.label << " VO"
+		<< (I.voBridge ? ", its breaks bridged by the " + I.channels[I.bridgeIndex].channel.label + " VO" : std::string())
+		<< "\n[map]\n";
 	I.map->options.dumpToTextStream(out);
 }
 
@@ -143,6 +193,7 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 	const std::string& inPath = I.inPath;
 	std::unique_ptr<CSurveyBuilder> builder;
 	size_t& nFrames = m_stats.frames;
+	TChainRef bridgeAtLast;	 // the last map keyframe as the bridge VO saw it
 
 	// The channels' sources walk the rawlog in lockstep: the same frame index
 	// and timestamp from each, or the run is refused.
@@ -205,8 +256,33 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 		}
 		else
 			res = voChain.process(f0.left, f0.right, calib, t);
+		// The bridge VO on its own channel: where the chain's VO breaks and
+		// it does not, its motion links the segment on (CSurveyBuilder::bridge).
+		TChainRef bridgeNow;
+		if (I.voBridge)
+		{
+			auto& vb = *I.voBridge;
+			const auto& cb = channels[I.bridgeIndex];
+			const size_t bBefore = vb.keyframes().size();
+			vo::TFrameResult bres;
+			if (everyFrame)
+			{
+				vb.track(frames[I.bridgeIndex], calib, t);
+				bres = vb.commit();
+			}
+			else
+				bres = vb.process(cb.frame.left, cb.frame.right, calib, t);
+			bridgeNow = chainRefOf(bres, vb.keyframes(), bBefore);
+		}
 		if (builder->offer(res, voChain.keyframes(), before))
 		{
+			if (builder->bridgeable() && bridgeAtLast.ok && bridgeNow.ok)
+			{
+				const auto link = vo::poseAlongChain(
+					I.voBridge->keyframes(), bridgeAtLast.ref, bridgeAtLast.T_ref_f, bridgeNow.ref, bridgeNow.T_ref_f);
+				if (link) builder->bridge(*link);
+			}
+			bridgeAtLast = bridgeNow;  // the map keyframe to come, as the bridge VO saw it
 			std::vector<std::vector<features::TStereoMeasurement>> meas(channels.size());
 			for (size_t c = 0; c < channels.size(); c++)
 			{
@@ -261,6 +337,7 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 		throw std::runtime_error(
 			I.opts.gtName + ": no ground-truth pose within 10 ms of any keyframe of " + inPath);
 	m_stats.breaks = builder->breaks();
+	m_stats.bridged = builder->bridged();
 	return I.map;
 }
 

@@ -26,6 +26,20 @@ double rotationDeg(const Eigen::Isometry3d& T)
 }
 }  // namespace
 
+std::optional<geometry::TPoseWithCov> poseAlongChain(
+	const std::vector<TKeyframe>& keyframes, size_t refA, const geometry::TPoseWithCov& T_refA_a, size_t refB,
+	const geometry::TPoseWithCov& T_refB_b)
+{
+	if (refA > refB || refB >= keyframes.size()) return std::nullopt;
+	geometry::TPoseWithCov T = geometry::inverse(T_refA_a);
+	for (size_t k = refA + 1; k <= refB; k++)
+	{
+		if (keyframes[k].chain_break) return std::nullopt;
+		T = geometry::compose(T, {keyframes[k].T_prevkf_kf, keyframes[k].cov});
+	}
+	return geometry::compose(T, T_refB_b);
+}
+
 std::string toString(FrameStatus s)
 {
 	switch (s)

@@ -448,6 +448,10 @@ TEST(MapSurvey, SurveyAndMapInfoOnASyntheticRun)
 	EXPECT_NE(out.find(".kfmap"), std::string::npos) << out;
 	EXPECT_NE(test::runCommand(test::appPath() + " map-info " + rawlog, &out), 0);
 	EXPECT_NE(out.find("corridor.rawlog"), std::string::npos) << out;
+	// The chain's own channel cannot bridge its breaks.
+	EXPECT_NE(test::runCommand(test::appPath() + " survey -i " + rawlog + " -o " + none + " --bridge mono", &out), 0);
+	EXPECT_NE(out.find("--bridge 'mono'"), std::string::npos) << out;
+	EXPECT_NE(out.find("(invariant)"), std::string::npos) << out;
 	EXPECT_FALSE(std::filesystem::exists(none));
 }
 
@@ -505,4 +509,88 @@ TEST(MapSurvey, AFilteredRunRecordsTheFilterThatMadeItsImages)
 	EXPECT_NE(test::runCommand(test::appPath() + " survey -i " + raw + " -o " + dir + "/x.kfmap --channels mono,infrared", &out), 0);
 	EXPECT_NE(out.find("infrared"), std::string::npos) << out;
 	EXPECT_FALSE(std::filesystem::exists(dir + "/x.kfmap"));
+}
+
+namespace
+{
+/** A chain VO's run, 1 m a frame along z, whose VO breaks at frame 6 (a
+ * Reinit whose dead reckoning is 2 m off), offered to a builder; with
+ * `bridge` the break is linked by the true motion since the last map
+ * keyframe, as the survey's bridge VO measures it. */
+CKeyframeMap::Ptr buildAcrossABreak(bool bridge, std::vector<Eigen::Isometry3d>& truth)
+{
+	auto m = CKeyframeMap::Create();
+	m->options.landmark_selection = TKeyframeMapOptions::LandmarkSelection::Strongest;
+	m->options.kf_spacing_m = 1.5;
+	const auto proto = test::makeSyntheticMap(1, 0, 0);
+	m->setup(proto->calibration(), 512, 384, proto->channels());
+	survey::CSurveyBuilder b(*m, "run");
+	auto at = [](double z) {
+		Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+		T.translation().z() = z;
+		return T;
+	};
+	std::vector<vo::TKeyframe> kfs;
+	Eigen::Isometry3d T_world_lastMapKf = Eigen::Isometry3d::Identity();
+	truth.clear();
+	for (int f = 0; f < 12; f++)
+	{
+		vo::TFrameResult r;
+		r.frame = static_cast<size_t>(f);
+		r.timestamp = f;
+		const size_t before = kfs.size();
+		const Eigen::Isometry3d T_true = at(f);
+		if (f == 0 || f == 6)
+		{
+			vo::TKeyframe k;
+			k.frame = r.frame;
+			k.chain_break = f == 6;
+			// The break's link: dead reckoning 2 m short.
+			k.T_world_kf = f == 0 ? T_true : at(f - 2.0);
+			k.T_prevkf_kf = f == 0 ? Eigen::Isometry3d::Identity() : kfs.back().T_world_kf.inverse() * k.T_world_kf;
+			k.cov = f == 0 ? geometry::Matrix6d::Zero() : geometry::Matrix6d(geometry::Matrix6d::Identity() * 1e2);
+			kfs.push_back(k);
+			r.status = f == 0 ? vo::FrameStatus::First : vo::FrameStatus::Reinit;
+			r.keyframe = true;
+			r.T_world_curr = k.T_world_kf;
+		}
+		else
+		{
+			r.status = vo::FrameStatus::Ok;
+			r.T_kf_curr = at(f - static_cast<double>(kfs.back().frame));
+			r.cov_kf_curr = geometry::Matrix6d::Identity() * 1e-6;
+			r.T_world_curr = kfs.back().T_world_kf * r.T_kf_curr;
+		}
+		if (!b.offer(r, kfs, before)) continue;
+		EXPECT_EQ(b.bridgeable(), f == 6) << "frame " << f;
+		if (bridge && b.bridgeable()) b.bridge({T_world_lastMapKf.inverse() * T_true, geometry::Matrix6d::Identity() * 1e-4});
+		b.addKeyframe({{}, {}});
+		T_world_lastMapKf = T_true;
+		truth.push_back(T_true);
+	}
+	b.finish();
+	return m;
+}
+}  // namespace
+
+TEST(MapSurvey, ABridgedBreakContinuesTheSegmentWhereTheBridgePutsIt)
+{
+	std::vector<Eigen::Isometry3d> truth;
+	const auto bridged = buildAcrossABreak(true, truth);
+	ASSERT_EQ(bridged->keyframeCount(), truth.size());
+	for (size_t i = 0; i < truth.size(); i++)
+	{
+		const auto& k = bridged->keyframe(static_cast<uint32_t>(i));
+		EXPECT_EQ(k.segment, 0u) << "keyframe " << i;
+		EXPECT_FALSE(k.predicted) << "keyframe " << i;
+		// The keyframes after the break too: the chain VO's world is re-anchored.
+		EXPECT_LT((k.T_map_kf.translation() - truth[i].translation()).norm(), 1e-9) << "keyframe " << i;
+	}
+	EXPECT_NO_THROW(bridged->relativePose(0, static_cast<uint32_t>(truth.size() - 1)));
+	// Unbridged: a new, predicted segment 2 m off.
+	const auto broken = buildAcrossABreak(false, truth);
+	const auto& last = broken->keyframes().back();
+	EXPECT_EQ(last.segment, 1u);
+	EXPECT_TRUE(last.predicted);
+	EXPECT_NEAR((last.T_map_kf.translation() - truth.back().translation()).norm(), 2.0, 1e-9);
 }

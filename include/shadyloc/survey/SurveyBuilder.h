@@ -104,6 +104,15 @@ class CSurveyBuilder : public mrpt::system::COutputLogger
 	 * call addKeyframe() with every channel's measurements of this frame. */
 	bool offer(const vo::TFrameResult& res, const std::vector<vo::TKeyframe>& voKeyframes, size_t voKeyframesBefore);
 
+	/** The frame offer() just accepted opens a new segment after a break of
+	 * the chain's VO (bridgeable()): `T_last_f`, its pose in the last map
+	 * keyframe measured by another channel's VO that tracked through the
+	 * break, links it to that keyframe instead, so the segment goes on
+	 * (addKeyframe places it and the chain's later keyframes by this link). */
+	bool bridgeable() const;
+	void bridge(const geometry::TPoseWithCov& T_last_f);
+	size_t bridged() const { return m_bridged; }  //!< breaks bridged by bridge()
+
 	/** Whether the builder needs every tracked frame's measurements (addFrame). */
 	bool needsFrames() const;
 	/** The frame last offered (tracked), every channel's measurements in the
@@ -130,6 +139,7 @@ class CSurveyBuilder : public mrpt::system::COutputLogger
 	CKeyframeMap& m_map;
 	uint16_t m_run;
 	size_t m_breaks = 0;
+	size_t m_bridged = 0;
 	bool m_haveOrigin = false;
 	size_t m_added = 0;	 //!< keyframes added by this builder (appended or waiting)
 	Eigen::Isometry3d m_T_world_map = Eigen::Isometry3d::Identity();  //!< VO world -> map frame
@@ -152,6 +162,7 @@ class CSurveyBuilder : public mrpt::system::COutputLogger
 		Eigen::Isometry3d T_prev_f = Eigen::Isometry3d::Identity();
 		geometry::Matrix6d cov_prev_f = geometry::Matrix6d::Zero();
 		bool newSegment = false;
+		bool bridged = false;  //!< newSegment, but linked by bridge()
 	} m_pending;
 
 	// ---- re-observation ----------------------------------------------------------

@@ -33,13 +33,17 @@ struct TSurveyRunOptions
 	std::optional<io::Trajectory> gt;  //!< stored beside the keyframes, associated within 10 ms
 	std::string gtName;	 //!< names the ground truth in errors
 	std::string configName = "(no config)";	 //!< names the config in messages
+	/** The channel whose VO bridges the chain VO's breaks (CSurveyBuilder::
+	 * bridge): "auto" is the second channel when there is one, "none" none. */
+	std::string bridgeChannel = "auto";
 };
 
 struct TSurveyStats
 {
 	size_t frames = 0;	//!< stereo frames read
 	size_t gtKeyframes = 0;	 //!< keyframes with a ground-truth pose
-	size_t breaks = 0;	//!< VO breaks (new map segments)
+	size_t breaks = 0;	//!< breaks of the chain's VO
+	size_t bridged = 0;	 //!< ... of them bridged by the bridge channel's VO (no new segment)
 	double msTotal = 0;	 //!< reading, filters, VO, every channel's features [ms]
 	geometry::TStereoCalib calib;  //!< of the first frame
 	/** Per channel: mean frames in which the kept landmarks were re-found

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/geometry/PoseCovariance.h>
 #include <shadyloc/geometry/PoseSolver.h>
 #include <shadyloc/geometry/StereoCamera.h>
 #include <shadyloc/map/Keyframe.h>
@@ -32,6 +33,7 @@
 #include <Eigen/Geometry>
 
 #include <chrono>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -58,6 +60,14 @@ inline bool isTracked(FrameStatus s)
 
 /** The VO's keyframes are the map's keyframe type (map/Keyframe.h). */
 using TKeyframe = map::TKeyframe;
+
+/** Frame b's pose in frame a, each given in a keyframe of the VO's list
+ * (`T_refA_a` in keyframe refA, `T_refB_b` in refB, refA <= refB), composed
+ * along the keyframes' links between them; nullopt when a chain break
+ * (a predicted link) lies between, or a reference is out of the list. */
+std::optional<geometry::TPoseWithCov> poseAlongChain(
+	const std::vector<TKeyframe>& keyframes, size_t refA, const geometry::TPoseWithCov& T_refA_a, size_t refB,
+	const geometry::TPoseWithCov& T_refB_b);
 
 /** Stage times of one frame [ms]. */
 struct TVOTimings
