@@ -1,6 +1,5 @@
 /* ShadyLoc — stereo pose: 3-point RANSAC and robust Gauss-Newton. */
 #include <shadyloc/geometry/PoseSolver.h>
-#include <shadyloc/geometry/PoseCovariance.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
@@ -302,51 +301,6 @@ TPoseSolution solveStereoPose(
 	sol.rms_px = std::sqrt(sumSq / std::max(1, used) / 3.0);
 	sol.ok = sol.cov_T_ref_curr.allFinite();
 	return sol;
-}
-
-Matrix6d bootstrapStereoPoseCovariance(
-	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const std::vector<uint8_t>& use,
-	const Eigen::Isometry3d& T_curr_ref, const TPoseSolverOptions& o, int samples, uint32_t seed)
-{
-	// Every used correspondence's terms, once, at the solution.
-	std::vector<Matrix6d, Eigen::aligned_allocator<Matrix6d>> Hs;
-	std::vector<Vector6d, Eigen::aligned_allocator<Vector6d>> gs;
-	for (size_t i = 0; i < c.size(); i++)
-	{
-		if (i < use.size() && !use[i]) continue;
-		Matrix6d H;
-		Vector6d g;
-		double sq;
-		if (!normalTerms(calib, T_curr_ref, c[i], o, H, g, sq)) continue;
-		Hs.push_back(H);
-		gs.push_back(g);
-	}
-	const size_t n = Hs.size();
-	if (n < 4 || samples < 2) return Matrix6d::Zero();
-	std::mt19937 rng(seed);
-	std::uniform_int_distribution<size_t> pick(0, n - 1);
-	const Eigen::Isometry3d T_ref_curr = T_curr_ref.inverse();
-	Matrix6d C = Matrix6d::Zero();
-	int solved = 0;
-	for (int b = 0; b < samples; b++)
-	{
-		Matrix6d H = Matrix6d::Zero();
-		Vector6d g = Vector6d::Zero();
-		for (size_t k = 0; k < n; k++)
-		{
-			const size_t i = pick(rng);
-			H += Hs[i];
-			g += gs[i];
-		}
-		const Eigen::LDLT<Matrix6d> ldlt(H);
-		if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) continue;
-		const Vector6d dx = ldlt.solve(-g);
-		if (!dx.allFinite()) continue;
-		const Vector6d xi = localLeft(retractLeft(dx, T_curr_ref).inverse(), T_ref_curr);
-		C += xi * xi.transpose();
-		solved++;
-	}
-	return solved >= 2 ? Matrix6d(C / (solved - 1)) : Matrix6d::Zero();
 }
 
 }  // namespace shadyloc::geometry

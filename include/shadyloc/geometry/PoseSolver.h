@@ -123,17 +123,6 @@ TPoseSolution solveStereoPose(
 	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c,
 	const std::vector<uint8_t>& use, const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o);
 
-/** Bootstrap covariance of T_ref_curr (left convention) at the solution
- * T_curr_ref of solveStereoPose: `samples` resamples (with replacement, from
- * `seed`) of the used correspondences, each solved by one Gauss-Newton step
- * from the solution on the terms linearised there once (the one-step
- * bootstrap: the resampled optimum to first order, at the cost of summing
- * 6x6 blocks instead of re-solving). It sees what the information matrix
- * cannot: a pose resting on a few correspondences moves when they are left
- * out. Zero with fewer than 4 usable correspondences or 2 samples. */
-Matrix6d bootstrapStereoPoseCovariance(
-	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const std::vector<uint8_t>& use,
-	const Eigen::Isometry3d& T_curr_ref, const TPoseSolverOptions& o, int samples, uint32_t seed);
 
 /** Two-view bundle adjustment from T_init: the pose and every used landmark
  * are unknowns; each landmark has its stereo measurement z_ref in the
