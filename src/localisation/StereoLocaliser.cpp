@@ -76,8 +76,8 @@ double varianceFactor(
  * correspondences (a wrong match among the inliers, landmarks all far or on
  * one side) moves when they are left out. Zero when fewer than 2 resamples
  * solve. Each resample is solved, not stepped once from the solution: a
- * one-step bootstrap (terms linearised once, Huber weights kept) was 1.6x
- * faster per frame but too small on the marginal solves that matter, and
+ * one-step bootstrap (terms linearised once, Huber weights kept) is far
+ * cheaper but came out too small on the marginal solves that matter, and
  * doubled the false fixes on the 301 m set (docs/localisation.md). */
 Matrix6d bootstrapCovariance(
 	const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
