@@ -20,6 +20,21 @@ double mahalanobis2(const Vector6d& xi, const Matrix6d& S)
 	return std::isfinite(d2) && d2 >= 0 ? d2 : std::numeric_limits<double>::infinity();
 }
 
+TPoseWithCov fuseWithPrediction(const TPoseWithCov& solve, const TPoseWithCov& prediction)
+{
+	const Matrix6d& P = prediction.cov;
+	const Eigen::LDLT<Matrix6d> ldlt(0.5 * (P + solve.cov + (P + solve.cov).transpose()));
+	if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return solve;
+	const Matrix6d K = ldlt.solve(P.transpose()).transpose();  // P (P + R)^-1
+	const Vector6d xi = geometry::localLeft(solve.T, prediction.T);
+	TPoseWithCov f;
+	f.T = geometry::retractLeft(K * xi, prediction.T);
+	const Matrix6d C = (Matrix6d::Identity() - K) * P;
+	f.cov = 0.5 * (C + C.transpose());
+	if (!f.T.matrix().allFinite() || !f.cov.allFinite()) return solve;
+	return f;
+}
+
 std::string toString(AcceptanceVerdict v)
 {
 	switch (v)

@@ -93,6 +93,7 @@ void TSystemOptions::load(const mrpt::config::CConfigFileBase& c, const std::str
 	r.read("relocalise_after_frames", track.relocalise_after_frames);
 	r.read("relocalise_window_m", track.relocalise_window_m);
 	r.read("relocalise_max_angle_deg", track.relocalise_max_angle_deg);
+	r.read("fuse_prediction", track.fuse_prediction);
 	r.read("global_search_after_frames", track.global_search_after_frames);
 	r.read("seed_with_unconfirmed", track.seed_with_unconfirmed);
 	r.read("global_sigma_m", track.global_sigma_m);
@@ -128,6 +129,7 @@ void TSystemOptions::dump(std::ostream& out) const
 	w.value("relocalise_after_frames", track.relocalise_after_frames, "without a fix this long, search around dead reckoning [frames]");
 	w.value("relocalise_window_m", track.relocalise_window_m, "... this far along the chain on both sides, and as near in the map frame [m]");
 	w.value("relocalise_max_angle_deg", track.relocalise_max_angle_deg, "... a keyframe of another segment facing within this [deg]");
+	w.value("fuse_prediction", track.fuse_prediction, "while the track is confirmed, a fix is the solve fused with the prediction");
 	w.value("global_search_after_frames", track.global_search_after_frames, "... and the whole map after this [frames]");
 	w.value("seed_with_unconfirmed", track.seed_with_unconfirmed,
 			"a consistent but unconfirmed solve narrows the next search (never a fix, never validates)");
@@ -458,6 +460,23 @@ void CLocalisationSystem::forLocalisers(F&& fn)
 	both(par, runFirst, runRest);
 }
 
+TKeyframePose CLocalisationSystem::fusedFix(const TLocaliserResult& r, const TKeyframePose& pred, bool confirmed) const
+{
+	TKeyframePose f = r.pose();
+	// Only a prediction made of accepted fixes, linked by measurements.
+	if (!m_opts.track.fuse_prediction || !confirmed || !pred.valid || !m_map->sameSegment(f.kf, pred.kf)) return f;
+	geometry::TPoseWithCov p = pred.withCov();
+	if (pred.kf != f.kf)
+	{
+		const auto link = m_map->relativePose(f.kf, pred.kf);
+		p = geometry::compose({link.T_a_b, link.cov}, p);
+	}
+	const auto fused = fuseWithPrediction(f.withCov(), p);
+	f.T_kf_live = fused.T;
+	f.cov = fused.cov;
+	return f;
+}
+
 std::vector<uint32_t> CLocalisationSystem::relocalisationWindow(const TKeyframePose& deadReckoning) const
 {
 	const double w = m_opts.track.relocalise_window_m;
@@ -556,7 +575,7 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 	if (fix)
 	{
 		u.used = fix->channel;
-		m_track.fix(fix->pose());
+		m_track.fix(fusedFix(*fix, pred, u.track_confirmed));
 	}
 	else
 	{

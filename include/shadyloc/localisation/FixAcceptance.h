@@ -122,4 +122,12 @@ class CFixAcceptance
 /** Mahalanobis distance^2 xi^T S^-1 xi; infinity if S is not positive definite. */
 double mahalanobis2(const geometry::Vector6d& xi, const geometry::Matrix6d& S);
 
+/** An accepted solve fused with the prediction it was tested against (both
+ * in the solve's keyframe): the Kalman update of the prediction by the
+ * solve in the tangent space at the prediction. Along what the solve's
+ * landmarks constrain weakly (depth in a far-field scene) the track carries
+ * the pose; elsewhere the solve. The solve itself when the covariances are
+ * not positive definite. */
+geometry::TPoseWithCov fuseWithPrediction(const geometry::TPoseWithCov& solve, const geometry::TPoseWithCov& prediction);
+
 }  // namespace shadyloc::localisation

@@ -224,6 +224,9 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	template <typename F>
 	void forLocalisers(F&& fn);
 	/** Searches for the place (scope) and adopts the first verified one in policy order. */
+	/** The accepted solve `r` as the track takes it (fused with the
+	 * prediction while the track is confirmed). */
+	TKeyframePose fusedFix(const TLocaliserResult& r, const TKeyframePose& pred, bool confirmed) const;
 	/** The keyframes a relocalisation searches around dead reckoning. */
 	std::vector<uint32_t> relocalisationWindow(const TKeyframePose& deadReckoning) const;
 	void searchPlace(

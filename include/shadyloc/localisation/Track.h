@@ -46,6 +46,9 @@ struct TTrackOptions
 	double global_sigma_deg = 1.0;
 	/** An unconfirmed, consistent solve narrows the next frame's search. */
 	bool seed_with_unconfirmed = true;
+	/** While the track is confirmed, a fix is the solve fused with the
+	 * prediction (fuseWithPrediction), not the solve alone. */
+	bool fuse_prediction = true;
 };
 
 /** Covariance added by a dead-reckoned step of `step` metres after `before`
