@@ -477,19 +477,19 @@ TKeyframePose CLocalisationSystem::fusedFix(const TLocaliserResult& r, const TKe
 	return f;
 }
 
-std::vector<uint32_t> CLocalisationSystem::relocalisationWindow(const TKeyframePose& deadReckoning) const
+std::vector<uint32_t> keyframesAroundDeadReckoning(
+	const CKeyframeMap& map, const TKeyframePose& deadReckoning, double window_m, double max_angle_deg)
 {
-	const double w = m_opts.track.relocalise_window_m;
-	std::vector<uint32_t> among = m_map->keyframesAlongChain(deadReckoning.kf, w, w);
+	std::vector<uint32_t> among = map.keyframesAlongChain(deadReckoning.kf, window_m, window_m);
 	// At a VO break of the survey the chain ends but the road goes on in
 	// another segment, whose map pose is the survey's dead reckoning: also
 	// every keyframe that near the dead-reckoned camera in the map frame.
 	map::TNearestQuery q;
-	q.max_distance_m = w;
-	q.max_angle_deg = m_opts.track.relocalise_max_angle_deg;
-	q.max_results = m_map->keyframeCount();
-	const Eigen::Isometry3d T_map_live = m_map->keyframe(deadReckoning.kf).T_map_kf * deadReckoning.T_kf_live;
-	for (const auto& h : m_map->nearestKeyframes(T_map_live, q))
+	q.max_distance_m = window_m;
+	q.max_angle_deg = max_angle_deg;
+	q.max_results = map.keyframeCount();
+	const Eigen::Isometry3d T_map_live = map.keyframe(deadReckoning.kf).T_map_kf * deadReckoning.T_kf_live;
+	for (const auto& h : map.nearestKeyframes(T_map_live, q))
 		if (std::find(among.begin(), among.end(), h.id) == among.end()) among.push_back(h.id);
 	std::sort(among.begin(), among.end());
 	return among;
@@ -500,7 +500,9 @@ void CLocalisationSystem::searchPlace(
 	const std::vector<size_t>& order, TLocalisationUpdate& u)
 {
 	std::vector<uint32_t> among = m_searchAmong;
-	if (scope == SearchScope::Window && m_track.estimate().valid) among = relocalisationWindow(m_track.estimate());
+	if (scope == SearchScope::Window && m_track.estimate().valid)
+		among = keyframesAroundDeadReckoning(
+			*m_map, m_track.estimate(), m_opts.track.relocalise_window_m, m_opts.track.relocalise_max_angle_deg);
 	const auto seed = static_cast<uint32_t>(u.frame * 7919u + 3);
 	std::vector<TGlobalPlace> places(m_pipes.size());
 	std::vector<double> ms(m_pipes.size(), 0);

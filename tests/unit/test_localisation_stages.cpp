@@ -6,11 +6,15 @@
  * validated the next frame against itself, the bootstrap covariance
  * inflated twice. */
 #include <shadyloc/localisation/FixAcceptance.h>
+#include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/localisation/StereoLocaliser.h>
 #include <shadyloc/localisation/Track.h>
 
+#include "test_map_support.h"
+
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace
@@ -214,4 +218,50 @@ TEST(LocalisationStages, FixCovarianceIsNotInflatedTwice)
 	EXPECT_TRUE(fixCovariance(A, 3.0 * A, 4.0, 30).isApprox(4.0 * A));	// bootstrap below the scaled solver's
 	EXPECT_TRUE(fixCovariance(A, 20.0 * A, 4.0, 30).isApprox(20.0 * A));  // above: the bootstrap's, not 80 A
 	EXPECT_TRUE(fixCovariance(A, 20.0 * A, 4.0, 0).isApprox(4.0 * A));	// bootstrap off
+}
+
+TEST(LocalisationStages, FusionWeighsTheSolveAndThePredictionByTheirCovariances)
+{
+	// Equal covariances: half way, and half the covariance.
+	const geometry::TPoseWithCov pred{ahead(10.0), diag(0.1, 1.0)};
+	const geometry::TPoseWithCov solve{ahead(10.4), diag(0.1, 1.0)};
+	const auto mid = fuseWithPrediction(solve, pred);
+	EXPECT_NEAR(mid.T.translation().z(), 10.2, 1e-9);
+	EXPECT_NEAR(mid.cov(2, 2), 0.5 * 0.01, 1e-12);
+	// A solve weak in depth (far landmarks) and sharp across: the depth from
+	// the prediction, the lateral offset from the solve.
+	Matrix6d weakDepth = diag(0.01, 0.1);
+	weakDepth(2, 2) = 0.5 * 0.5;
+	geometry::TPoseWithCov off{ahead(10.5), weakDepth};
+	off.T.translation().x() = 0.3;
+	const auto f = fuseWithPrediction(off, pred);
+	EXPECT_NEAR(f.T.translation().z(), 10.0 + 0.5 * 0.01 / (0.01 + 0.25), 1e-6);
+	EXPECT_NEAR(f.T.translation().x(), 0.3 * 0.01 / (0.01 + 1e-4), 1e-6);
+	EXPECT_LT(f.cov(2, 2), pred.cov(2, 2));
+	// Not positive definite: the solve as it is.
+	const auto same = fuseWithPrediction(solve, {ahead(10.0), Matrix6d::Zero() - Matrix6d::Identity()});
+	EXPECT_TRUE(same.T.isApprox(solve.T));
+}
+
+TEST(LocalisationStages, DeadReckoningWindowCrossesASurveyBreak)
+{
+	// The synthetic road breaks after keyframe 14 (segment 1 predicted from
+	// dead reckoning): along the chain the window stops there; in the map
+	// frame it goes on into the next segment, within the same distance.
+	const auto m = test::makeSyntheticMap(24, 4, 15);
+	TKeyframePose dr;
+	dr.valid = true;
+	dr.kf = 14;
+	dr.T_kf_live.translation() = Eigen::Vector3d(0, 0, 2.0);
+	const auto along = m->keyframesAlongChain(14, 10, 10);
+	EXPECT_EQ(along.back(), 14u);
+	const auto w = keyframesAroundDeadReckoning(*m, dr, 10, 45);
+	EXPECT_TRUE(std::is_sorted(w.begin(), w.end()));
+	for (const uint32_t k : along) EXPECT_TRUE(std::binary_search(w.begin(), w.end(), k)) << k;
+	EXPECT_TRUE(std::binary_search(w.begin(), w.end(), 15u));
+	EXPECT_TRUE(std::binary_search(w.begin(), w.end(), 16u));
+	// Along the chain from keyframe 14, or near the camera 2 m beyond it.
+	const Eigen::Vector3d cam = (m->keyframe(14).T_map_kf * dr.T_kf_live).translation();
+	for (const uint32_t k : w) EXPECT_LE((m->keyframe(k).T_map_kf.translation() - cam).norm(), 12.5) << k;
+	EXPECT_FALSE(std::binary_search(w.begin(), w.end(), 23u)) << "18 m beyond the window";
 }

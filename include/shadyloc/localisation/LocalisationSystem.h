@@ -118,6 +118,14 @@ struct TLocalisationUpdate
 	mrpt::poses::CPose3DPDFGaussian pdf() const;
 };
 
+/** The keyframes a relocalisation searches around dead reckoning: those
+ * within window_m along the map's chain from its keyframe, and those of any
+ * segment within window_m of the dead-reckoned camera in the map frame,
+ * facing within max_angle_deg of it (after a VO break of the survey the road
+ * goes on in another segment); sorted by id. */
+std::vector<uint32_t> keyframesAroundDeadReckoning(
+	const CKeyframeMap& map, const TKeyframePose& deadReckoning, double window_m, double max_angle_deg);
+
 class CLocalisationSystem : public mrpt::system::COutputLogger
 {
    public:
@@ -227,8 +235,6 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	/** The accepted solve `r` as the track takes it (fused with the
 	 * prediction while the track is confirmed). */
 	TKeyframePose fusedFix(const TLocaliserResult& r, const TKeyframePose& pred, bool confirmed) const;
-	/** The keyframes a relocalisation searches around dead reckoning. */
-	std::vector<uint32_t> relocalisationWindow(const TKeyframePose& deadReckoning) const;
 	void searchPlace(
 		SearchScope scope, const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib,
 		const std::vector<size_t>& order, TLocalisationUpdate& u);
