@@ -170,12 +170,6 @@ BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_patch_pass, 2, "[localiser]\npat
 	->Unit(benchmark::kMillisecond)
 	->UseManualTime()
 	->Iterations(600);
-// The patch pass after every solve, however many inliers it has
-// (patch_search_below_inliers): the saving of skipping it is the difference.
-BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_patch_pass_always, 2, "[localiser]\npatch_search_below_inliers = 1000000\n")
-	->Unit(benchmark::kMillisecond)
-	->UseManualTime()
-	->Iterations(600);
 
 /** The monochrome channel's conversion and the stereo VO alone, on the same frames. */
 void BM_VOFrameMono(benchmark::State& st)

@@ -37,7 +37,6 @@ void TLocaliserOptions::load(const mrpt::config::CConfigFileBase& c, const std::
 	r.read("patch_min_zncc", patch_min_zncc);
 	r.read("patch_prediction_max_sigma_m", patch_prediction_max_sigma_m);
 	r.read("patch_prediction_min_descriptor_inliers", patch_prediction_min_descriptor_inliers);
-	r.read("patch_search_below_inliers", patch_search_below_inliers);
 	r.read("match_ratio", match_ratio);
 	r.read("refine_min_zncc", refine_min_zncc);
 	r.read("refine_radius_px", refine_radius_px);
@@ -104,7 +103,6 @@ void TLocaliserOptions::dump(std::ostream& out) const
 	w.value("patch_min_zncc", patch_min_zncc, "... and must correlate this well there");
 	w.value("patch_prediction_max_sigma_m", patch_prediction_max_sigma_m, "... or at a prediction this certain (a place just verified) [m]");
 	w.value("patch_prediction_min_descriptor_inliers", patch_prediction_min_descriptor_inliers, "... and its solve must keep this many descriptor matches as inliers");
-	w.value("patch_search_below_inliers", patch_search_below_inliers, "... after a solve only when it has fewer inliers than this");
 	w.value("patch_search_from_prediction", patch_search_from_prediction, "... and at the prediction of a confirmed track when descriptors find too few");
 	w.value("match_ratio", match_ratio);
 	w.value("refine_min_zncc", refine_min_zncc);
@@ -159,7 +157,6 @@ void TLocaliserOptions::validate() const
 	need(max_hamming > 0 && max_hamming <= 256, "max_hamming", "must be in (0, 256]");
 	need(patch_prediction_max_sigma_m >= 0 && patch_prediction_max_sigma_m <= 10, "patch_prediction_max_sigma_m", "must be in [0, 10] [m]");
 	need(patch_prediction_min_descriptor_inliers >= 0, "patch_prediction_min_descriptor_inliers", "must be >= 0");
-	need(patch_search_below_inliers > min_inliers, "patch_search_below_inliers", "must be > min_inliers");
 	need(patch_min_zncc > 0 && patch_min_zncc <= 1, "patch_min_zncc", "must be in (0, 1]");
 	need(patch_search_radius_px >= 0 && patch_search_radius_px <= 10, "patch_search_radius_px", "must be in 0..10 [px]");
 	need(warp_min_distortion >= 0 && warp_min_distortion <= 10, "warp_min_distortion", "must be in [0, 10]");

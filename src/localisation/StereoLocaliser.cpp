@@ -599,8 +599,7 @@ LocaliserStatus CStereoLocaliser::searchAndSolve(
 	const bool sharp = in.track_confirmed || translationSigma(in.prediction.cov) <= o.patch_prediction_max_sigma_m;
 	const bool fromPrediction = !solved && o.patch_search_from_prediction && sharp &&
 								(status == LocaliserStatus::FewMatches || status == LocaliserStatus::FewInliers);
-	const bool thinSolve = solved && r.inliers < o.patch_search_below_inliers;
-	if (o.patch_search && (thinSolve || fromPrediction))
+	if (o.patch_search && (solved || fromPrediction))
 	{
 		// The prediction is taken in `ref`, as the first pass took it.
 		const Eigen::Isometry3d T_curr_ref = solved ? po.T_curr_ref : pred.T_kf_live.inverse();

@@ -135,10 +135,6 @@ struct TLocaliserOptions
 	 * matches as inliers: patches found at the prediction agree with it
 	 * whether it is right or not. */
 	int patch_prediction_min_descriptor_inliers = 6;
-	/** ... and after a solve only when it has fewer inliers than this: a
-	 * solve that many landmarks agree on is not what the pass rescues, and
-	 * the pass is a fifth of a frame's time. */
-	int patch_search_below_inliers = 80;
 	/** ... where the warp distorts pixel offsets by more than this share [-]. */
 	double warp_min_distortion = 0.1;
 
