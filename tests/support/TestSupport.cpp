@@ -10,7 +10,13 @@
 
 #include <array>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 #include <random>
+
+#include <fcntl.h>
+#include <sys/types.h>
+#include <unistd.h>
 
 namespace fs = std::filesystem;
 
@@ -61,6 +67,33 @@ std::vector<mrpt::obs::CObservationStereoImages::Ptr> readStereoFrames(const std
 
 // SHADYLOC_TEST_APP runs the command-line tests against another build (an
 // older one, to see a regression test fail without its fix).
+int spawnApp(const std::vector<std::string>& args, const std::string& log)
+{
+	const pid_t pid = fork();
+	if (pid == 0)
+	{
+		const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+		dup2(fd, 1);
+		dup2(fd, 2);
+		std::vector<std::string> copy = args;
+		std::string app = appPath();
+		std::vector<char*> argv{app.data()};
+		for (auto& a : copy) argv.push_back(a.data());
+		argv.push_back(nullptr);
+		execv(app.c_str(), argv.data());
+		_exit(127);
+	}
+	return pid;
+}
+
+std::string fileContents(const std::string& path)
+{
+	std::ifstream f(path, std::ios::binary);
+	std::ostringstream s;
+	s << f.rdbuf();
+	return s.str();
+}
+
 std::string appPath()
 {
 	const char* other = std::getenv("SHADYLOC_TEST_APP");

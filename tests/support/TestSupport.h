@@ -34,6 +34,11 @@ std::string tempDir(const std::string& name);
 int runCommand(const std::string& cmd, std::string* output = nullptr);
 
 std::string appPath();	  //!< the built `shadyloc` executable
+/** Starts `shadyloc args...` (appPath) with stdout and stderr to `log`;
+ * returns its pid (wait for it with waitpid). */
+int spawnApp(const std::vector<std::string>& args, const std::string& log);
+/** The whole file as bytes ("" when it cannot be read). */
+std::string fileContents(const std::string& path);
 std::string pluginPath();  //!< the built MRPT plugin module
 
 /** Every stereo observation of a rawlog (both styles), external images

@@ -30,13 +30,6 @@ namespace fs = std::filesystem;
 
 namespace
 {
-std::string contents(const std::string& path)
-{
-	std::ifstream f(path, std::ios::binary);
-	std::ostringstream s;
-	s << f.rdbuf();
-	return s.str();
-}
 
 std::string src(const std::string& rel) { return std::string(SHADYLOC_SOURCE_DIR) + "/" + rel; }
 
@@ -45,10 +38,10 @@ using Snapshot = std::map<std::string, std::string>;
 Snapshot snapshot(const std::string& path)
 {
 	Snapshot s;
-	if (fs::is_regular_file(path)) s["."] = contents(path);
+	if (fs::is_regular_file(path)) s["."] = test::fileContents(path);
 	else if (fs::is_directory(path))
 		for (const auto& e : fs::recursive_directory_iterator(path))
-			if (e.is_regular_file()) s[fs::relative(e.path(), path).string()] = contents(e.path().string());
+			if (e.is_regular_file()) s[fs::relative(e.path(), path).string()] = test::fileContents(e.path().string());
 	return s;
 }
 
@@ -69,25 +62,6 @@ std::string describe(const Snapshot& s)
 	return d.empty() ? "  (nothing)\n" : d;
 }
 
-/** Starts `shadyloc args...` with stdout and stderr to `log`; returns its pid. */
-pid_t spawnApp(const std::vector<std::string>& args, const std::string& log)
-{
-	const pid_t pid = fork();
-	if (pid == 0)
-	{
-		const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-		dup2(fd, 1);
-		dup2(fd, 2);
-		std::vector<std::string> copy = args;
-		std::string app = test::appPath();
-		std::vector<char*> argv{app.data()};
-		for (auto& a : copy) argv.push_back(a.data());
-		argv.push_back(nullptr);
-		execv(app.c_str(), argv.data());
-		_exit(127);
-	}
-	return pid;
-}
 
 /** Staged entries (".<name>.tmp-<pid>..." or ".old-<pid>") of process `pid` in `dirs`. */
 std::vector<std::string> stagedOf(pid_t pid, const std::set<std::string>& dirs, const std::string& namePrefix = "")
@@ -141,15 +115,15 @@ class Killer
 	void interrupt(int sig, const std::string& at)
 	{
 		SCOPED_TRACE("signal " + std::to_string(sig));
-		const pid_t pid = spawnApp(m_c.args, m_log);
-		ASSERT_TRUE(waitForTemporary(pid, at)) << contents(m_log);
+		const pid_t pid = test::spawnApp(m_c.args, m_log);
+		ASSERT_TRUE(waitForTemporary(pid, at)) << test::fileContents(m_log);
 		kill(pid, sig);
 		int status = 0;
 		waitpid(pid, &status, 0);
 		// Ended by the signal, or (a signal arriving during the commit waits
 		// for it) finished just before.
 		EXPECT_TRUE((WIFSIGNALED(status) && WTERMSIG(status) == sig) || (WIFEXITED(status) && WEXITSTATUS(status) == 0))
-			<< "status " << status << "\n" << contents(m_log);
+			<< "status " << status << "\n" << test::fileContents(m_log);
 		const auto left = stagedOf(pid, m_dirs);
 		EXPECT_TRUE(left.empty()) << "left behind: " << left.front();
 		expectOldOrNew();
@@ -159,8 +133,8 @@ class Killer
 	/** SIGKILL once the temporary appears, then a rerun that names what was left. */
 	void killAndRerun(const std::string& at)
 	{
-		const pid_t pid = spawnApp(m_c.args, m_log);
-		ASSERT_TRUE(waitForTemporary(pid, at)) << contents(m_log);
+		const pid_t pid = test::spawnApp(m_c.args, m_log);
+		ASSERT_TRUE(waitForTemporary(pid, at)) << test::fileContents(m_log);
 		kill(pid, SIGKILL);
 		int status = 0;
 		waitpid(pid, &status, 0);
@@ -195,10 +169,10 @@ class Killer
    private:
 	std::string runToEnd(const std::string& what)
 	{
-		const pid_t pid = spawnApp(m_c.args, m_log);
+		const pid_t pid = test::spawnApp(m_c.args, m_log);
 		int status = 0;
 		waitpid(pid, &status, 0);
-		const std::string out = contents(m_log);
+		const std::string out = test::fileContents(m_log);
 		EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << what << ": status " << status << "\n" << out;
 		return out;
 	}

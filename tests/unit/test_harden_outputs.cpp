@@ -10,13 +10,6 @@ namespace fs = std::filesystem;
 
 namespace
 {
-std::string contents(const std::string& path)
-{
-	std::ifstream f(path, std::ios::binary);
-	std::ostringstream s;
-	s << f.rdbuf();
-	return s.str();
-}
 }  // namespace
 
 TEST(OutputsNotInputs, VoRefusesToWriteOverItsInput)
@@ -24,7 +17,7 @@ TEST(OutputsNotInputs, VoRefusesToWriteOverItsInput)
 	const auto dir = test::tempDir("vo_out_is_in");
 	const std::string in = dir + "/r.rawlog";
 	test::writeSyntheticRawlog(in, 4, false);
-	const std::string original = contents(in);
+	const std::string original = test::fileContents(in);
 	fs::create_symlink(in, dir + "/link.rawlog");
 	fs::create_hard_link(in, dir + "/hard.rawlog");
 	const std::string vo = test::appPath() + " vo -q -i " + in;
@@ -35,7 +28,7 @@ TEST(OutputsNotInputs, VoRefusesToWriteOverItsInput)
 	{
 		std::string out;
 		EXPECT_NE(test::runCommand(vo + args, &out), 0) << args << ": " << out;
-		EXPECT_EQ(contents(in), original) << args << ": the input rawlog was replaced";
+		EXPECT_EQ(test::fileContents(in), original) << args << ": the input rawlog was replaced";
 		EXPECT_FALSE(fs::exists(dir + "/t.tum")) << args;
 	}
 }
@@ -57,6 +50,6 @@ TEST(OutputsTogether, VoWritesNoTrajectoryWhenStatsCannotBeWritten)
 			f << "# old\n";
 		}
 		EXPECT_NE(test::runCommand(test::appPath() + " vo -q -i " + in + " -o " + dir + "/t.tum" + bad, &out), 0) << out;
-		EXPECT_EQ(contents(dir + "/t.tum"), "# old\n") << bad;
+		EXPECT_EQ(test::fileContents(dir + "/t.tum"), "# old\n") << bad;
 	}
 }

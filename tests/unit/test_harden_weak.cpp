@@ -37,26 +37,6 @@ std::vector<std::string> temporariesUnder(const std::string& dir)
 	return out;
 }
 
-/** Starts `shadyloc args...` with output to `log`; returns its pid. */
-pid_t spawnApp(const std::vector<std::string>& args, const std::string& log)
-{
-	const pid_t pid = fork();
-	if (pid == 0)
-	{
-		const int fd = ::open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-		dup2(fd, 1);
-		dup2(fd, 2);
-		std::vector<char*> argv;
-		std::string app = test::appPath();
-		argv.push_back(app.data());
-		std::vector<std::string> copy = args;
-		for (auto& a : copy) argv.push_back(a.data());
-		argv.push_back(nullptr);
-		execv(app.c_str(), argv.data());
-		_exit(127);
-	}
-	return pid;
-}
 
 /** A copy of config/sim.ini with `frames` frames per traversal. */
 std::string smallSimConfig(const std::string& dir, int frames)
@@ -69,13 +49,6 @@ std::string smallSimConfig(const std::string& dir, int frames)
 	return path;
 }
 
-std::string contents(const std::string& path)
-{
-	std::ifstream f(path, std::ios::binary);
-	std::ostringstream s;
-	s << f.rdbuf();
-	return s.str();
-}
 }  // namespace
 
 TEST(Interrupts, SigintAndSigtermRemoveTemporaries)
@@ -84,7 +57,7 @@ TEST(Interrupts, SigintAndSigtermRemoveTemporaries)
 	{
 		const auto dir = test::tempDir("interrupt_" + std::to_string(sig));
 		const std::string cfg = smallSimConfig(dir, 400);
-		const pid_t pid = spawnApp({"sim", "-c", cfg, "-o", dir + "/out"}, dir + "/log.txt");
+		const pid_t pid = test::spawnApp({"sim", "-c", cfg, "-o", dir + "/out"}, dir + "/log.txt");
 		// Wait until the first rawlog is being written, then interrupt.
 		bool started = false;
 		for (int i = 0; i < 600 && !started; i++)
@@ -92,14 +65,14 @@ TEST(Interrupts, SigintAndSigtermRemoveTemporaries)
 			std::this_thread::sleep_for(std::chrono::milliseconds(50));
 			started = fs::is_directory(dir + "/out") && !temporariesUnder(dir + "/out").empty();
 		}
-		ASSERT_TRUE(started) << contents(dir + "/log.txt");
+		ASSERT_TRUE(started) << test::fileContents(dir + "/log.txt");
 		kill(pid, sig);
 		int status = 0;
 		waitpid(pid, &status, 0);
 		EXPECT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == sig) << "status " << status;
 		EXPECT_TRUE(temporariesUnder(dir).empty()) << "left: " << temporariesUnder(dir)[0];
 		EXPECT_FALSE(fs::exists(dir + "/out/noon.rawlog"));
-		EXPECT_NE(contents(dir + "/log.txt").find("temporary output(s) removed"), std::string::npos);
+		EXPECT_NE(test::fileContents(dir + "/log.txt").find("temporary output(s) removed"), std::string::npos);
 	}
 }
 
@@ -215,8 +188,8 @@ TEST(OutputsTogether, TransactionCommitsAllOrNothing)
 		(void)b;  // never written: commit must fail and change nothing
 		EXPECT_THROW(tx.commit(), std::runtime_error);
 	}
-	EXPECT_EQ(contents(dir + "/a.txt"), "old a");
-	EXPECT_EQ(contents(dir + "/b.txt"), "old b");
+	EXPECT_EQ(test::fileContents(dir + "/a.txt"), "old a");
+	EXPECT_EQ(test::fileContents(dir + "/b.txt"), "old b");
 	EXPECT_TRUE(temporariesUnder(dir).empty());
 	{
 		io::OutputTransaction tx;
@@ -225,8 +198,8 @@ TEST(OutputsTogether, TransactionCommitsAllOrNothing)
 		std::ofstream(d + "/x") << "x";
 		tx.commit();
 	}
-	EXPECT_EQ(contents(dir + "/a.txt"), "new a");
-	EXPECT_EQ(contents(dir + "/d/x"), "x");
+	EXPECT_EQ(test::fileContents(dir + "/a.txt"), "new a");
+	EXPECT_EQ(test::fileContents(dir + "/d/x"), "x");
 	EXPECT_TRUE(temporariesUnder(dir).empty());
 	// Inputs: by path, through a symbolic link, a hard link, and a folder
 	// replaced as a whole that holds one.
@@ -265,7 +238,7 @@ TEST(OutputsTogether, FolderReplacedOnlyIfAnEarlierOutputOfTheSameKind)
 			EXPECT_NE(std::string(e.what()).find("'" + dir + "/user'"), std::string::npos) << e.what();
 		}
 	}
-	EXPECT_EQ(contents(dir + "/user/thesis.tex"), "years of work");
+	EXPECT_EQ(test::fileContents(dir + "/user/thesis.tex"), "years of work");
 	EXPECT_TRUE(temporariesUnder(dir).empty());
 
 	// Empty: replaced; then marked, so the next run of that kind replaces it
@@ -277,13 +250,13 @@ TEST(OutputsTogether, FolderReplacedOnlyIfAnEarlierOutputOfTheSameKind)
 		const std::string to = dir + (content == "1" ? "/out" : "/out/");
 		std::ofstream(tx.addDirectory(to, "output folder", "test output") + "/x") << content;
 		tx.commit();
-		EXPECT_EQ(contents(dir + "/out/x"), content);
+		EXPECT_EQ(test::fileContents(dir + "/out/x"), content);
 	}
-	EXPECT_EQ(contents(dir + "/out/" + io::kOutputMarker), "test output\n");
+	EXPECT_EQ(test::fileContents(dir + "/out/" + io::kOutputMarker), "test output\n");
 	// Another kind's output is refused.
 	io::OutputTransaction tx;
 	EXPECT_THROW(tx.addDirectory(dir + "/out", "output folder", "other output"), std::invalid_argument);
-	EXPECT_EQ(contents(dir + "/out/x"), "2");
+	EXPECT_EQ(test::fileContents(dir + "/out/x"), "2");
 }
 
 namespace
@@ -311,7 +284,7 @@ void writeBytes(const std::string& path, const Bytes& b)
 /** Peak resident memory [kB] of `shadyloc args` (ru_maxrss of the child). */
 long peakKb(const std::vector<std::string>& args, const std::string& log, int* exitCode)
 {
-	const pid_t pid = spawnApp(args, log);
+	const pid_t pid = test::spawnApp(args, log);
 	int status = 0;
 	struct rusage ru
 	{
@@ -367,7 +340,7 @@ TEST(DamagedRawlog, EveryHeaderByteFlippedIsAnErrorOrReadsAndMemoryStaysBounded)
 	// within valid + 2 x the decompressed size + 64 MB.
 	int rc = 0;
 	const long validKb = peakKb({"filter", "-q", "-i", dir + "/valid.rawlog", "-o", dir + "/out.rawlog"}, dir + "/log", &rc);
-	ASSERT_EQ(rc, 0) << contents(dir + "/log");
+	ASSERT_EQ(rc, 0) << test::fileContents(dir + "/log");
 	const long boundKb = validKb + long(2 * valid.size() / 1024) + 64 * 1024;
 	for (size_t k = 0; k < lengthFaults.size() && k < 4; k++)
 	{

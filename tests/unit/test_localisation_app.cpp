@@ -26,13 +26,6 @@ namespace
 using namespace shadyloc;
 namespace fs = std::filesystem;
 
-std::string contents(const std::string& path)
-{
-	std::ifstream f(path, std::ios::binary);
-	std::ostringstream s;
-	s << f.rdbuf();
-	return s.str();
-}
 
 void writeText(const std::string& path, const std::string& text)
 {
@@ -135,7 +128,7 @@ TEST(LocalisationApp, OutputsIdenticalWithoutGroundTruthAcrossRunsAndThreadCount
 				EXPECT_EQ(a->keyframe(i).channels[c].size(), b->keyframe(i).channels[c].size());
 		}
 	}
-	EXPECT_NE(contents(d.map), contents(stripped));
+	EXPECT_NE(test::fileContents(d.map), test::fileContents(stripped));
 	// --strip-gt refuses to write over its input.
 	EXPECT_NE(test::runCommand(test::appPath() + " map-info " + d.map + " --strip-gt " + d.map, &out), 0) << out;
 	EXPECT_EQ(CKeyframeMap::LoadFromFile(d.map)->groundTruthCount(), CKeyframeMap::LoadFromFile(d.map)->keyframeCount());
@@ -152,7 +145,7 @@ TEST(LocalisationApp, OutputsIdenticalWithoutGroundTruthAcrossRunsAndThreadCount
 		ASSERT_EQ(test::runCommand(localiseCmd(r.map, d.overcast, d.dir + "/out_" + r.name, r.extra), &out), 0)
 			<< r.name << ": " << out;
 	const std::string ref = d.dir + "/out_a/";
-	const std::string refSummary = contents(ref + "summary.json");
+	const std::string refSummary = test::fileContents(ref + "summary.json");
 	// The comparison covers localised frames.
 	EXPECT_GT(jsonInt(refSummary, "fixes"), 10) << refSummary;
 	for (const auto& r : runs)
@@ -160,14 +153,14 @@ TEST(LocalisationApp, OutputsIdenticalWithoutGroundTruthAcrossRunsAndThreadCount
 		if (r.name == "a") continue;
 		const std::string o = d.dir + "/out_" + r.name + "/";
 		for (const char* f : {"frames.csv", "trajectory.tum"})
-			EXPECT_TRUE(contents(o + f) == contents(ref + f)) << r.name << ": " << f << " differs";
+			EXPECT_TRUE(test::fileContents(o + f) == test::fileContents(ref + f)) << r.name << ": " << f << " differs";
 		if (r.name == "nogt")
 		{
-			EXPECT_NE(contents(o + "summary.json"), refSummary);  // the map's hash names the other file ...
-			EXPECT_EQ(withoutMapProvenance(contents(o + "summary.json")), withoutMapProvenance(refSummary));  // ... alone
+			EXPECT_NE(test::fileContents(o + "summary.json"), refSummary);  // the map's hash names the other file ...
+			EXPECT_EQ(withoutMapProvenance(test::fileContents(o + "summary.json")), withoutMapProvenance(refSummary));  // ... alone
 		}
 		else
-			EXPECT_TRUE(contents(o + "summary.json") == refSummary) << r.name << ": summary.json differs";
+			EXPECT_TRUE(test::fileContents(o + "summary.json") == refSummary) << r.name << ": summary.json differs";
 	}
 	EXPECT_NE(withoutMapProvenance(refSummary), refSummary);  // the filter above did remove something
 }
@@ -210,7 +203,7 @@ TEST(LocalisationApp, BadInputFailsCleanlyOrGivesNoFix)
 	writeText(outDir + "/frames.csv", "earlier\n");
 	writeText(outDir + "/.shadyloc-output", "shadyloc localise output\n");
 	const auto expectUntouched = [&](const std::string& what) {
-		EXPECT_EQ(contents(outDir + "/frames.csv"), "earlier\n") << what;
+		EXPECT_EQ(test::fileContents(outDir + "/frames.csv"), "earlier\n") << what;
 		EXPECT_FALSE(fs::exists(outDir + "/summary.json")) << what;
 		expectNoStagedLeftovers(outDir);
 	};
@@ -219,7 +212,7 @@ TEST(LocalisationApp, BadInputFailsCleanlyOrGivesNoFix)
 	// the invariant channel's descriptor kind differs (the map's ORB, live
 	// FAST + BRIEF). Refused, naming both kinds and both sets.
 	{
-		std::string ini = contents(src("config/vo_sim.ini"));
+		std::string ini = test::fileContents(src("config/vo_sim.ini"));
 		const auto at = ini.find("[features.invariant]\n");
 		ASSERT_NE(at, std::string::npos);
 		const auto kind = ini.find("\ndescriptor = orb", at);
@@ -277,7 +270,7 @@ TEST(LocalisationApp, BadInputFailsCleanlyOrGivesNoFix)
 	// 4. A live run through another world (the scene seed differs): no place
 	// in common, so no fix; not an error.
 	{
-		std::string ini = contents(src("config/sim.ini"));
+		std::string ini = test::fileContents(src("config/sim.ini"));
 		const std::regex seed(R"((\n)seed = 7\b)");
 		ASSERT_TRUE(std::regex_search(ini, seed)) << "config/sim.ini's scene seed moved";
 		ini = std::regex_replace(ini, seed, "$1seed = 8", std::regex_constants::format_first_only);
@@ -291,11 +284,11 @@ TEST(LocalisationApp, BadInputFailsCleanlyOrGivesNoFix)
 			<< out;
 		const std::string o = d.dir + "/other_out";
 		ASSERT_EQ(test::runCommand(localiseCmd(d.map, other + "/overcast.rawlog", o), &out), 0) << out;
-		const std::string s = contents(o + "/summary.json");
+		const std::string s = test::fileContents(o + "/summary.json");
 		EXPECT_EQ(jsonInt(s, "frames"), 20) << s;
 		EXPECT_EQ(jsonInt(s, "fixes"), 0) << s;
 		EXPECT_GT(jsonInt(s, "global_searches"), 0) << s;
-		std::istringstream csv(contents(o + "/frames.csv"));
+		std::istringstream csv(test::fileContents(o + "/frames.csv"));
 		std::string line;
 		std::getline(csv, line);
 		int rows = 0;
@@ -323,7 +316,7 @@ TEST(LocalisationApp, OutputFolderReplacedOnlyIfAnEarlierLocaliseOutput)
 	writeText(mine + "/notes.txt", "mine\n");
 	EXPECT_NE(test::runCommand(localiseCmd(d.map, d.overcast, mine), &out), 0) << out;
 	EXPECT_NE(out.find("'" + mine + "'"), std::string::npos) << out;
-	EXPECT_EQ(contents(mine + "/notes.txt"), "mine\n");
+	EXPECT_EQ(test::fileContents(mine + "/notes.txt"), "mine\n");
 	EXPECT_FALSE(fs::exists(mine + "/frames.csv"));
 	expectNoStagedLeftovers(mine);
 
