@@ -50,15 +50,7 @@ bool BriefExtractor::compute(const cv::Mat& img, int x, int y, TBriefDescriptor&
 {
 	if (x < m_radius || y < m_radius || x >= img.cols - m_radius || y >= img.rows - m_radius)
 		return false;
-	const uint8_t* c = img.ptr<uint8_t>(y) + x;
-	const ptrdiff_t step = static_cast<ptrdiff_t>(img.step[0]);
-	d.w = {0, 0, 0, 0};
-	for (int i = 0; i < 256; i++)
-	{
-		const auto& t = m_pattern[i];
-		const bool bit = c[t[1] * step + t[0]] < c[t[3] * step + t[2]];
-		d.w[i >> 6] |= static_cast<uint64_t>(bit) << (i & 63);
-	}
+	briefTests(img.ptr<uint8_t>(y) + x, static_cast<ptrdiff_t>(img.step[0]), m_pattern, d);
 	return true;
 }
 

@@ -151,19 +151,11 @@ bool CSurveyBuilder::offer(
 	TPending p;
 	p.res = res;
 	const bool restart = res.status == vo::FrameStatus::First || res.status == vo::FrameStatus::Reinit;
-	if (restart)
-	{
-		if (voKfs.empty()) throw std::logic_error("CSurveyBuilder::offer: the VO made no keyframe at a First/Reinit frame");
-		p.ref = voKfs.size() - 1;  // the frame itself
-	}
-	else
-	{
-		if (voKfsBefore == 0 || voKfsBefore > voKfs.size())
-			throw std::logic_error("CSurveyBuilder::offer: inconsistent VO keyframe counts");
-		p.ref = voKfsBefore - 1;  // tracked against the VO's last keyframe
-		p.T_ref_f = res.T_kf_curr;
-		p.cov_ref_f = res.cov_kf_curr;
-	}
+	const auto chain = vo::chainReference(res, voKfs, voKfsBefore);
+	if (!chain) throw std::logic_error("CSurveyBuilder::offer: inconsistent VO keyframe counts for a tracked frame");
+	p.ref = chain->ref;
+	p.T_ref_f = chain->T_ref_f.T;
+	p.cov_ref_f = chain->T_ref_f.cov;
 	// T_last_f along the VO chain, unless a break lies between.
 	const auto along = restart || !m_segmentOpen
 						   ? std::nullopt

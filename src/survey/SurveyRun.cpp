@@ -36,31 +36,6 @@ bool sameCalib(const geometry::TStereoCalib& a, const geometry::TStereoCalib& b)
 	return eq(a.fx, b.fx) && eq(a.fy, b.fy) && eq(a.cx, b.cx) && eq(a.cy, b.cy) && eq(a.cxR, b.cxR) &&
 		   eq(a.baseline, b.baseline);
 }
-/** A VO's view of one frame: its reference keyframe and pose there (for
- * vo::poseAlongChain); ok only for a tracked frame. */
-struct TChainRef
-{
-	bool ok = false;
-	size_t ref = 0;
-	geometry::TPoseWithCov T_ref_f;
-};
-
-TChainRef chainRefOf(const vo::TFrameResult& r, const std::vector<vo::TKeyframe>& keyframes, size_t keyframesBefore)
-{
-	TChainRef c;
-	if (!vo::isTracked(r.status) || keyframes.empty()) return c;
-	c.ok = true;
-	if (r.status == vo::FrameStatus::First || r.status == vo::FrameStatus::Reinit)
-	{
-		c.ref = keyframes.size() - 1;  // the frame itself
-		c.T_ref_f.cov.setZero();
-		return c;
-	}
-	if (keyframesBefore == 0) return TChainRef();
-	c.ref = keyframesBefore - 1;
-	c.T_ref_f = {r.T_kf_curr, r.cov_kf_curr};
-	return c;
-}
 }  // namespace
 
 struct CSurveyRun::TImpl
@@ -193,7 +168,7 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 	const std::string& inPath = I.inPath;
 	std::unique_ptr<CSurveyBuilder> builder;
 	size_t& nFrames = m_stats.frames;
-	TChainRef bridgeAtLast;	 // the last map keyframe as the bridge VO saw it
+	std::optional<vo::TChainReference> bridgeAtLast;  // the last map keyframe as the bridge VO saw it
 
 	// The channels' sources walk the rawlog in lockstep: the same frame index
 	// and timestamp from each, or the run is refused.
@@ -258,7 +233,7 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 			res = voChain.process(f0.left, f0.right, calib, t);
 		// The bridge VO on its own channel: where the chain's VO breaks and
 		// it does not, its motion links the segment on (CSurveyBuilder::bridge).
-		TChainRef bridgeNow;
+		std::optional<vo::TChainReference> bridgeNow;
 		if (I.voBridge)
 		{
 			auto& vb = *I.voBridge;
@@ -272,14 +247,14 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 			}
 			else
 				bres = vb.process(cb.frame.left, cb.frame.right, calib, t);
-			bridgeNow = chainRefOf(bres, vb.keyframes(), bBefore);
+			bridgeNow = vo::chainReference(bres, vb.keyframes(), bBefore);
 		}
 		if (builder->offer(res, voChain.keyframes(), before))
 		{
-			if (builder->bridgeable() && bridgeAtLast.ok && bridgeNow.ok)
+			if (builder->bridgeable() && bridgeAtLast && bridgeNow)
 			{
 				const auto link = vo::poseAlongChain(
-					I.voBridge->keyframes(), bridgeAtLast.ref, bridgeAtLast.T_ref_f, bridgeNow.ref, bridgeNow.T_ref_f);
+					I.voBridge->keyframes(), bridgeAtLast->ref, bridgeAtLast->T_ref_f, bridgeNow->ref, bridgeNow->T_ref_f);
 				if (link) builder->bridge(*link);
 			}
 			bridgeAtLast = bridgeNow;  // the map keyframe to come, as the bridge VO saw it

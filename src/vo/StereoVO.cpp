@@ -26,6 +26,22 @@ double rotationDeg(const Eigen::Isometry3d& T)
 }
 }  // namespace
 
+std::optional<TChainReference> chainReference(
+	const TFrameResult& r, const std::vector<TKeyframe>& keyframes, size_t keyframesBefore)
+{
+	if (!isTracked(r.status) || keyframes.empty()) return std::nullopt;
+	TChainReference c;
+	if (r.status == FrameStatus::First || r.status == FrameStatus::Reinit)
+	{
+		c.ref = keyframes.size() - 1;  // the frame itself
+		return c;
+	}
+	if (keyframesBefore == 0 || keyframesBefore > keyframes.size()) return std::nullopt;
+	c.ref = keyframesBefore - 1;  // tracked against the last keyframe before it
+	c.T_ref_f = {r.T_kf_curr, r.cov_kf_curr};
+	return c;
+}
+
 std::optional<geometry::TPoseWithCov> poseAlongChain(
 	const std::vector<TKeyframe>& keyframes, size_t refA, const geometry::TPoseWithCov& T_refA_a, size_t refB,
 	const geometry::TPoseWithCov& T_refB_b)

@@ -35,13 +35,6 @@ std::string errorOf(const std::function<void()>& f)
 	return "";
 }
 
-std::string slurp(const std::string& path)
-{
-	std::ifstream f(path, std::ios::binary);
-	std::ostringstream s;
-	s << f.rdbuf();
-	return s.str();
-}
 
 /** n colour frames of the textured corridor (the VO tracks it). */
 void writeCorridor(const std::string& rawlog, int n)
@@ -197,7 +190,7 @@ TEST(FilterChannels, VoAppRunsOneSectionsChannelFilteredOrNot)
 		ASSERT_EQ(est.size(), 8u);
 		EXPECT_GT(est.back().T.translation().norm(), 0.3) << name;	// 0.7 m travelled
 		EXPECT_NE(out.find("frames: 8, tracked: 8"), std::string::npos) << out;
-		EXPECT_EQ(slurp(ta), slurp(tb)) << name << ": filtered and on-the-fly runs differ";
+		EXPECT_EQ(test::fileContents(ta), test::fileContents(tb)) << name << ": filtered and on-the-fly runs differ";
 	}
 	// A channel of colour images cannot drive the VO: said, naming it.
 	EXPECT_NE(

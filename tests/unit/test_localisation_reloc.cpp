@@ -29,13 +29,6 @@ using namespace shadyloc;
 using namespace shadyloc::localisation;
 namespace fs = std::filesystem;
 
-std::string slurp(const std::string& p)
-{
-	std::ifstream f(p);
-	std::ostringstream s;
-	s << f.rdbuf();
-	return s.str();
-}
 
 TEST(LocalisationRelocalisation, TwentyStartsWithNoPoseAlongALiveRunNoneWrong)
 {
@@ -56,7 +49,7 @@ TEST(LocalisationRelocalisation, TwentyStartsWithNoPoseAlongALiveRunNoneWrong)
 		0)
 		<< out;
 	const auto map = CKeyframeMap::LoadFromFile(mapPath);
-	mrpt::config::CConfigFileMemory cfg(slurp(src + "/config/vo_sim.ini") + "\n" + slurp(src + "/config/localise_sim.ini"));
+	mrpt::config::CConfigFileMemory cfg(test::fileContents(src + "/config/vo_sim.ini") + "\n" + test::fileContents(src + "/config/localise_sim.ini"));
 	const io::Trajectory gt = io::readTum(data + "/overcast.tum");
 
 	// The live run's colour frames, read once.

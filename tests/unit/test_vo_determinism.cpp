@@ -77,13 +77,6 @@ std::vector<vo::TFrameResult> run(const std::string& ch, uint8_t poison)
 	return out;
 }
 
-std::string slurp(const std::string& path)
-{
-	std::ifstream f(path, std::ios::binary);
-	std::ostringstream ss;
-	ss << f.rdbuf();
-	return ss.str();
-}
 }  // namespace
 
 TEST(VODeterminism, SameInputGivesBitIdenticalPosesInProcess)
@@ -157,7 +150,7 @@ TEST(VODeterminism, AppWritesIdenticalTrajectoriesAcrossProcesses)
 					&out),
 				0)
 				<< out;
-			text[i] = slurp(tum);
+			text[i] = test::fileContents(tum);
 		}
 		EXPECT_GT(text[0].size(), 100u) << ch;	// a real trajectory, not two empty files
 		EXPECT_EQ(text[0], text[1]) << ch << ": two runs of `shadyloc vo` differ";

@@ -12,6 +12,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include <array>
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -30,6 +31,22 @@ inline int hamming(const TBriefDescriptor& a, const TBriefDescriptor& b)
 {
 	return __builtin_popcountll(a.w[0] ^ b.w[0]) + __builtin_popcountll(a.w[1] ^ b.w[1]) +
 		   __builtin_popcountll(a.w[2] ^ b.w[2]) + __builtin_popcountll(a.w[3] ^ b.w[3]);
+}
+
+/** The 256 intensity tests of `tests` (pairs of offsets dx1, dy1, dx2, dy2)
+ * about the pixel at `centre` of an image with row stride `step` [bytes]:
+ * bit i is set when the first pixel of test i is darker. The caller checks
+ * that every offset lies inside the image. */
+template <class Tests>
+void briefTests(const uint8_t* centre, ptrdiff_t step, const Tests& tests, TBriefDescriptor& d)
+{
+	d.w = {0, 0, 0, 0};
+	for (int i = 0; i < 256; i++)
+	{
+		const auto& t = tests[static_cast<size_t>(i)];
+		const bool bit = centre[t[1] * step + t[0]] < centre[t[3] * step + t[2]];
+		d.w[i >> 6] |= static_cast<uint64_t>(bit) << (i & 63);
+	}
 }
 
 class BriefExtractor

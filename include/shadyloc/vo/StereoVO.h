@@ -96,6 +96,19 @@ struct TFrameResult
 	TVOTimings ms;
 };
 
+/** A tracked frame's place on the VO's chain: its reference keyframe (the
+ * frame itself at First/Reinit, else the last keyframe before it) and its
+ * pose there, for poseAlongChain. */
+struct TChainReference
+{
+	size_t ref = 0;
+	geometry::TPoseWithCov T_ref_f;
+};
+/** `r`'s chain reference, given the VO's keyframes after the frame and their
+ * count before it; nullopt for an untracked frame or counts that disagree. */
+std::optional<TChainReference> chainReference(
+	const TFrameResult& r, const std::vector<TKeyframe>& keyframes, size_t keyframesBefore);
+
 /** Options of StereoVO ([vo] in config/vo.ini). */
 struct TStereoVOOptions : public mrpt::config::CLoadableOptions
 {
