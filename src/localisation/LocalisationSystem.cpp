@@ -93,6 +93,7 @@ void TSystemOptions::load(const mrpt::config::CConfigFileBase& c, const std::str
 	r.read("relocalise_after_frames", track.relocalise_after_frames);
 	r.read("relocalise_window_m", track.relocalise_window_m);
 	r.read("relocalise_max_angle_deg", track.relocalise_max_angle_deg);
+	r.read("relocalise_at_dead_reckoning", track.relocalise_at_dead_reckoning);
 	r.read("fuse_prediction", track.fuse_prediction);
 	r.read("global_search_after_frames", track.global_search_after_frames);
 	r.read("seed_with_unconfirmed", track.seed_with_unconfirmed);
@@ -129,6 +130,7 @@ void TSystemOptions::dump(std::ostream& out) const
 	w.value("relocalise_after_frames", track.relocalise_after_frames, "without a fix this long, search around dead reckoning [frames]");
 	w.value("relocalise_window_m", track.relocalise_window_m, "... this far along the chain on both sides, and as near in the map frame [m]");
 	w.value("relocalise_max_angle_deg", track.relocalise_max_angle_deg, "... a keyframe of another segment facing within this [deg]");
+	w.value("relocalise_at_dead_reckoning", track.relocalise_at_dead_reckoning, "... first matching each candidate where dead reckoning projects it, warped");
 	w.value("fuse_prediction", track.fuse_prediction, "while the track is confirmed, a fix is the solve fused with the prediction");
 	w.value("global_search_after_frames", track.global_search_after_frames, "... and the whole map after this [frames]");
 	w.value("seed_with_unconfirmed", track.seed_with_unconfirmed,
@@ -500,27 +502,44 @@ void CLocalisationSystem::searchPlace(
 	const std::vector<size_t>& order, TLocalisationUpdate& u)
 {
 	std::vector<uint32_t> among = m_searchAmong;
+	std::optional<Eigen::Isometry3d> guess;	 // dead reckoning in the map frame
 	if (scope == SearchScope::Window && m_track.estimate().valid)
+	{
+		const TKeyframePose& dr = m_track.estimate();
 		among = keyframesAroundDeadReckoning(
-			*m_map, m_track.estimate(), m_opts.track.relocalise_window_m, m_opts.track.relocalise_max_angle_deg);
+			*m_map, dr, m_opts.track.relocalise_window_m, m_opts.track.relocalise_max_angle_deg);
+		// A confirmed track's, or a hypothesis' that began at a verified place.
+		if (m_opts.track.relocalise_at_dead_reckoning && (m_track.confirmed() || m_track.hypothesisPlaces() >= 1))
+			guess = m_map->keyframe(dr.kf).T_map_kf * dr.T_kf_live;
+	}
 	const auto seed = static_cast<uint32_t>(u.frame * 7919u + 3);
 	std::vector<TGlobalPlace> places(m_pipes.size());
 	std::vector<double> ms(m_pipes.size(), 0);
 	forLocalisers([&](size_t i) {
 		const auto t0 = Clock::now();
 		const auto& L = *m_pipes[i].localiser;
-		places[i] = among.empty() ? L.globalSearch(meas[i], calib, seed) : L.globalSearch(meas[i], calib, seed, among);
+		places[i] = among.empty() ? L.globalSearch(meas[i], calib, seed) : L.globalSearch(meas[i], calib, seed, among, guess);
 		ms[i] = msSince(t0);
 	});
 	u.global_search = true;
 	u.search_scope = scope;
 	u.place = places[order.front()];
 	for (size_t k = 0; k < order.size(); k++) u.localisers[k].ms += ms[order[k]];
+	const KeyframeLink link = [this](uint32_t a, uint32_t b) {
+		const auto l = m_map->relativePose(a, b);
+		return geometry::TPoseWithCov{l.T_a_b, l.cov};
+	};
 	for (const size_t i : order)
 		if (places[i].ok)
 		{
 			u.place = places[i];
-			m_track.adoptPlace(places[i].pose);
+			// Two verified places that agree through VO confirm the place as K
+			// consistent frames of the localisers would; a place that
+			// replaced the hypothesis instead would restart it on every search.
+			const auto& lo = m_pipes[i].localiser->options();
+			const bool agrees = placeAgrees(places[i].pose, m_track.estimate(), link, lo.prediction_chi2);
+			if (m_track.placeFound(places[i].pose, agrees, places[i].certain, lo.consistent_frames))
+				u.used = m_pipes[i].setup.channel.label;
 			// The verified place is each localiser's first consistent frame.
 			for (const size_t j : order) m_pipes[j].localiser->startFrom(u.frame, m_track.estimate());
 			m_searchAmong.clear();

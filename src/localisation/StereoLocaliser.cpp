@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <random>
 #include <cmath>
 #include <stdexcept>
@@ -135,6 +136,13 @@ Matrix6d covarianceMax(const Matrix6d& A, const Matrix6d& B, int samples)
 double translationSigma(const Matrix6d& cov)
 {
 	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
+	return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
+}
+
+/** ... and of its rotation [rad]. */
+double rotationSigma(const Matrix6d& cov)
+{
+	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
 	return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
 }
 }  // namespace
@@ -502,21 +510,12 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 	r.var_factor = varianceFactor(in.calib, mo.corr, po.inlier, po.T_curr_ref, o.sigma_px);
 	r.T_kf_live = po.T_curr_ref.inverse();
 	const uint32_t seed = static_cast<uint32_t>(in.frame * 2654435761u + 7) ^ 0x9e3779b9u;
-	r.cov = fixCovariance(
-		po.cov_T_ref_curr,
-		o.bootstrap_samples > 0 ? bootstrapCovariance(in.calib, mo.corr, po.inlier, po.T_curr_ref, o, seed)
-								: Matrix6d::Zero(),
-		o.cov_scale, o.bootstrap_samples);
-	{
-		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> et(r.cov.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
-		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> er(r.cov.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
-		r.sigma_m = std::sqrt(std::max(0.0, et.eigenvalues().maxCoeff()));
-		r.sigma_deg = std::sqrt(std::max(0.0, er.eigenvalues().maxCoeff())) / kDeg;
-	}
+	r.cov = solveCovariance(in.calib, mo.corr, po, seed);
+	r.sigma_m = translationSigma(r.cov);
+	r.sigma_deg = rotationSigma(r.cov) / kDeg;
 
 	// ---- 4. acceptance (FixAcceptance.h) ---------------------------------------------------
-	const bool uncertain =
-		(o.max_sigma_m > 0 && r.sigma_m > o.max_sigma_m) || (o.max_sigma_deg > 0 && r.sigma_deg > o.max_sigma_deg);
+	const bool uncertain = !certain(r.cov);
 	if (uncertain && o.uncertain_breaks_chain) return fail(LocaliserStatus::Uncertain);
 	TSolve sv;
 	sv.frame = in.frame;
@@ -636,6 +635,42 @@ LocaliserStatus CStereoLocaliser::searchAndSolve(
 	return status;
 }
 
+Matrix6d CStereoLocaliser::solveCovariance(
+	const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
+	const vo::TRelativePoseOutput& po, uint32_t seed) const
+{
+	const auto& o = m_opts;
+	return fixCovariance(
+		po.cov_T_ref_curr,
+		o.bootstrap_samples > 0 ? bootstrapCovariance(calib, corr, po.inlier, po.T_curr_ref, o, seed) : Matrix6d::Zero(),
+		o.cov_scale, o.bootstrap_samples);
+}
+
+bool CStereoLocaliser::certain(const Matrix6d& cov) const
+{
+	const auto& o = m_opts;
+	return !(o.max_sigma_m > 0 && translationSigma(cov) > o.max_sigma_m) &&
+		   !(o.max_sigma_deg > 0 && rotationSigma(cov) > o.max_sigma_deg * kDeg);
+}
+
+void CStereoLocaliser::putNearestFirst(
+	const Eigen::Isometry3d& guess, std::vector<std::pair<int, uint32_t>>& candidates) const
+{
+	// The keyframe nearest the guessed camera, facing its way: near the
+	// guess its landmarks are where the guess puts them even when too few of
+	// its descriptors vote (seen from the side of the survey).
+	const auto score = [&](uint32_t k) {
+		const Eigen::Isometry3d T = m_map.keyframe(k).T_map_kf.inverse() * guess;
+		const double facing = Eigen::AngleAxisd(T.linear()).angle();
+		return facing > M_PI / 2 ? std::numeric_limits<double>::infinity() : T.translation().norm();
+	};
+	if (candidates.empty()) return;
+	auto nearest = candidates.begin();
+	for (auto it = candidates.begin(); it != candidates.end(); ++it)
+		if (score(it->second) < score(nearest->second)) nearest = it;
+	std::rotate(candidates.begin(), nearest, nearest + 1);
+}
+
 TGlobalPlace CStereoLocaliser::globalSearch(
 	const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed) const
 {
@@ -646,7 +681,7 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 
 TGlobalPlace CStereoLocaliser::globalSearch(
 	const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed,
-	const std::vector<uint32_t>& among) const
+	const std::vector<uint32_t>& among, const std::optional<Eigen::Isometry3d>& guess) const
 {
 	const auto& o = m_opts;
 	TGlobalPlace out;
@@ -683,41 +718,53 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 	votes.reserve(among.size());
 	for (size_t a = 0; a < among.size(); a++) votes.emplace_back(-count[a], among[a]);
 	std::sort(votes.begin(), votes.end());
+	if (guess) putNearestFirst(*guess, votes);
 	// ---- geometric check of the best candidates.
 	struct TVerified
 	{
 		uint32_t kf;
 		int inliers, votes;
 		Eigen::Isometry3d T_kf_live, T_map_live;
-		Matrix6d cov;
+		vo::TRelativePoseOutput solve;
+		std::vector<geometry::TStereoCorrespondence> corr;	//!< the solve's
 	};
 	std::vector<TVerified> ver;
 	for (int c = 0; c < o.global_candidates && c < static_cast<int>(votes.size()); c++)
 	{
 		const uint32_t k = votes[c].second;
-		if (-votes[c].first < o.min_matches) break;
-		// (1) the live camera near the keyframe: a window around each
-		// landmark's projection from the keyframe's own pose;
+		const bool nearGuess = guess && c == 0;	 // putNearestFirst: no votes needed
+		if (!nearGuess && -votes[c].first < o.min_matches) continue;
+		// (1) a window around each landmark's projection: where the guess
+		// puts it (warped), else from the keyframe's own pose;
 		vo::TKeyframeMatchInput mi;
 		mi.landmarks = &m_map.measurements(k, m_channel);
 		mi.calib_kf = m_map.calibration();
 		mi.frame = &meas;
 		mi.calib = calib;
 		vo::TKeyframeMatchOutput mo;
-		m_placeMatcher.match(mi, mo);
-		if (static_cast<int>(mo.corr.size()) < o.min_matches) continue;
+		vo::TRelativePoseOutput po;
 		vo::TRelativePoseInput pi;
-		pi.corr = &mo.corr;
 		pi.calib = calib;
 		pi.seed = seed + k;
-		vo::TRelativePoseOutput po;
-		m_estimator.estimate(pi, po);
-		out.verified++;
-		// A first pass below min_inliers is what random matches give (RANSAC
-		// finds 6-8 consistent ones among ~150 in a world that is not the
-		// map's); the gates around such a pose are wide enough for a second
-		// pass to gather a spurious consensus, so it is not refined.
-		if (!po.ok() || static_cast<int>(po.inliers) < o.min_inliers) continue;
+		bool verified = false;
+		for (const bool atGuess : {true, false})
+		{
+			if (atGuess && !guess) continue;
+			mi.T_curr_kf_pred = atGuess ? guess->inverse() * m_map.keyframe(k).T_map_kf : Eigen::Isometry3d::Identity();
+			mi.brief = atGuess ? briefPattern() : nullptr;
+			m_placeMatcher.match(mi, mo);
+			if (static_cast<int>(mo.corr.size()) < o.min_matches) continue;
+			pi.corr = &mo.corr;
+			m_estimator.estimate(pi, po);
+			out.verified++;
+			// A first pass below min_inliers is what random matches give
+			// (RANSAC finds 6-8 consistent ones among ~150 in a world that is
+			// not the map's); the gates around such a pose are wide enough for
+			// a second pass to gather a spurious consensus, so it is not refined.
+			verified = po.ok() && static_cast<int>(po.inliers) >= o.min_inliers;
+			if (verified) break;
+		}
+		if (!verified) continue;
 		// (2) active search around that pose, solved again (without it as prior).
 		TPoseWithCov p1;
 		p1.T = po.T_curr_ref;
@@ -734,7 +781,9 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 			m_estimator.estimate(pi, po2);
 		}
 		const bool second = po2.ok() && po2.inliers >= po.inliers;
-		vo::TRelativePoseOutput best = second ? po2 : po;
+		TVerified v;
+		v.solve = second ? po2 : po;
+		v.corr = second ? mo2.corr : mo.corr;
 		if (o.patch_search)
 		{
 			// The patch pass at the verified pose, as a tracked frame gets it.
@@ -744,22 +793,24 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 			vo::TKeyframeMatchOutput more = second ? mo2 : mo;
 			std::vector<uint32_t> keyframeOf(more.corr.size(), k);
 			const size_t before = more.corr.size();
-			searchLocalMapByPatches(li, k, best.T_curr_ref, more, keyframeOf);
+			searchLocalMapByPatches(li, k, v.solve.T_curr_ref, more, keyframeOf);
 			vo::TRelativePoseOutput po3;
 			if (more.corr.size() > before)
 			{
 				pi.corr = &more.corr;
 				m_estimator.estimate(pi, po3);
 			}
-			if (po3.ok() && po3.inliers >= best.inliers) best = po3;
+			if (po3.ok() && po3.inliers >= v.solve.inliers)
+			{
+				v.solve = po3;
+				v.corr = std::move(more.corr);
+			}
 		}
-		TVerified v;
 		v.kf = k;
-		v.inliers = static_cast<int>(best.inliers);
+		v.inliers = static_cast<int>(v.solve.inliers);
 		v.votes = -votes[c].first;
-		v.T_kf_live = best.T_curr_ref.inverse();
+		v.T_kf_live = v.solve.T_curr_ref.inverse();
 		v.T_map_live = m_map.keyframe(k).T_map_kf * v.T_kf_live;
-		v.cov = o.cov_scale * best.cov_T_ref_curr;
 		ver.push_back(v);
 	}
 	if (ver.empty())
@@ -770,7 +821,7 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 	const auto bestIt = std::max_element(ver.begin(), ver.end(), [](const TVerified& a, const TVerified& b) {
 		return a.inliers < b.inliers || (a.inliers == b.inliers && a.kf > b.kf);
 	});
-	const TVerified best = *bestIt;
+	const TVerified& best = *bestIt;
 	for (const auto& v : ver)
 		if ((v.T_map_live.translation() - best.T_map_live.translation()).norm() > o.global_distinct_m)
 			out.runner_up_inliers = std::max(out.runner_up_inliers, v.inliers);
@@ -778,7 +829,10 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 	out.votes = best.votes;
 	out.pose.kf = best.kf;
 	out.pose.T_kf_live = best.T_kf_live;
-	out.pose.cov = best.cov;
+	// The covariance a tracked solve of the same matches gets (bootstrap
+	// included): a place is a fix only under the same sigma bounds.
+	out.pose.cov = solveCovariance(calib, best.corr, best.solve, seed + best.kf);
+	out.certain = certain(out.pose.cov);
 	if (best.inliers < o.global_min_inliers)
 	{
 		out.why = "best place has " + std::to_string(best.inliers) + " inliers (< " +

@@ -73,6 +73,7 @@ void CTrack::fix(const TKeyframePose& f)
 	m_est.valid = true;
 	m_seed = TKeyframePose();
 	m_confirmed = true;
+	m_places = 0;
 	m_framesSinceFix = 0;
 	m_distSinceFix = 0;
 }
@@ -108,6 +109,27 @@ void CTrack::adoptPlace(const TKeyframePose& place)
 	m_confirmed = false;
 	m_framesSinceFix = 0;
 	m_distSinceFix = 0;
+}
+
+bool CTrack::placeFound(const TKeyframePose& place, bool agrees, bool certain, int K)
+{
+	const bool confirmedTrack = confirmed();
+	if (agrees && certain && (confirmedTrack || m_places + 1 >= K))
+	{
+		fix(place);
+		return true;
+	}
+	const int places = agrees && !confirmedTrack ? m_places + 1 : 1;
+	adoptPlace(place);
+	m_places = places;
+	return false;
+}
+
+bool placeAgrees(const TKeyframePose& place, const TKeyframePose& pred, const KeyframeLink& link, double chi2)
+{
+	if (!place.valid || !pred.valid) return false;
+	const TPoseWithCov p = pred.kf == place.kf ? pred.withCov() : geometry::compose(link(place.kf, pred.kf), pred.withCov());
+	return mahalanobis2(geometry::localLeft(place.T_kf_live, p.T), p.cov + place.cov) <= chi2;
 }
 
 }  // namespace shadyloc::localisation

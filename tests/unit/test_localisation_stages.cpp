@@ -265,3 +265,58 @@ TEST(LocalisationStages, DeadReckoningWindowCrossesASurveyBreak)
 	for (const uint32_t k : w) EXPECT_LE((m->keyframe(k).T_map_kf.translation() - cam).norm(), 12.5) << k;
 	EXPECT_FALSE(std::binary_search(w.begin(), w.end(), 23u)) << "18 m beyond the window";
 }
+
+// Places from the relocalisation, at system level: a place that agrees with
+// the unconfirmed hypothesis it would replace is that hypothesis' next
+// consistent frame (before, every search restarted it, so a run whose
+// localisers could not hold the place never confirmed it); K agreeing places
+// confirm it, and the K-th is a fix. A place that agrees with a confirmed
+// track is a fix at once; an uncertain or disagreeing one never is.
+TEST(LocalisationStages, AgreeingPlacesConfirmAHypothesisAsConsistentFramesDo)
+{
+	TTrackOptions o;
+	constexpr int K = 2;
+	CTrack t(o);
+	const TKeyframePose first = poseAt(0.0, 0.03);
+	EXPECT_FALSE(t.placeFound(first, placeAgrees(first, t.estimate(), identityLink, 16.81), true, K));
+	EXPECT_EQ(t.hypothesisPlaces(), 1);
+	EXPECT_FALSE(t.confirmed());
+	// Two frames on (0.8 m each, no fix), a place where VO says the camera is.
+	for (int i = 0; i < 2; i++)
+	{
+		t.predict(step(0.8));
+		t.noFix({});
+	}
+	const TKeyframePose second = poseAt(1.62, 0.03);
+	const bool agrees = placeAgrees(second, t.estimate(), identityLink, 16.81);
+	EXPECT_TRUE(agrees);
+	// Uncertain (beyond the fix bounds): it continues the hypothesis, no fix.
+	{
+		CTrack u = t;
+		EXPECT_FALSE(u.placeFound(second, agrees, false, K));
+		EXPECT_EQ(u.hypothesisPlaces(), 2);
+	}
+	EXPECT_TRUE(t.placeFound(second, agrees, true, K));
+	EXPECT_EQ(t.hypothesisPlaces(), 0);
+	t.predict(step(0.8));
+	EXPECT_TRUE(t.confirmed());
+	// A place 3 m from where the confirmed track is: a new hypothesis.
+	t.noFix({});
+	const TKeyframePose far = poseAt(2.42 + 3.0, 0.03);
+	EXPECT_FALSE(placeAgrees(far, t.estimate(), identityLink, 16.81));
+	CTrack v = t;
+	EXPECT_FALSE(v.placeFound(far, false, true, K));
+	EXPECT_EQ(v.hypothesisPlaces(), 1);
+	EXPECT_FALSE(v.confirmed());
+	// One that agrees with the confirmed track: a fix at once.
+	const TKeyframePose near = poseAt(2.45, 0.03);
+	EXPECT_TRUE(t.placeFound(near, placeAgrees(near, t.estimate(), identityLink, 16.81), true, K));
+	// With K = 3 the second agreeing place is not yet a fix.
+	CTrack w(o);
+	w.placeFound(first, false, true, 3);
+	w.predict(step(0.8));
+	w.noFix({});
+	const TKeyframePose next = poseAt(0.8, 0.03);
+	EXPECT_FALSE(w.placeFound(next, placeAgrees(next, w.estimate(), identityLink, 16.81), true, 3));
+	EXPECT_EQ(w.hypothesisPlaces(), 2);
+}

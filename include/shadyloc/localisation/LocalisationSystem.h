@@ -231,10 +231,13 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	 * the others on a second one when threads >= 2. */
 	template <typename F>
 	void forLocalisers(F&& fn);
-	/** Searches for the place (scope) and adopts the first verified one in policy order. */
 	/** The accepted solve `r` as the track takes it (fused with the
 	 * prediction while the track is confirmed). */
 	TKeyframePose fusedFix(const TLocaliserResult& r, const TKeyframePose& pred, bool confirmed) const;
+	/** Searches for the place (scope) and adopts the first verified one in
+	 * policy order: a fix when it agrees with a confirmed track, or when it
+	 * is the K-th agreeing place of an unconfirmed hypothesis; else a new
+	 * hypothesis, or the next consistent frame of the one it agrees with. */
 	void searchPlace(
 		SearchScope scope, const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib,
 		const std::vector<size_t>& order, TLocalisationUpdate& u);

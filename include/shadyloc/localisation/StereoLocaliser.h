@@ -302,6 +302,7 @@ struct TGlobalPlace
 	int inliers = 0, votes = 0;
 	int runner_up_inliers = 0;	//!< best verified place elsewhere (ambiguity)
 	int verified = 0;  //!< candidates verified
+	bool certain = false;  //!< its covariance within the fix bounds (max_sigma_m, max_sigma_deg)
 };
 
 class CStereoLocaliser
@@ -317,10 +318,15 @@ class CStereoLocaliser
 	/** A place for the live frame with no prior. Const: one instance may run
 	 * it while another thread uses a different localiser. */
 	TGlobalPlace globalSearch(const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed) const;
-	/** The same among the given keyframes only (e.g. around a start keyframe). */
+	/** The same among the given keyframes only (e.g. around a start keyframe).
+	 * With `guess` (the live camera in the map frame, e.g. dead reckoning
+	 * after a loss), each candidate is first matched where the guess projects
+	 * its landmarks, through their warps (a live run to the side of the
+	 * survey), and then, if that fails, as if the camera were at the
+	 * keyframe. */
 	TGlobalPlace globalSearch(
 		const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed,
-		const std::vector<uint32_t>& among) const;
+		const std::vector<uint32_t>& among, const std::optional<Eigen::Isometry3d>& guess = std::nullopt) const;
 
 	/** Forgets the previous solve and confirmation (a new start). */
 	void reset();
@@ -358,6 +364,15 @@ class CStereoLocaliser
 		const TLocaliserInput& in, uint32_t ref, const TKeyframePose& pred, vo::TKeyframeMatchOutput& mo,
 		vo::TRelativePoseOutput& po, TLocaliserResult& r) const;
 
+	/** A solve's covariance as a fix carries it (scaled solver's, at least
+	 * the bootstrap's over its inliers). */
+	geometry::Matrix6d solveCovariance(
+		const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
+		const vo::TRelativePoseOutput& po, uint32_t seed) const;
+	/** Within the fix bounds (max_sigma_m, max_sigma_deg; 0 = none). */
+	bool certain(const geometry::Matrix6d& cov) const;
+	/** Moves the candidate keyframe nearest `guess` (T_map_live) to the front. */
+	void putNearestFirst(const Eigen::Isometry3d& guess, std::vector<std::pair<int, uint32_t>>& candidates) const;
 	/** The map channel's BRIEF pattern, for warped descriptors; null when
 	 * the channel holds ORB descriptors (oriented tests: not warped). */
 	const features::BriefExtractor* briefPattern() const;

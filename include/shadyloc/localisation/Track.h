@@ -40,6 +40,10 @@ struct TTrackOptions
 	int relocalise_after_frames = 2;  //!< frames without a fix before the windowed search [frames]
 	double relocalise_window_m = 20.0;	//!< ... along the chain on both sides of dead reckoning, and as near in the map frame (any segment) [m]
 	double relocalise_max_angle_deg = 45.0;	 //!< ... a keyframe of another segment there facing within this of dead reckoning [deg]
+	/** The relocalisation's first pass matches each candidate where dead
+	 * reckoning projects its landmarks, through their warps (then, if that
+	 * fails, as if at the keyframe): a live run to the side of the survey. */
+	bool relocalise_at_dead_reckoning = true;
 	int global_search_after_frames = 30;  //!< frames without a fix before the whole map is searched [frames]
 	/** Added to a global-search place's covariance (one frame's solve) [m], [deg]. */
 	double global_sigma_m = 0.1;
@@ -55,6 +59,10 @@ struct TTrackOptions
  * metres without a fix: the variance of drift k * d grows from
  * (k before)^2 to (k (before + step))^2 (k: drift per metre) [m^2, rad^2]. */
 geometry::Matrix6d driftCovariance(double before, double step, double k_m_per_m, double k_deg_per_m);
+
+/** Whether a verified place agrees with the track's prediction `pred` for
+ * its frame (chi^2 on the sum of covariances, `link` between keyframes). */
+bool placeAgrees(const TKeyframePose& place, const TKeyframePose& pred, const KeyframeLink& link, double chi2);
 
 /** Where the place is searched for on a frame without a fix. */
 enum class SearchScope
@@ -87,6 +95,17 @@ class CTrack
 	SearchScope searchNeeded(bool allLost) const;
 	/** A verified place becomes the track: a new, unconfirmed hypothesis. */
 	void adoptPlace(const TKeyframePose& place);
+	/** A verified place of the relocalisation. `agrees`: with this frame's
+	 * prediction (placeAgrees); `certain`: within the fix bounds. A fix when
+	 * it agrees with a confirmed track, or is the K-th agreeing place of the
+	 * unconfirmed hypothesis (two verified places that agree through VO
+	 * confirm as K consistent frames do; replacing the hypothesis instead
+	 * restarted it on every search). Otherwise it continues the hypothesis
+	 * it agrees with, or starts a new one. Returns whether it is a fix. */
+	bool placeFound(const TKeyframePose& place, bool agrees, bool certain, int K);
+	/** Verified places that agree in the current unconfirmed hypothesis
+	 * (0: none, or the track is a fix's). */
+	int hypothesisPlaces() const { return m_places; }
 
 	const TKeyframePose& estimate() const { return m_est; }
 	int framesSinceFix() const { return m_framesSinceFix; }
@@ -99,6 +118,7 @@ class CTrack
 	TKeyframePose m_pred, m_seedPred;  //!< this frame's prediction and seed
 	TKeyframePose m_seed;  //!< an unconfirmed solve of the last frame
 	bool m_confirmed = false;
+	int m_places = 0;
 	int m_framesSinceFix = 0;
 	double m_distSinceFix = 0;
 };
