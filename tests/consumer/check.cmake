@@ -3,7 +3,8 @@
 # frames of the simulator's overcast run on a map of its noon run (the
 # sim_sequences fixture, SIM_DIR) with the example, and check the outcome:
 # enough frames localised, their poses within a few centimetres of the
-# ground truth, a picture written, and no tools library in the example's links.
+# ground truth, the same poses from the filtered rawlog, a picture written,
+# and no tools library in the example's links.
 function(run what)
   execute_process(COMMAND ${ARGN} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
   if(rc)
@@ -30,6 +31,12 @@ message(STATUS "the example's link line: ${link}")
 run("ldd" ldd ${example})
 if(NOT out MATCHES "libshadyloc_localisation" OR out MATCHES "libshadyloc_tools")
   message(FATAL_ERROR "the example should load libshadyloc_localisation and not libshadyloc_tools:\n${out}")
+endif()
+
+# ... and that library holds no simulator, dataset, evaluation or render code.
+run("nm" nm -DC --defined-only ${prefix}/lib/libshadyloc_localisation.so)
+if(out MATCHES "shadyloc::(sim|datasets|eval|render)::[A-Za-z_]+")
+  message(FATAL_ERROR "libshadyloc_localisation defines ${CMAKE_MATCH_0}")
 endif()
 
 # The map of the noon run, by the installed program with the installed config.
@@ -62,6 +69,18 @@ if(CMAKE_MATCH_1 GREATER ${MAX_ATE_M} OR CMAKE_MATCH_2 GREATER ${MAX_ERR_M})
     "max ${CMAKE_MATCH_2} m (<= ${MAX_ERR_M})")
 endif()
 message(STATUS "${n} fixes, ATE RMSE ${CMAKE_MATCH_1} m, max ${CMAKE_MATCH_2} m")
+
+# A filtered rawlog (the colour pairs with their derived grey channels
+# beside them) localises to the same poses.
+run("filter" ${env} ${prefix}/bin/shadyloc filter -q -i ${SIM_DIR}/overcast.rawlog -o ${WORK_DIR}/filtered.rawlog
+  -c ${cfg}/filters_sim.ini)
+run("example on the filtered rawlog" ${example} ${WORK_DIR}/noon.kfmap ${WORK_DIR}/filtered.rawlog
+  ${WORK_DIR}/filtered ${cfg}/vo_sim.ini ${cfg}/localise_sim.ini --frames ${FRAMES})
+file(READ ${WORK_DIR}/overcast.tum colour_tum)
+file(READ ${WORK_DIR}/filtered.tum filtered_tum)
+if(NOT colour_tum STREQUAL filtered_tum)
+  message(FATAL_ERROR "the filtered rawlog localised to other poses than its colour original")
+endif()
 
 file(SIZE ${WORK_DIR}/overcast.png png_bytes)
 if(png_bytes LESS 2000)
