@@ -5,12 +5,14 @@
 #include <shadyloc/Localiser.h>
 #include <shadyloc/core/Settings.h>
 #include <shadyloc/geometry/PoseCovariance.h>
+#include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/localisation/LocaliseRun.h>
 
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/obs/CObservationStereoImages.h>
 
+#include <functional>
 #include <stdexcept>
 
 namespace shadyloc
@@ -40,11 +42,6 @@ std::string nameOf(const mrpt::config::CConfigFileBase& cfg)
 {
 	const std::string s = core::settingsSource(cfg);
 	return s.empty() ? "(in-memory config)" : s;
-}
-
-bool endsWith(const std::string& s, const std::string& tail)
-{
-	return !tail.empty() && s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
 }
 
 /** The share of a fix's matches that its solve kept. */
@@ -101,7 +98,7 @@ struct Localiser::Impl
 	CKeyframeMap::Ptr map;
 	std::unique_ptr<CLocalisationSystem> sys;
 	std::string label;	//!< the live camera ("" until chosen)
-	std::vector<std::string> channelSuffixes;  //!< a filtered rawlog's derived observations end so
+	std::function<bool(const std::string&)> notDerived;	//!< false for a label with a channel's suffix (a filtered rawlog's)
 	std::optional<TLocalisationUpdate> last;
 
 	Impl(CKeyframeMap::Ptr m, const LocaliserOptions& o) : map(std::move(m)), label(o.sensor_label)
@@ -112,7 +109,9 @@ struct Localiser::Impl
 		localisation::checkLocaliseSections(cfg, o.source);
 		sys = CLocalisationSystem::FromConfig(cfg, map, {}, 0, o.source);
 		if (o.start_keyframe >= 0) sys->setStartKeyframe(static_cast<uint32_t>(o.start_keyframe));
-		for (const auto& l : sys->channelLabels()) channelSuffixes.push_back(sys->channelSetup(l).channel.suffix());
+		std::vector<std::string> suffixes;
+		for (const auto& l : sys->channelLabels()) suffixes.push_back(sys->channelSetup(l).channel.suffix());
+		notDerived = io::labelWithoutSuffixes(suffixes);
 	}
 
 	/** True for a pair of the live camera; picks it when not given. */
@@ -120,8 +119,7 @@ struct Localiser::Impl
 	{
 		if (label.empty())
 		{
-			for (const auto& s : channelSuffixes)
-				if (endsWith(obs.sensorLabel, s)) return false;
+			if (!notDerived(obs.sensorLabel)) return false;
 			label = obs.sensorLabel;
 		}
 		if (obs.sensorLabel != label) return false;
