@@ -26,7 +26,7 @@ out="$2"
 shift 2
 [ -x "$here/build/shadyloc" ] || { echo "map-size-curve: build/shadyloc not found: build first" >&2; exit 1; }
 mkdir -p "$out/bin"
-cp "$here/build/shadyloc" "$here"/build/libshadyloc.so* "$out/bin/"
+cp "$here/build/shadyloc" "$here"/build/libshadyloc_{localisation,tools}.so* "$out/bin/"
 app="$out/bin/shadyloc"
 export LD_LIBRARY_PATH="$out/bin${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
 conds=()

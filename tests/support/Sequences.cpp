@@ -164,28 +164,34 @@ const TStereoSequence& corridorSequence(int frames, double speed)
 												  : renderCorridor(frames, speed);
 }
 
+std::string simSequenceDir(const std::string& traversal)
+{
+	std::string dir = fixtureDir().empty() ? "" : fixtureDir() + "/sim";
+	if (!dir.empty() && fs::exists(dir + "/" + traversal + ".rawlog")) return dir;
+	if (!fixtureDir().empty())
+		throw std::runtime_error(
+			"'" + dir + "/" + traversal + ".rawlog' missing: its ctest fixture setup "
+			"(Fixture.SimSequences) did not run or does not render '" + traversal + "'");
+	// Outside ctest: render with the same command the fixture runs, once per process.
+	static std::mutex mx;
+	static std::map<std::string, std::string> rendered;
+	std::lock_guard<std::mutex> lock(mx);
+	if (auto it = rendered.find(traversal); it != rendered.end()) return it->second;
+	dir = tempDir("sim_sequence_" + traversal);
+	std::string out;
+	const std::string cmd = appPath() + " sim -q -c " + std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini -o " + dir +
+							" --traversals " + traversal + " --frames " + std::to_string(kSimFixtureFrames);
+	if (runCommand(cmd, &out) != 0) throw std::runtime_error(cmd + " failed:\n" + out);
+	return rendered[traversal] = dir;
+}
+
 const TStereoSequence& simSequence(const std::string& traversal)
 {
 	static std::mutex mx;
 	static std::map<std::string, TStereoSequence> cache;
 	std::lock_guard<std::mutex> lock(mx);
 	if (auto it = cache.find(traversal); it != cache.end()) return it->second;
-	std::string dir = fixtureDir().empty() ? "" : fixtureDir() + "/sim";
-	if (dir.empty() || !fs::exists(dir + "/" + traversal + ".rawlog"))
-	{
-		if (!fixtureDir().empty())
-			throw std::runtime_error(
-				"'" + dir + "/" + traversal + ".rawlog' missing: its ctest fixture setup "
-				"(Fixture.SimSequences) did not run or does not render '" + traversal + "'");
-		// Outside ctest: render with the same command the fixture runs.
-		dir = tempDir("sim_sequence_" + traversal);
-		std::string out;
-		const std::string cmd = appPath() + " sim -q -c " + std::string(SHADYLOC_SOURCE_DIR) +
-								"/config/sim.ini -o " + dir + " --traversals " + traversal +
-								" --frames " + std::to_string(kSimFixtureFrames);
-		if (runCommand(cmd, &out) != 0) throw std::runtime_error(cmd + " failed:\n" + out);
-	}
-	return cache[traversal] = readSimDir(dir, traversal);
+	return cache[traversal] = readSimDir(simSequenceDir(traversal), traversal);
 }
 
 }  // namespace shadyloc::test

@@ -41,6 +41,9 @@ void writeCorridorFixtures(const std::string& dir);
  * `shadyloc sim --frames 30` renders them; the ctest fixture renders noon and
  * overcast. Ground truth from the TUM file (9 decimals). */
 const TStereoSequence& simSequence(const std::string& traversal);
+/** The folder holding <traversal>.rawlog and .tum of simSequence (the
+ * fixture's, or rendered once per process outside ctest). */
+std::string simSequenceDir(const std::string& traversal);
 constexpr int kSimFixtureFrames = 30;
 
 }  // namespace shadyloc::test

@@ -1,0 +1,208 @@
+/* ShadyLoc — the public face (include/shadyloc/Localiser.h) over the
+ * combined localisation system: options through the strict readers, the
+ * live camera picked from a stream of observations, the system's per-frame
+ * record turned into a MOLA-shaped update. No localisation logic here. */
+#include <shadyloc/Localiser.h>
+#include <shadyloc/core/Settings.h>
+#include <shadyloc/geometry/PoseCovariance.h>
+#include <shadyloc/io/StereoFrameSource.h>
+#include <shadyloc/localisation/LocalisationSystem.h>
+#include <shadyloc/localisation/LocaliseRun.h>
+
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/obs/CObservationStereoImages.h>
+
+#include <functional>
+#include <stdexcept>
+
+namespace shadyloc
+{
+namespace
+{
+using localisation::CLocalisationSystem;
+using localisation::TLocalisationUpdate;
+
+/** Every key of every section of `from` but `skip` into `to`, values as
+ * written (inline comments too: the strict reader strips them on reading). */
+void copySections(
+	const mrpt::config::CConfigFileBase& from, mrpt::config::CConfigFileBase& to, const std::string& skip)
+{
+	std::vector<std::string> sections;
+	from.getAllSections(sections);
+	for (const auto& s : sections)
+	{
+		if (!skip.empty() && s == skip) continue;
+		std::vector<std::string> keys;
+		from.getAllKeys(s, keys);
+		for (const auto& k : keys) to.write(s, k, from.read_string(s, k, ""));
+	}
+}
+
+std::string nameOf(const mrpt::config::CConfigFileBase& cfg)
+{
+	const std::string s = core::settingsSource(cfg);
+	return s.empty() ? "(in-memory config)" : s;
+}
+
+/** The share of a fix's matches that its solve kept. */
+double inlierFraction(const localisation::TLocaliserResult* r)
+{
+	return r && r->matches > 0 ? double(r->inliers) / r->matches : 0.0;
+}
+}  // namespace
+
+std::string toString(LocalisationStatus s)
+{
+	switch (s)
+	{
+		case LocalisationStatus::Localised: return "localised";
+		case LocalisationStatus::DeadReckoning: return "dead_reckoning";
+		case LocalisationStatus::NoPlace: return "no_place";
+	}
+	return "?";
+}
+
+// ---- options ------------------------------------------------------------------------------
+void LocaliserOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& cfg, const std::string& section)
+{
+	source = nameOf(cfg);
+	if (!section.empty() && cfg.sectionExists(section))
+	{
+		core::SettingsSection r(cfg, section);
+		r.read("sensor_label", sensor_label);
+		r.read("start_keyframe", start_keyframe);
+		r.finish();
+		if (start_keyframe < -1) r.fail("start_keyframe", "must be a keyframe id >= 0, or -1 to search the whole map");
+	}
+	mrpt::config::CConfigFileMemory sys;
+	copySections(cfg, sys, section);
+	localisation::checkLocaliseSections(sys, source);
+	// Every struct read from the original, so that errors name its file.
+	(void)CLocalisationSystem::SetupFromConfig(cfg, {}, 0, source);
+	sys.getContent(system_config);
+}
+
+void LocaliserOptions::saveToConfigFile(mrpt::config::CConfigFileBase& cfg, const std::string& section) const
+{
+	if (!section.empty())
+	{
+		cfg.write(section, "sensor_label", sensor_label);
+		cfg.write(section, "start_keyframe", start_keyframe);
+	}
+	copySections(mrpt::config::CConfigFileMemory(system_config), cfg, "");
+}
+
+// ---- the localiser ------------------------------------------------------------------------
+struct Localiser::Impl
+{
+	CKeyframeMap::Ptr map;
+	std::unique_ptr<CLocalisationSystem> sys;
+	std::string label;	//!< the live camera ("" until chosen)
+	std::function<bool(const std::string&)> notDerived;	//!< false for a label with a channel's suffix (a filtered rawlog's)
+	std::optional<TLocalisationUpdate> last;
+
+	Impl(CKeyframeMap::Ptr m, const LocaliserOptions& o) : map(std::move(m)), label(o.sensor_label)
+	{
+		if (map->isEmpty()) throw std::runtime_error("Localiser: the map has no keyframes: nothing to localise against");
+		// The options may have been filled in code: checked as when loaded.
+		const mrpt::config::CConfigFileMemory cfg(o.system_config);
+		localisation::checkLocaliseSections(cfg, o.source);
+		sys = CLocalisationSystem::FromConfig(cfg, map, {}, 0, o.source);
+		if (o.start_keyframe >= 0) sys->setStartKeyframe(static_cast<uint32_t>(o.start_keyframe));
+		std::vector<std::string> suffixes;
+		for (const auto& l : sys->channelLabels()) suffixes.push_back(sys->channelSetup(l).channel.suffix());
+		notDerived = io::labelWithoutSuffixes(suffixes);
+	}
+
+	/** True for a pair of the live camera; picks it when not given. */
+	bool isLive(const mrpt::obs::CObservationStereoImages& obs)
+	{
+		if (label.empty())
+		{
+			if (!notDerived(obs.sensorLabel)) return false;
+			label = obs.sensorLabel;
+		}
+		if (obs.sensorLabel != label) return false;
+		if (!obs.imageLeft.isColor())
+			throw std::invalid_argument(
+				"Localiser: '" + label + "' is a grey stereo pair; the localisers make their channels from colour images");
+		return true;
+	}
+
+	LocalisationUpdate toUpdate(const TLocalisationUpdate& u, mrpt::Clock::time_point stamp) const
+	{
+		LocalisationUpdate r;
+		r.timestamp = stamp;
+		r.frames_since_fix = u.frames_since_fix;
+		if (!u.placeKnown) return r;
+		r.status = u.localised() ? LocalisationStatus::Localised : LocalisationStatus::DeadReckoning;
+		if (u.localised())
+		{
+			r.method = u.used;
+			r.quality = inlierFraction(u.result(u.used));
+		}
+		r.keyframe_id = u.kf_id;
+		r.pose_in_keyframe = u.pdf();
+		// The keyframe's place in the map is the map's own frame: taken as exact.
+		geometry::TPoseWithCov kf, rel;
+		kf.T = map->keyframe(u.kf_id).T_map_kf;
+		rel.T = u.T_kf_live;
+		rel.cov = u.cov;
+		r.pose = geometry::toCPose3DPDFGaussian(geometry::compose(kf, rel));
+		return r;
+	}
+};
+
+Localiser::Localiser(const std::string& mapFile, const LocaliserOptions& opts)
+{
+	CKeyframeMap::Ptr map;
+	try
+	{
+		map = CKeyframeMap::LoadFromFile(mapFile);
+	}
+	catch (const std::exception& e)
+	{
+		throw std::runtime_error("map '" + mapFile + "': " + e.what());
+	}
+	m_impl = std::make_unique<Impl>(std::move(map), opts);
+}
+
+Localiser::Localiser(mrpt::maps::CMetricMap::Ptr map, const LocaliserOptions& opts)
+{
+	auto kfmap = std::dynamic_pointer_cast<CKeyframeMap>(map);
+	if (!kfmap)
+		throw std::invalid_argument(
+			std::string("Localiser: the map is ") + (map ? map->GetRuntimeClass()->className : "null") +
+			", not a shadyloc keyframe map (CKeyframeMap)");
+	m_impl = std::make_unique<Impl>(std::move(kfmap), opts);
+}
+
+Localiser::~Localiser() = default;
+Localiser::Localiser(Localiser&&) noexcept = default;
+Localiser& Localiser::operator=(Localiser&&) noexcept = default;
+
+std::optional<LocalisationUpdate> Localiser::process(const mrpt::obs::CObservation::Ptr& obs)
+{
+	const auto stereo = std::dynamic_pointer_cast<mrpt::obs::CObservationStereoImages>(obs);
+	if (!stereo || !m_impl->isLive(*stereo)) return std::nullopt;
+	m_impl->last = m_impl->sys->processObservation(*stereo);
+	return m_impl->toUpdate(*m_impl->last, stereo->timestamp);
+}
+
+const std::string& Localiser::sensorLabel() const { return m_impl->label; }
+
+const mrpt::maps::CMetricMap& Localiser::map() const { return *m_impl->map; }
+
+const localisation::TLocalisationUpdate& Localiser::lastDiagnostics() const
+{
+	if (!m_impl->last) throw std::logic_error("Localiser::lastDiagnostics: no frame processed yet");
+	return *m_impl->last;
+}
+
+void Localiser::reset()
+{
+	m_impl->sys->reset();
+	m_impl->last.reset();
+}
+
+}  // namespace shadyloc

@@ -1,0 +1,181 @@
+/* ShadyLoc tests: the public face for MRPT applications (include/shadyloc/
+ * Localiser.h): the header includes MRPT and the standard library only; its
+ * options load through the strict readers and dump back to the same; and,
+ * on the simulator's runs (the sim_sequences fixture), a map of the noon run
+ * localises the first overcast frames, fed as MRPT observations among the
+ * grey channels of a filtered rawlog and another sensor, with the fields an
+ * application reads checked against the ground truth. */
+#include "../support/Sequences.h"
+#include "../support/TestSupport.h"
+
+#include <shadyloc/Localiser.h>
+#include <shadyloc/core/Settings.h>
+#include <shadyloc/io/Trajectory.h>
+#include <shadyloc/io/Tum.h>
+#include <shadyloc/localisation/LocalisationSystem.h>
+#include <shadyloc/survey/SurveyRun.h>
+
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/obs/CObservationOdometry.h>
+
+#include <opencv2/imgproc.hpp>
+
+#include <regex>
+#include <set>
+#include <sstream>
+
+namespace
+{
+using namespace shadyloc;
+
+std::string src(const std::string& rel) { return std::string(SHADYLOC_SOURCE_DIR) + "/" + rel; }
+
+/** The shipped simulator configs as one text (their sections are disjoint). */
+std::string simLocaliseConfig()
+{
+	return test::fileContents(src("config/vo_sim.ini")) + "\n" + test::fileContents(src("config/localise_sim.ini"));
+}
+
+TEST(PublicFace, HeaderIncludesMrptAndTheStandardLibraryOnly)
+{
+	const std::string text = test::fileContents(src("include/shadyloc/Localiser.h"));
+	ASSERT_FALSE(text.empty());
+	const std::regex inc(R"(#\s*include\s*([<"])([^>"]+)[>"])");
+	int includes = 0;
+	for (auto it = std::sregex_iterator(text.begin(), text.end(), inc); it != std::sregex_iterator(); ++it)
+	{
+		includes++;
+		const std::string delim = (*it)[1], name = (*it)[2];
+		// An MRPT header, or a standard one (<memory>: no folder, no extension).
+		const bool mrpt = name.rfind("mrpt/", 0) == 0;
+		const bool standard = name.find_first_of("/.") == std::string::npos;
+		EXPECT_TRUE(delim == "<" && (mrpt || standard)) << "Localiser.h includes " << delim << name << (delim == "<" ? ">" : "\"");
+	}
+	EXPECT_GE(includes, 5);
+}
+
+TEST(PublicFace, OptionsLoadStrictlyAndDumpBackToTheSame)
+{
+	const std::string app = "[application]\nsensor_label = CAMERA\nstart_keyframe = 3\n";
+	LocaliserOptions a;
+	a.loadFromConfigFile(mrpt::config::CConfigFileMemory(simLocaliseConfig() + app), "application");
+	EXPECT_EQ(a.sensor_label, "CAMERA");
+	EXPECT_EQ(a.start_keyframe, 3);
+	mrpt::config::CConfigFileMemory dumped;
+	a.saveToConfigFile(dumped, "application");
+	LocaliserOptions b;
+	b.loadFromConfigFile(dumped, "application");
+	EXPECT_EQ(b.sensor_label, a.sensor_label);
+	EXPECT_EQ(b.start_keyframe, a.start_keyframe);
+	EXPECT_EQ(b.system_config, a.system_config);
+	// The system's sections are there: [localise] localisers as shipped.
+	EXPECT_NE(a.system_config.find("localisers"), std::string::npos);
+	// A misspelt key, in the application's section or the system's, names itself.
+	const std::vector<std::pair<std::string, std::string>> bad = {
+		{app + "sensor_lable = X\n", "sensor_lable"}, {app + "[localiser]\nmin_inlier = 3\n", "min_inlier"}};
+	for (const auto& [text, key] : bad)
+	{
+		LocaliserOptions c;
+		try
+		{
+			c.loadFromConfigFile(mrpt::config::CConfigFileMemory(simLocaliseConfig() + text), "application");
+			ADD_FAILURE() << "accepted:\n" << text;
+		}
+		catch (const core::SettingsError& e)
+		{
+			EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+		}
+	}
+}
+
+/** A map of the noon run surveyed with the shipped config, its ground truth
+ * stored beside its keyframes. */
+CKeyframeMap::Ptr noonMap()
+{
+	const std::string dir = test::simSequenceDir("noon");
+	survey::TSurveyRunOptions o;
+	o.gt = io::readTum(dir + "/noon.tum");
+	mrpt::config::CConfigFileMemory cfg(test::fileContents(src("config/vo_sim.ini")));
+	return survey::CSurveyRun(dir + "/noon.rawlog", cfg, o).run();
+}
+
+/** Metres and degrees between two poses. */
+std::pair<double, double> poseError(const mrpt::poses::CPose3D& a, const Eigen::Isometry3d& b)
+{
+	const Eigen::Isometry3d d = io::toIsometry(a).inverse() * b;
+	return {d.translation().norm(), Eigen::AngleAxisd(d.linear()).angle() * 180 / M_PI};
+}
+
+TEST(PublicFace, LocalisesSimulatedFramesAmongOtherObservations)
+{
+	const auto map = noonMap();
+	LocaliserOptions opts;
+	opts.loadFromConfigFile(mrpt::config::CConfigFileMemory(simLocaliseConfig()), "");
+	Localiser loc(mrpt::maps::CMetricMap::Ptr(map), opts);
+	EXPECT_THROW(loc.lastDiagnostics(), std::logic_error);
+	const auto& live = test::simSequence("overcast");
+	const std::set<std::string> methods = {"mono", "invariant"};
+	int localised = 0;
+	for (size_t i = 0; i < 15; i++)
+	{
+		// As in a filtered rawlog: a derived grey channel first, then the colour pair, then another sensor.
+		cv::Mat gl, gr;
+		cv::cvtColor(live.left[i], gl, cv::COLOR_BGR2GRAY);
+		cv::cvtColor(live.right[i], gr, cv::COLOR_BGR2GRAY);
+		EXPECT_FALSE(loc.process(std::make_shared<mrpt::obs::CObservationStereoImages>(
+			test::stereoObservation(gl, gr, live.calib, live.t[i], "CAMERA_mono"))));
+		const auto obs = std::make_shared<mrpt::obs::CObservationStereoImages>(
+			test::stereoObservation(live.left[i], live.right[i], live.calib, live.t[i], "CAMERA"));
+		const auto r = loc.process(obs);
+		EXPECT_FALSE(loc.process(std::make_shared<mrpt::obs::CObservationOdometry>()));
+		ASSERT_TRUE(r) << "frame " << i;
+		EXPECT_EQ(r->timestamp, obs->timestamp);
+		EXPECT_EQ(r->reference_frame, "map");
+		EXPECT_EQ(loc.lastDiagnostics().frame, i);
+		if (r->status != LocalisationStatus::Localised)
+		{
+			EXPECT_EQ(r->method, "none") << "frame " << i;
+			continue;
+		}
+		localised++;
+		EXPECT_TRUE(methods.count(r->method)) << r->method;
+		EXPECT_GT(r->quality, 0.2);
+		EXPECT_LE(r->quality, 1.0);
+		EXPECT_EQ(r->frames_since_fix, 0);
+		// The truth in the keyframe's frame and in the map's, from both runs' ground truth.
+		const auto& kf = map->keyframe(r->keyframe_id);
+		ASSERT_TRUE(kf.T_gt_kf);
+		const Eigen::Isometry3d T_kf_live = kf.T_gt_kf->inverse() * live.T_world_left[i];
+		const auto [em, ed] = poseError(r->pose_in_keyframe.mean, T_kf_live);
+		EXPECT_LT(em, 0.1) << "frame " << i;
+		EXPECT_LT(ed, 1.0) << "frame " << i;
+		// The map-frame pose is the keyframe-relative one placed at the keyframe.
+		const auto [mm, md] = poseError(r->pose.mean, kf.T_map_kf * T_kf_live);
+		EXPECT_LT(mm, 0.1) << "frame " << i;
+		EXPECT_LT(md, 1.0) << "frame " << i;
+		EXPECT_GT(r->pose.cov(0, 0), 0);
+	}
+	EXPECT_GE(localised, 8);
+	EXPECT_EQ(loc.sensorLabel(), "CAMERA");
+}
+
+TEST(PublicFace, RefusesAGreyLiveCameraAndAnotherKindOfMap)
+{
+	const auto map = noonMap();
+	LocaliserOptions opts;
+	opts.loadFromConfigFile(mrpt::config::CConfigFileMemory(simLocaliseConfig()), "");
+	opts.sensor_label = "CAMERA";
+	Localiser loc(mrpt::maps::CMetricMap::Ptr(map), opts);
+	const auto& live = test::simSequence("overcast");
+	cv::Mat gl, gr;
+	cv::cvtColor(live.left[0], gl, cv::COLOR_BGR2GRAY);
+	cv::cvtColor(live.right[0], gr, cv::COLOR_BGR2GRAY);
+	EXPECT_THROW(
+		loc.process(std::make_shared<mrpt::obs::CObservationStereoImages>(
+			test::stereoObservation(gl, gr, live.calib, live.t[0], "CAMERA"))),
+		std::invalid_argument);
+	EXPECT_THROW(Localiser(mrpt::maps::CSimplePointsMap::Create(), opts), std::invalid_argument);
+}
+
+}  // namespace
