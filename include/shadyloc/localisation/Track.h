@@ -37,7 +37,7 @@ struct TTrackOptions
 	/** The track stays a confirmed place while its largest translational
 	 * standard deviation is below this [m]. */
 	double confirmed_max_sigma_m = 0.5;
-	int relocalise_after_frames = 2;  //!< frames without a fix before the windowed search [frames]
+	int relocalise_after_frames = 1;  //!< frames without a fix before the windowed search (1: every lost frame) [frames]
 	double relocalise_window_m = 20.0;	//!< ... along the chain on both sides of dead reckoning, and as near in the map frame (any segment) [m]
 	double relocalise_max_angle_deg = 45.0;	 //!< ... a keyframe of another segment there facing within this of dead reckoning [deg]
 	/** The relocalisation's first pass matches each candidate where dead
