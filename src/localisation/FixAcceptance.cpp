@@ -20,6 +20,12 @@ double mahalanobis2(const Vector6d& xi, const Matrix6d& S)
 	return std::isfinite(d2) && d2 >= 0 ? d2 : std::numeric_limits<double>::infinity();
 }
 
+double predictionDistance2(const TKeyframePose& solve, const TKeyframePose& pred, const KeyframeLink& link)
+{
+	const TPoseWithCov p = pred.kf == solve.kf ? pred.withCov() : geometry::compose(link(solve.kf, pred.kf), pred.withCov());
+	return mahalanobis2(geometry::localLeft(solve.T_kf_live, p.T), p.cov + solve.cov);
+}
+
 TPoseWithCov fuseWithPrediction(const TPoseWithCov& solve, const TPoseWithCov& prediction)
 {
 	const Matrix6d& P = prediction.cov;
@@ -56,9 +62,7 @@ TAcceptance CFixAcceptance::judge(
 	bool consistent = true;
 	if (pred.valid)
 	{
-		// The prediction re-expressed in the solve's keyframe.
-		const TPoseWithCov p = pred.kf == s.pose.kf ? pred.withCov() : geometry::compose(link(s.pose.kf, pred.kf), pred.withCov());
-		a.prediction_d2 = mahalanobis2(geometry::localLeft(s.pose.T_kf_live, p.T), p.cov + s.pose.cov);
+		a.prediction_d2 = predictionDistance2(s.pose, pred, link);
 		if (a.prediction_d2 > m_opts.prediction_chi2)
 		{
 			consistent = false;

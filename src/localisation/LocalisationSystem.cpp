@@ -525,10 +525,6 @@ void CLocalisationSystem::searchPlace(
 	u.search_scope = scope;
 	u.place = places[order.front()];
 	for (size_t k = 0; k < order.size(); k++) u.localisers[k].ms += ms[order[k]];
-	const KeyframeLink link = [this](uint32_t a, uint32_t b) {
-		const auto l = m_map->relativePose(a, b);
-		return geometry::TPoseWithCov{l.T_a_b, l.cov};
-	};
 	for (const size_t i : order)
 		if (places[i].ok)
 		{
@@ -536,7 +532,11 @@ void CLocalisationSystem::searchPlace(
 			// Two verified places that agree through VO confirm the place as K
 			// consistent frames of the localisers would; a place that
 			// replaced the hypothesis instead would restart it on every search.
-			const auto& lo = m_pipes[i].localiser->options();
+			// Through the localiser's link, which crosses a VO break of the map
+			// (the place may lie in another segment than the track).
+			const auto& L = *m_pipes[i].localiser;
+			const KeyframeLink link = [&L](uint32_t a, uint32_t b) { return L.between(a, b); };
+			const auto& lo = L.options();
 			const bool agrees = placeAgrees(places[i].pose, m_track.estimate(), link, lo.prediction_chi2);
 			if (m_track.placeFound(places[i].pose, agrees, places[i].certain, lo.consistent_frames))
 				u.used = m_pipes[i].setup.channel.label;

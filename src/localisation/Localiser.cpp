@@ -44,10 +44,14 @@ std::string nameOf(const mrpt::config::CConfigFileBase& cfg)
 	return s.empty() ? "(in-memory config)" : s;
 }
 
-/** The share of a fix's matches that its solve kept. */
-double inlierFraction(const localisation::TLocaliserResult* r)
+/** The share of the used fix's matches that its solve kept: a localiser's
+ * accepted solve, or else the verified place the relocalisation took as
+ * the fix. */
+double inlierFraction(const TLocalisationUpdate& u)
 {
-	return r && r->matches > 0 ? double(r->inliers) / r->matches : 0.0;
+	const auto* r = u.result(u.used);
+	if (r && r->accepted()) return r->matches > 0 ? double(r->inliers) / r->matches : 0.0;
+	return u.place.ok && u.place.matches > 0 ? double(u.place.inliers) / u.place.matches : 0.0;
 }
 }  // namespace
 
@@ -139,7 +143,7 @@ struct Localiser::Impl
 		if (u.localised())
 		{
 			r.method = u.used;
-			r.quality = inlierFraction(u.result(u.used));
+			r.quality = inlierFraction(u);
 		}
 		r.keyframe_id = u.kf_id;
 		r.pose_in_keyframe = u.pdf();

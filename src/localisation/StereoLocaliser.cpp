@@ -826,6 +826,7 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 		if ((v.T_map_live.translation() - best.T_map_live.translation()).norm() > o.global_distinct_m)
 			out.runner_up_inliers = std::max(out.runner_up_inliers, v.inliers);
 	out.inliers = best.inliers;
+	out.matches = static_cast<int>(best.corr.size());
 	out.votes = best.votes;
 	out.pose.kf = best.kf;
 	out.pose.T_kf_live = best.T_kf_live;

@@ -127,9 +127,7 @@ bool CTrack::placeFound(const TKeyframePose& place, bool agrees, bool certain, i
 
 bool placeAgrees(const TKeyframePose& place, const TKeyframePose& pred, const KeyframeLink& link, double chi2)
 {
-	if (!place.valid || !pred.valid) return false;
-	const TPoseWithCov p = pred.kf == place.kf ? pred.withCov() : geometry::compose(link(place.kf, pred.kf), pred.withCov());
-	return mahalanobis2(geometry::localLeft(place.T_kf_live, p.T), p.cov + place.cov) <= chi2;
+	return place.valid && pred.valid && predictionDistance2(place, pred, link) <= chi2;
 }
 
 }  // namespace shadyloc::localisation

@@ -121,6 +121,9 @@ class CFixAcceptance
 
 /** Mahalanobis distance^2 xi^T S^-1 xi; infinity if S is not positive definite. */
 double mahalanobis2(const geometry::Vector6d& xi, const geometry::Matrix6d& S);
+/** The prediction test's statistic: `solve` against `pred` re-expressed in
+ * the solve's keyframe through `link`, on the sum of their covariances. */
+double predictionDistance2(const TKeyframePose& solve, const TKeyframePose& pred, const KeyframeLink& link);
 
 /** An accepted solve fused with the prediction it was tested against (both
  * in the solve's keyframe): the Kalman update of the prediction by the

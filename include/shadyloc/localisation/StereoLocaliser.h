@@ -300,6 +300,7 @@ struct TGlobalPlace
 	std::string why;  //!< when not ok: why not
 	TKeyframePose pose;	 //!< the live camera in the place's keyframe
 	int inliers = 0, votes = 0;
+	int matches = 0;  //!< the verified solve's correspondences
 	int runner_up_inliers = 0;	//!< best verified place elsewhere (ambiguity)
 	int verified = 0;  //!< candidates verified
 	bool certain = false;  //!< its covariance within the fix bounds (max_sigma_m, max_sigma_deg)
@@ -336,13 +337,14 @@ class CStereoLocaliser
 
 	const std::string& channel() const { return m_channel; }
 	const TLocaliserOptions& options() const { return m_opts; }
+	/** T_a_b with covariance through the chain, or through map poses plus
+	 * the cross-segment covariance when a and b are in different segments
+	 * (the link its acceptance tests use). */
+	geometry::TPoseWithCov between(uint32_t a, uint32_t b) const;
 
    private:
 	/** The keyframe to localise against and the prediction in it; invalid if none. */
 	TKeyframePose chooseKeyframe(const TKeyframePose& pred) const;
-	/** T_a_b with covariance through the chain, or through map poses plus
-	 * the cross-segment covariance when a and b are in different segments. */
-	geometry::TPoseWithCov between(uint32_t a, uint32_t b) const;
 	/** The local map's keyframes around `ref` (ref first, then by distance
 	 * from the predicted camera). */
 	std::vector<uint32_t> window(uint32_t ref, const Eigen::Isometry3d& T_map_pred) const;
