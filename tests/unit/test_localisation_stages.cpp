@@ -320,3 +320,38 @@ TEST(LocalisationStages, AgreeingPlacesConfirmAHypothesisAsConsistentFramesDo)
 	EXPECT_FALSE(w.placeFound(next, placeAgrees(next, w.estimate(), identityLink, 16.81), true, 3));
 	EXPECT_EQ(w.hypothesisPlaces(), 2);
 }
+
+// A place found in another segment of the map than the track (the survey's
+// VO broke between them): it is judged through the localiser's keyframe
+// link, which crosses the break with the map poses and a covariance that
+// says so. The map's own relative pose is defined only within a segment and
+// throws there: judged through it, such a place ended the run.
+TEST(LocalisationStages, APlaceAcrossAVoBreakOfTheMapIsJudgedNotThrown)
+{
+	const auto m = test::makeSyntheticMap(24, 4, 15);
+	TLocaliserOptions o;
+	o.cross_segment_sigma_m = 2;
+	o.cross_segment_sigma_deg = 5;
+	const CStereoLocaliser loc(*m, "mono", o);
+	ASSERT_FALSE(m->sameSegment(14, 16));
+	EXPECT_ANY_THROW(m->relativePose(14, 16));
+	const auto link = loc.between(14, 16);
+	EXPECT_TRUE(link.T.isApprox(m->keyframe(14).T_map_kf.inverse() * m->keyframe(16).T_map_kf, 1e-9));
+	EXPECT_NEAR(std::sqrt(link.cov(0, 0)), 2.0, 1e-12);
+	EXPECT_NEAR(std::sqrt(link.cov(5, 5)), 5.0 * kDeg, 1e-12);
+	// Within a segment: the map's chain.
+	EXPECT_TRUE(loc.between(3, 5).T.isApprox(m->relativePose(3, 5).T_a_b, 1e-9));
+
+	// The track predicts 1 m past keyframe 14; the place is keyframe 16,
+	// where the map frame puts that camera (agrees; the break's 2 m sigma
+	// allows a few metres), or 12 m beyond (does not).
+	const KeyframeLink through = [&loc](uint32_t a, uint32_t b) { return loc.between(a, b); };
+	TKeyframePose pred = poseAt(1.0, 0.1, 14);
+	const Eigen::Isometry3d T_16_cam = link.T.inverse() * pred.T_kf_live;
+	TKeyframePose place = poseAt(0.0, 0.05, 16);
+	place.T_kf_live = T_16_cam;
+	EXPECT_NO_THROW(placeAgrees(place, pred, through, 16.81));
+	EXPECT_TRUE(placeAgrees(place, pred, through, 16.81));
+	place.T_kf_live.translation().z() += 12.0;
+	EXPECT_FALSE(placeAgrees(place, pred, through, 16.81));
+}
