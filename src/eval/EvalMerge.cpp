@@ -33,6 +33,12 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 const char* const kPairFiles[] = {"frames.csv", "summary.json", "trajectory.tum"};
 
 double ratio(size_t a, size_t b) { return b ? static_cast<double>(a) / static_cast<double>(b) : kNaN; }
+/** The exact 95 % upper bound (Clopper-Pearson) of a false share: what the
+ * localisation issue's "under 0.1 %" is judged by (NaN without fixes). */
+double falseShareUpper(size_t falseFixes, size_t fixes)
+{
+	return fixes ? localisation::clopperPearson(falseFixes, fixes, 0.95).hi : kNaN;
+}
 
 /** Mean of the finite values; NaN if none. */
 double meanOf(const std::vector<double>& v)
@@ -312,8 +318,9 @@ TMergeResult merge(const std::string& outDir, const TEvalInputs& in, const std::
 	if (anyGt)
 	{
 		sm << "## Fixes against ground truth (pairs with ground truth on both sides)\n\n"
-		   << "| system | localiser | accepted | true | false | unverifiable | false share [%] |\n"
-		   << "|---|---|---|---|---|---|---|\n";
+		   << "| system | localiser | accepted | true | false | unverifiable | false share [%] | exact 95 % upper "
+			  "bound [%] |\n"
+		   << "|---|---|---|---|---|---|---|---|\n";
 		for (int s = 0; s < 2; s++)
 		{
 			const auto& P = pooled[s];
@@ -322,11 +329,13 @@ TMergeResult merge(const std::string& outDir, const TEvalInputs& in, const std::
 				const auto& C = P.channels.at(name);
 				sm << "| " << sysName[s] << " | " << name << " | " << C.accepted << " | " << C.true_fixes << " | "
 				   << C.false_fixes << " | " << C.unverifiable << " | "
-				   << pct(ratio(C.false_fixes, C.true_fixes + C.false_fixes)) << " |\n";
+				   << pct(ratio(C.false_fixes, C.true_fixes + C.false_fixes)) << " | "
+				   << pct(falseShareUpper(C.false_fixes, C.true_fixes + C.false_fixes), 3) << " |\n";
 			}
 			sm << "| " << sysName[s] << " | (used) | " << P.trueFixes + P.falseFixes + P.unverifiable << " | "
 			   << P.trueFixes << " | " << P.falseFixes << " | " << P.unverifiable << " | "
-			   << pct(ratio(P.falseFixes, P.trueFixes + P.falseFixes)) << " |\n";
+			   << pct(ratio(P.falseFixes, P.trueFixes + P.falseFixes)) << " | "
+			   << pct(falseShareUpper(P.falseFixes, P.trueFixes + P.falseFixes), 3) << " |\n";
 		}
 		sm << "\n## Error of the fixes used and accuracy bins\n\n"
 		   << "| system | fixes | median [m] | p95 [m] | max [m] | median [deg] | p95 [deg] | max [deg] | "
@@ -482,14 +491,18 @@ TMergeResult merge(const std::string& outDir, const TEvalInputs& in, const std::
 			js << (s ? ",\n    " : "\n    ") << jsonString(sysName[s]) << ": {\"pairs\": " << P.gtPairs
 			   << ", \"fixes_used\": {\"true\": " << P.trueFixes << ", \"false\": " << P.falseFixes
 			   << ", \"unverifiable\": " << P.unverifiable
-			   << ", \"false_share\": " << num(ratio(P.falseFixes, P.trueFixes + P.falseFixes)) << "}, \"channels\": [";
+			   << ", \"false_share\": " << num(ratio(P.falseFixes, P.trueFixes + P.falseFixes))
+			   << ", \"false_share_hi95\": " << num(falseShareUpper(P.falseFixes, P.trueFixes + P.falseFixes))
+			   << "}, \"channels\": [";
 			for (size_t c = 0; c < P.channelOrder.size(); c++)
 			{
 				const auto& C = P.channels.at(P.channelOrder[c]);
 				js << (c ? ", " : "") << "{\"channel\": " << jsonString(C.name) << ", \"accepted\": " << C.accepted
 				   << ", \"true\": " << C.true_fixes << ", \"false\": " << C.false_fixes
 				   << ", \"unverifiable\": " << C.unverifiable
-				   << ", \"false_share\": " << num(ratio(C.false_fixes, C.true_fixes + C.false_fixes)) << "}";
+				   << ", \"false_share\": " << num(ratio(C.false_fixes, C.true_fixes + C.false_fixes))
+				   << ", \"false_share_hi95\": " << num(falseShareUpper(C.false_fixes, C.true_fixes + C.false_fixes))
+				   << "}";
 			}
 			js << "], \"fix_error\": {\"fixes\": " << P.errM.size() << ", \"median_m\": " << num(percentile(P.errM, 0.5))
 			   << ", \"p95_m\": " << num(percentile(P.errM, 0.95)) << ", \"max_m\": " << num(percentile(P.errM, 1.0))
