@@ -21,15 +21,18 @@ TEST(ArchitectureAreaGraph, OnlyAllowedIncludes)
 		{"geometry", {}},
 		{"io", {"geometry"}},
 		{"features", {"geometry"}},
-		{"filters", {"image", "io"}},
+		// The channels' frame source yields the stereo model with the images.
+		{"filters", {"geometry", "image", "io"}},
 		{"map", {"features", "geometry", "io"}},
 		{"vo", {"features", "geometry", "map"}},
 		// Joins the VO and the map (and the channels' filters that the map records).
 		{"survey", {"features", "filters", "geometry", "io", "map", "vo"}},
 		// The leave-one-out evaluation surveys maps and runs the localisation.
-		{"eval", {"geometry", "io", "localisation", "map", "survey"}},
+		// ... and reads the runs' cameras through the channels' frame source.
+		{"eval", {"filters", "geometry", "io", "localisation", "map", "survey"}},
 		{"sim", {"geometry", "io"}},
-		{"datasets", {"io"}},
+		// The exporter walks the colour frames with the channels' frame source.
+		{"datasets", {"filters", "io"}},
 		{"render", {"io"}},
 		{"core", {"filters", "map"}},
 		{"localisation", {"features", "filters", "geometry", "io", "map", "vo"}},
