@@ -7,7 +7,7 @@
  *   SHADYLOC_UPDATE_GOLDEN=1 build/tests/shadyloc_tests --gtest_filter='FormatsGolden.*'
  * (the run rewrites the files and fails on purpose), then review
  * `git diff tests/golden` and commit. */
-#include <shadyloc/core/Registration.h>
+#include <shadyloc/Registration.h>
 #include <shadyloc/filters/FilterPipeline.h>
 #include <shadyloc/filters/Filters.h>
 #include <shadyloc/io/BoundedReader.h>
@@ -493,6 +493,22 @@ void checkGolden(const std::string& name, const Bytes& actual)
 
 // ---- the registry: every class listed, each round-trips to identical bytes --
 
+// The one list (src/Registration.cpp) runs when the library loads, after the
+// class ids it names are initialised: a program that calls nothing (this
+// test, alone in its process under ctest) finds every class by name.
+TEST(FormatsRegistry, ClassesAreRegisteredWhenTheLibraryLoads)
+{
+	for (const char* name :
+		 {"shadyloc::CObservationFilter", "shadyloc::CFilterMonochrome", "shadyloc::CFilterInvariant",
+		  "shadyloc::CFilterLinearise", "shadyloc::CKeyframeMap"})
+	{
+		const auto* id = mrpt::rtti::findRegisteredClass(name);
+		ASSERT_NE(id, nullptr) << name << " is not registered at load time";
+		EXPECT_STREQ(id->className, name);
+	}
+	EXPECT_NE(mrpt::rtti::classFactory("shadyloc::CFilterInvariant"), nullptr);
+}
+
 TEST(FormatsRegistry, EveryClassIsListedAndRoundTrips)
 {
 	const auto registered = registeredShadylocClasses();
@@ -502,7 +518,7 @@ TEST(FormatsRegistry, EveryClassIsListedAndRoundTrips)
 			<< name << " is registered but not covered: add it to classCases() in " << __FILE__
 			<< " (a populated instance, a field comparison) and a golden file";
 	for (const auto& [name, c] : classCases())
-		EXPECT_TRUE(registered.count(name)) << name << " is listed but not registered (src/core/Registration.cpp)";
+		EXPECT_TRUE(registered.count(name)) << name << " is listed but not registered (src/Registration.cpp)";
 
 	for (const auto& name : registered)
 	{
