@@ -27,7 +27,8 @@ TEST(ArchitectureAreaGraph, OnlyAllowedIncludes)
 		// The channels' frame source yields the stereo model with the images.
 		{"filters", {"geometry", "image", "io"}},
 		{"map", {"features", "geometry", "io"}},
-		{"vo", {"features", "geometry", "map"}},
+		// The VO's keyframes are its own type (vo/Keyframe.h); the survey joins them to the map.
+		{"vo", {"features", "geometry"}},
 		// Joins the VO and the map (and the channels' filters that the map records).
 		{"survey", {"features", "filters", "geometry", "io", "map", "vo"}},
 		// The leave-one-out evaluation surveys maps and runs the localisation.
