@@ -1,5 +1,5 @@
 /* ShadyLoc — the public face for MRPT applications: localise live colour
- * stereo observations against a keyframe map (a `shadyloc survey` .kfmap),
+ * (or filtered) stereo observations against a keyframe map (a `shadyloc survey` .kfmap),
  * one result per frame shaped like MOLA's LocalizationUpdate.
  *
  *   shadyloc::LocaliserOptions opts;
@@ -103,11 +103,18 @@ class Localiser
 	Localiser(Localiser&&) noexcept;
 	Localiser& operator=(Localiser&&) noexcept;
 
-	/** One observation of a rawlog or a driver. A rectified colour stereo
-	 * pair (CObservationStereoImages) of the live camera gives a result;
-	 * any other observation (another sensor, a filtered rawlog's derived
-	 * grey channels) gives none. Throws if the live camera's pair is grey
-	 * (the channels are made from colour) or has no right image. */
+	/** One observation of a rawlog or a driver. The live camera's stereo
+	 * observations (CObservationStereoImages, rectified) are its colour pair
+	 * (every channel made from it) or, labelled <camera><suffix>, its
+	 * channels' grey pairs (a rawlog made by `shadyloc filter`, or one
+	 * without the colour pairs): the colour pair is used if the first frame
+	 * has one, else every channel's grey pair, read from its own
+	 * observation. A result comes when a frame is
+	 * complete (the colour pair; the last of the channels' pairs of one
+	 * timestamp); any other observation gives none. Throws (naming the
+	 * observation and frame) if the live camera's colour pair is grey or has
+	 * no right image, or if the channels' observations do not pair up (same
+	 * timestamp, calibration and size, one of each per frame). */
 	std::optional<LocalisationUpdate> process(const mrpt::obs::CObservation::Ptr& obs);
 
 	/** The live camera's sensor label ("" until the first frame when chosen automatically). */

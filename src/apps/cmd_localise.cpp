@@ -5,7 +5,6 @@
 
 #include <shadyloc/core/ConfigLocation.h>
 #include <shadyloc/core/Settings.h>
-#include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/io/Tum.h>
@@ -60,17 +59,13 @@ bool sameCamera(const geometry::TStereoCalib& a, const geometry::TStereoCalib& b
 /** The live run's camera (its first frame) must be the map's: landmarks
  * projected with another calibration find nothing, and the run would end
  * with no fix and exit 0 (eval refuses such pairs too). */
-void checkLiveCamera(const CKeyframeMap& map, const std::string& mapPath, const std::string& livePath, const std::string& label)
+void checkLiveCamera(const CKeyframeMap& map, const std::string& mapPath, const std::string& livePath, const CLocaliseRun& run)
 {
-	io::TStereoFrameSourceOptions so;
-	so.sensorLabel = label;
-	io::StereoFrameSource src(livePath, so);
-	io::TStereoFrame f;
-	if (!src.next(f)) throw std::runtime_error(src.noFramesMessage());
-	if (sameCamera(f.calib, map.calibration()) && f.left.cols == map.imageWidth() && f.left.rows == map.imageHeight())
+	const auto& f = run.firstFrame();
+	if (sameCamera(f.calib, map.calibration()) && f.size.width == map.imageWidth() && f.size.height == map.imageHeight())
 		return;
 	throw std::runtime_error(
-		"live rawlog '" + livePath + "' (camera '" + label + "': " + describeCamera(f.calib, f.left.cols, f.left.rows) +
+		"live rawlog '" + livePath + "' (camera '" + f.camera + "': " + describeCamera(f.calib, f.size.width, f.size.height) +
 		") is not of the camera of map '" + mapPath + "' (" +
 		describeCamera(map.calibration(), map.imageWidth(), map.imageHeight()) +
 		"): a map localises runs of the camera that surveyed it");
@@ -86,7 +81,7 @@ int run(int argc, char** argv)
 		"trajectory.tum, summary.json and timing.json (docs/localisation.md).");
 	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> mapArg("m", "map", "keyframe map (.kfmap)", true, "", "map.kfmap", cmd);
-	TCLAP::ValueArg<std::string> in("i", "input", "live rawlog (colour stereo)", true, "", "live.rawlog", cmd);
+	TCLAP::ValueArg<std::string> in("i", "input", "live rawlog (colour stereo, or filtered by shadyloc filter: its channels are read)", true, "", "live.rawlog", cmd);
 	TCLAP::ValueArg<std::string> out(
 		"o", "output",
 		"output directory (replaced as a whole if it is empty or an earlier localise output; any other folder is "
@@ -106,7 +101,7 @@ int run(int argc, char** argv)
 		cli, "", "threads", "threads (default: [localise] threads, else 2)", 0, "N", 0, 64);
 	shadyloc::apps::NumberArg<int> startKf(
 		cli, "", "start-kf", "start at this map keyframe instead of by global search", -1, "id", -1, 1000000000);
-	TCLAP::ValueArg<std::string> label("", "label", "sensor label of the live colour stereo camera", false, "", "label", cmd);
+	TCLAP::ValueArg<std::string> label("", "label", "sensor label of the live colour stereo camera (of a filtered rawlog: the camera its channels' labels start with)", false, "", "label", cmd);
 	TCLAP::SwitchArg quiet("q", "quiet", "no progress output", cmd);
 	TCLAP::SwitchArg debug(
 		"", "debug",
@@ -173,14 +168,17 @@ int run(int argc, char** argv)
 			std::to_string(map->keyframeCount() - 1));
 	ro.startKf = startKf.isSet() ? startKf.getValue() : -1;
 	CLocaliseRun lrun(cfg, map, mapPath, livePath, ro);
-	checkLiveCamera(*map, mapPath, livePath, lrun.sensorLabel());
+	checkLiveCamera(*map, mapPath, livePath, lrun);
 	auto& sys = lrun.system();
 	if (debug.getValue()) sys.setMinLoggingLevel(mrpt::system::LVL_DEBUG);
 	if (talk)
 	{
 		std::cout << "map: " << mapPath << " (" << map->keyframeCount() << " keyframes, " << std::fixed
 				  << std::setprecision(1) << map->pathLength() << " m)\nlive: " << livePath << " ('" << lrun.sensorLabel()
-				  << "')\n[localise]\n";
+				  << "')\n";
+		for (size_t i = 0; i < lrun.source().channels().size(); i++)
+			std::cout << "channel " << lrun.source().channels()[i].label << ": " << lrun.source().describeInput(i) << "\n";
+		std::cout << "[localise]\n";
 		sys.options().dump(std::cout);
 	}
 	const auto& ups = lrun.run([&](const TLocalisationUpdate& u) {

@@ -3,8 +3,8 @@
 #include "CommandLine.h"
 
 #include <shadyloc/filters/Channel.h>
+#include <shadyloc/filters/ChannelFrameSource.h>
 #include <shadyloc/io/Csv.h>
-#include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/vo/ChannelOptions.h>
 #include <shadyloc/io/OutputTransaction.h>
@@ -21,6 +21,23 @@
 namespace
 {
 using namespace shadyloc;
+
+/** The images of a filtered rawlog are used as they are; says which filter
+ * made them, and warns when the config describes another one (a map and a
+ * live run must use the same, or their channel images are not comparable). */
+void warnAboutRecord(const filters::TChannelInput& input, const filters::TChannel& ch, const std::string& rawlog, bool quiet)
+{
+	if (!input.recorded)
+		std::cerr << "warning: " << rawlog << ": no filter record"
+				  << (input.hasRecord ? " of suffix " + ch.suffix() : std::string()) << "; the parameters of its "
+				  << ch.label << " images are unknown\n";
+	else if (!input.recorded->sameImagesAs(*ch.filter))
+		std::cerr << "warning: " << rawlog << ": its " << ch.label << " images were made with "
+				  << input.recorded->describe() << " (filter record), not with the config's [" << ch.label << "] "
+				  << ch.filter->describe() << "; the recorded images are used\n";
+	else if (!quiet)
+		std::cout << ch.label << " images made with the config's parameters (filter record)\n";
+}
 
 int run(int argc, char** argv)
 {
@@ -78,7 +95,10 @@ int run(int argc, char** argv)
 	vo::StereoVO vo(vopt, fopt);
 	vo.setMinLoggingLevel(quiet.getValue() ? mrpt::system::LVL_ERROR : mrpt::system::LVL_WARN);
 
-	const filters::TChannelInput input = filters::resolveChannelInput(in.getValue(), ch, label.getValue());
+	filters::TChannelFrameSourceOptions so;
+	so.camera = label.getValue();
+	filters::ChannelFrameSource source(in.getValue(), {ch}, so);
+	const filters::TChannelInput& input = source.input(0);
 	if (!quiet.getValue())
 	{
 		std::cout << "channel: " << ch.asString() << "\n"
@@ -89,24 +109,8 @@ int run(int argc, char** argv)
 		std::cout << "[features]\n";
 		fopt.dumpToTextStream(std::cout);
 	}
-	if (input.filtered)
-	{
-		// The images are used as they are; say which filter made them, and
-		// warn when the config describes another one (a map and a live run
-		// must use the same, or their channel images are not comparable).
-		if (!input.recorded)
-			std::cerr << "warning: " << in.getValue() << ": no filter record"
-					  << (input.hasRecord ? " of suffix " + ch.suffix() : std::string()) << "; the parameters of its "
-					  << ch.label << " images are unknown\n";
-		else if (!input.recorded->sameImagesAs(*ch.filter))
-			std::cerr << "warning: " << in.getValue() << ": its " << ch.label << " images were made with "
-					  << input.recorded->describe() << " (filter record), not with the config's [" << ch.label
-					  << "] " << ch.filter->describe() << "; the recorded images are used\n";
-		else if (!quiet.getValue())
-			std::cout << ch.label << " images made with the config's parameters (filter record)\n";
-	}
+	if (input.filtered) warnAboutRecord(input, ch, in.getValue(), quiet.getValue());
 
-	io::StereoFrameSource source(in.getValue(), input.sourceOptions);
 	io::Trajectory traj;
 	std::unique_ptr<io::CsvWriter> csv;
 	if (stats.isSet())
@@ -119,16 +123,16 @@ int run(int argc, char** argv)
 	}
 	size_t nTracked = 0;
 	double msSum = 0;
-	io::TStereoFrame fr;
+	filters::TChannelFrame fr;
 	while (source.next(fr))
 	{
 		if (fr.index == 0 && !quiet.getValue()) std::cout << "calibration: " << fr.calib.asString() << "\n";
-		if (fr.left.type() != CV_8UC1)
+		const auto& img = fr.channels[0];
+		if (img.left.type() != CV_8UC1)
 			throw std::runtime_error(
-				source.reader().where(
-					"frame " + std::to_string(fr.index) + ": channel '" + ch.label + "' gives " +
-					std::to_string(fr.left.channels()) + "-channel images; the VO needs a grey channel"));
-		const auto res = vo.process(fr.left, fr.right, fr.calib, fr.timestamp);
+				fr.where + "channel '" + ch.label + "' gives " + std::to_string(img.left.channels()) +
+				"-channel images; the VO needs a grey channel");
+		const auto res = vo.process(img.left, img.right, fr.calib, fr.timestamp);
 		traj.push_back({fr.timestamp, res.T_world_curr});
 		nTracked += vo::isTracked(res.status);
 		msSum += res.ms.total;

@@ -3,7 +3,7 @@
 #include "CommandLine.h"
 
 #include <shadyloc/core/Errors.h>
-#include <shadyloc/core/Registration.h>
+#include <shadyloc/Registration.h>
 #include <shadyloc/io/OutputTransaction.h>
 
 

@@ -2,7 +2,7 @@
 #include <shadyloc/datasets/Folder.h>
 #include <shadyloc/datasets/Kitti.h>
 #include <shadyloc/io/AtomicFile.h>
-#include <shadyloc/io/StereoFrameSource.h>
+#include <shadyloc/filters/ChannelFrameSource.h>
 #include <shadyloc/io/OutputTransaction.h>
 
 #include "Detail.h"
@@ -369,9 +369,11 @@ KittiExporter::TResult KittiExporter::run(const std::string& inRawlog, const std
 	if (options.sequence.empty() || options.sequence.find('/') != std::string::npos || options.sequence == "." ||
 		options.sequence == "..")
 		throw DatasetError("sequence '" + options.sequence + "': not a sequence name (e.g. 00)");
-	io::TStereoFrameSourceOptions sourceOpts;
-	sourceOpts.sensorLabel = options.sensorLabel;
-	io::StereoFrameSource source(inRawlog, sourceOpts);  // throws naming the file if missing
+	// No channels: the colour frames of the camera, paired and checked as
+	// every command's are (throws naming the file if missing).
+	filters::TChannelFrameSourceOptions sourceOpts;
+	sourceOpts.camera = options.sensorLabel;
+	filters::ChannelFrameSource source(inRawlog, {}, sourceOpts);
 	const fs::path seqDir = fs::path(outRoot) / "sequences" / options.sequence;
 	const fs::path posesPath = fs::path(outRoot) / "poses" / (options.sequence + ".txt");
 	// The sequence folder and its poses file are put in place together, or
@@ -409,15 +411,15 @@ KittiExporter::TResult KittiExporter::run(const std::string& inRawlog, const std
 	// KITTI sequence has one calib.txt) and that the pair is rectified
 	// (KITTI's P matrices describe a rectified pair); its errors name the
 	// object and frame.
-	io::TStereoFrame fr;
+	filters::TChannelFrame fr;
 	while (source.next(fr))
 	{
 		const size_t i = fr.index;
-		const std::string where = source.reader().where("frame " + std::to_string(i) + ": ");
+		const std::string& where = fr.where;
 		if (i == 0)
 		{
-			left = fr.camera.leftCamera;
-			right = fr.camera.rightCamera;
+			left = fr.stereoCamera.leftCamera;
+			right = fr.stereoCamera.rightCamera;
 			baseline = fr.calib.baseline;
 		}
 		const cv::Mat& L = fr.left;

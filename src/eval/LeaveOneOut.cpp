@@ -3,8 +3,8 @@
 #include <shadyloc/core/ConfigLocation.h>
 #include <shadyloc/core/Settings.h>
 #include <shadyloc/eval/LeaveOneOut.h>
+#include <shadyloc/filters/ChannelFrameSource.h>
 #include <shadyloc/io/OutputTransaction.h>
-#include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/localisation/LocaliseRun.h>
 #include <shadyloc/map/CKeyframeMap.h>
@@ -54,25 +54,24 @@ struct TCamera
 	std::string label;
 };
 
-/** The colour stereo camera of a run, from its first frame. */
-TCamera cameraOf(const std::string& listPath, const TRun& r)
+/** The stereo camera of a run, from its first frame, as the localisation
+ * reads it: the config's channels, read from a filtered run or made from
+ * colour (nothing is made here: only the calibration is looked at). */
+TCamera cameraOf(const std::string& listPath, const TRun& r, const std::vector<filters::TChannel>& channels)
 {
 	const std::string at = runWhere(listPath, r) + ": '" + r.rawlogPath + "'";
 	TCamera c;
 	try
 	{
-		c.label = io::findStereoLabel(r.rawlogPath, io::labelWithoutSuffixes({"_mono", "_inv", "_lin"}));
-		if (c.label.empty()) throw std::runtime_error("no colour stereo observations (the channels are made from them)");
-		io::TStereoFrameSourceOptions so;
-		so.sensorLabel = c.label;
-		io::StereoFrameSource src(r.rawlogPath, so);
-		io::TStereoFrame f;
+		filters::TChannelFrameSourceOptions so;
+		so.makeChannels = false;
+		filters::ChannelFrameSource src(r.rawlogPath, channels, so);
+		filters::TChannelFrame f;
 		if (!src.next(f)) throw std::runtime_error(src.noFramesMessage());
-		if (f.left.type() != CV_8UC3)
-			throw std::runtime_error("'" + c.label + "' is not a colour pair; the invariant channel needs colour images");
+		c.label = f.camera;
 		c.calib = f.calib;
-		c.width = f.left.cols;
-		c.height = f.left.rows;
+		c.width = f.size.width;
+		c.height = f.size.height;
 	}
 	catch (const std::exception& e)
 	{
@@ -282,8 +281,11 @@ TEvalInputs TEvalInputs::Load(
 		// One camera for every run: a map refuses live data whose descriptor
 		// parameters differ, and pairs of different cameras are not the
 		// paper's comparison.
+		std::vector<filters::TChannel> channels;
+		for (const auto& ch : localisation::CLocalisationSystem::SetupFromConfig(*in.m_cfg, {}, 0, cfgNames).channels)
+			channels.push_back(ch.channel);
 		std::vector<TCamera> cams;
-		for (const auto& r : in.runs) cams.push_back(cameraOf(runsPath, r));
+		for (const auto& r : in.runs) cams.push_back(cameraOf(runsPath, r, channels));
 		for (size_t i = 1; i < cams.size(); i++)
 			if (!sameCalib(cams[i].calib, cams[0].calib) || cams[i].width != cams[0].width ||
 				cams[i].height != cams[0].height)

@@ -186,17 +186,3 @@ void CObservationFilter::deserializeCommon(io::BoundedReader& in)
 	in.readString(common.output_suffix, "output_suffix", kMaxOptionStringBytes);
 	in.readString(common.sensor_labels, "sensor_labels", kMaxOptionStringBytes);
 }
-
-// Registered after this file's class id is initialised (see Filters.cpp).
-namespace
-{
-/** A static object, not MRPT_INITIALIZER (a constructor function, which
- * clang may run before this file's dynamic initialisation). */
-struct TRegister
-{
-	TRegister()
-	{
-		mrpt::rtti::registerClass(CLASS_ID(shadyloc::CObservationFilter));
-	}
-} s_register;
-}  // namespace

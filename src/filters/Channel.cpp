@@ -1,5 +1,6 @@
 /* ShadyLoc — image channels as filter objects. */
 #include <shadyloc/filters/Channel.h>
+#include <shadyloc/io/StereoFrameSource.h>
 
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/obs/CObservationStereoImages.h>
@@ -120,19 +121,14 @@ TChannelInput resolveChannelInput(const std::string& rawlog, const TChannel& cha
 			if (f->common.output_suffix == channel.suffix() && !in.recorded) in.recorded = f;
 		}
 	}
+	in.derivedSuffixes = derived;
 	in.sensorLabel = io::findStereoLabel(rawlog, io::labelWithSuffix(channel.suffix(), cameraLabel));
 	in.filtered = !in.sensorLabel.empty();
 	if (!in.filtered)
 	{
 		in.recorded.reset();
 		in.sensorLabel = cameraLabel;
-		in.sourceOptions.acceptLabel = io::labelWithoutSuffixes(derived);
-		const CObservationFilter::Ptr f = channel.filter;
-		in.sourceOptions.transform = [f](const std::vector<cv::Mat>& a, std::vector<cv::Mat>& b) {
-			f->transformImages(a, b);
-		};
 	}
-	in.sourceOptions.sensorLabel = in.sensorLabel;
 	return in;
 }
 

@@ -257,23 +257,3 @@ void CFilterLinearise::serializeFrom(mrpt::serialization::CArchive& in, uint8_t 
 		default: MRPT_THROW_UNKNOWN_SERIALIZATION_VERSION(version);
 	};
 }
-
-// Registered here, after this file's class ids are initialised (one file is
-// initialised in order of definition): the ids hold a std::function, so they
-// are initialised at load time, in an order across files that the compiler
-// chooses (clang: after core/Registration.cpp).
-namespace
-{
-/** A static object, not MRPT_INITIALIZER (a constructor function, which
- * clang may run before this file's dynamic initialisation). */
-struct TRegister
-{
-	TRegister()
-	{
-		using namespace mrpt::rtti;
-		registerClass(CLASS_ID(shadyloc::CFilterMonochrome));
-		registerClass(CLASS_ID(shadyloc::CFilterInvariant));
-		registerClass(CLASS_ID(shadyloc::CFilterLinearise));
-	}
-} s_register;
-}  // namespace

@@ -15,9 +15,8 @@ bool endsWith(const std::string& s, const std::string& suf)
 {
 	return s.size() >= suf.size() && s.compare(s.size() - suf.size(), suf.size(), suf) == 0;
 }
+}  // namespace
 
-/** What differs between two stored calibrations, "" if nothing. Exact
- * comparison: every frame of one camera carries the same copied numbers. */
 std::string calibrationDifference(const mrpt::img::TStereoCamera& a, const mrpt::img::TStereoCamera& b)
 {
 	auto cam = [](const mrpt::img::TCamera& x, const mrpt::img::TCamera& y, const char* eye) -> std::string {
@@ -47,7 +46,6 @@ std::string calibrationDifference(const mrpt::img::TStereoCamera& a, const mrpt:
 		}
 	return "";
 }
-}  // namespace
 
 std::function<bool(const std::string&)> labelWithSuffix(const std::string& suffix, const std::string& base)
 {
@@ -105,6 +103,61 @@ std::string StereoFrameSource::noFramesMessage() const
 		   " (other labels: " + (labels.empty() ? "none" : labels) + ")";
 }
 
+void StereoFrameChecker::take(const mrpt::obs::CObservationStereoImages::Ptr& st, const std::string& where, TStereoFrame& f)
+{
+	if (!st->hasImageRight) throw RawlogError(where + "stereo observation without a right image");
+	try
+	{
+		loadExternalImages(*st);
+	}
+	catch (const std::exception& e)
+	{
+		throw RawlogError(where + e.what());
+	}
+	f.obs = st;
+	f.sensorLabel = st->sensorLabel;
+	f.timestamp = mrpt::Clock::toDouble(st->timestamp);
+	// Trajectories, ground-truth lookups and frame rates assume time
+	// moves forward: a repeated or earlier time is a damaged input.
+	if (m_frames > 0 && !(f.timestamp > m_lastTime))
+		throw RawlogError(
+			where + "timestamp " + secondsText(f.timestamp) + " s is not after frame " + std::to_string(m_frames - 1) +
+			"'s (" + secondsText(m_lastTime) + " s): frame times must increase");
+	m_lastTime = f.timestamp;
+	f.left = st->imageLeft.asCvMatRef();
+	f.right = st->imageRight.asCvMatRef();
+	if (f.left.empty() || f.right.empty() || f.left.size() != f.right.size())
+		throw RawlogError(
+			where + "empty or mismatched left/right images (" + std::to_string(f.left.cols) + "x" +
+			std::to_string(f.left.rows) + " / " + std::to_string(f.right.cols) + "x" + std::to_string(f.right.rows) +
+			")");
+	st->getStereoCameraParams(f.camera);
+	if (m_frames == 0)
+	{
+		try
+		{
+			m_calib = geometry::TStereoCalib::FromObservation(*st);
+		}
+		catch (const std::exception& e)
+		{
+			throw RawlogError(where + e.what());
+		}
+		m_camera = f.camera;
+		m_size = f.left.size();
+	}
+	else
+	{
+		if (const auto d = calibrationDifference(m_camera, f.camera); !d.empty())
+			throw RawlogError(where + "calibration differs from frame 0: " + d);
+		if (f.left.size() != m_size)
+			throw RawlogError(
+				where + "image size " + std::to_string(f.left.cols) + "x" + std::to_string(f.left.rows) +
+				" differs from frame 0 (" + std::to_string(m_size.width) + "x" + std::to_string(m_size.height) + ")");
+	}
+	f.calib = m_calib;
+	m_frames++;
+}
+
 bool StereoFrameSource::next(TStereoFrame& f)
 {
 	using mrpt::obs::CObservationStereoImages;
@@ -129,79 +182,11 @@ bool StereoFrameSource::next(TStereoFrame& f)
 			if (!o->sensorLabel.empty() && o->sensorLabel != m_label) m_otherLabels.insert(o->sensorLabel);
 			continue;
 		}
-
 		const std::string where = "'" + path() + "': object #" + std::to_string(m_pendingObject) + ": frame " +
 								  std::to_string(m_frames) + " (sensor '" + m_label + "'): ";
-		if (!st->hasImageRight) throw RawlogError(where + "stereo observation without a right image");
-		try
-		{
-			loadExternalImages(*st);
-		}
-		catch (const std::exception& e)
-		{
-			throw RawlogError(where + e.what());
-		}
-		f.obs = st;
-		f.index = m_frames;
+		m_check.take(st, where, f);
+		f.index = m_frames++;
 		f.object = m_pendingObject;
-		f.sensorLabel = m_label;
-		f.timestamp = mrpt::Clock::toDouble(st->timestamp);
-		// Trajectories, ground-truth lookups and frame rates assume time
-		// moves forward: a repeated or earlier time is a damaged input.
-		if (m_frames > 0 && !(f.timestamp > m_lastTime))
-			throw RawlogError(
-				where + "timestamp " + secondsText(f.timestamp) + " s is not after frame " +
-				std::to_string(m_frames - 1) + "'s (" + secondsText(m_lastTime) + " s): frame times must increase");
-		m_lastTime = f.timestamp;
-		f.left = st->imageLeft.asCvMatRef();
-		f.right = st->imageRight.asCvMatRef();
-		if (f.left.empty() || f.right.empty() || f.left.size() != f.right.size())
-			throw RawlogError(
-				where + "empty or mismatched left/right images (" + std::to_string(f.left.cols) + "x" +
-				std::to_string(f.left.rows) + " / " + std::to_string(f.right.cols) + "x" +
-				std::to_string(f.right.rows) + ")");
-		st->getStereoCameraParams(f.camera);
-		if (m_frames == 0)
-		{
-			try
-			{
-				m_calib = geometry::TStereoCalib::FromObservation(*st);
-			}
-			catch (const std::exception& e)
-			{
-				throw RawlogError(where + e.what());
-			}
-			m_camera = f.camera;
-			m_size = f.left.size();
-		}
-		else
-		{
-			if (const auto d = calibrationDifference(m_camera, f.camera); !d.empty())
-				throw RawlogError(where + "calibration differs from frame 0: " + d);
-			if (f.left.size() != m_size)
-				throw RawlogError(
-					where + "image size " + std::to_string(f.left.cols) + "x" + std::to_string(f.left.rows) +
-					" differs from frame 0 (" + std::to_string(m_size.width) + "x" +
-					std::to_string(m_size.height) + ")");
-		}
-		f.calib = m_calib;
-		if (m_opts.transform)
-		{
-			std::vector<cv::Mat> out;
-			try
-			{
-				m_opts.transform({f.left, f.right}, out);
-			}
-			catch (const std::exception& e)
-			{
-				throw RawlogError(where + e.what());
-			}
-			if (out.size() != 2 || out[0].empty() || out[1].empty())
-				throw RawlogError(where + "the image transform returned no pair");
-			f.left = out[0];
-			f.right = out[1];
-		}
-		m_frames++;
 		return true;
 	}
 }

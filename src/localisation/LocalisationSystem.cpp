@@ -384,7 +384,7 @@ TLocalisationUpdate CLocalisationSystem::processObservation(const mrpt::obs::COb
 }
 
 void CLocalisationSystem::frontEnd(
-	const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib, double timestamp,
+	const ChannelImages& images, const geometry::TStereoCalib& calib, double timestamp,
 	std::vector<features::TStereoFrame>& meas, TLocalisationUpdate& u)
 {
 	const bool par = m_opts.threads >= 2 && m_pipes.size() >= 2;
@@ -397,7 +397,7 @@ void CLocalisationSystem::frontEnd(
 		cv::Mat gl, gr;
 		try
 		{
-			m_pipes[i].setup.channel.convertPair(left, right, gl, gr);
+			images(i, gl, gr);
 		}
 		catch (const std::exception& e)
 		{
@@ -553,13 +553,22 @@ void CLocalisationSystem::searchPlace(
 TLocalisationUpdate CLocalisationSystem::processFrame(
 	const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib, double timestamp)
 {
+	// Each channel made from the colour pair on the thread that extracts it.
+	return processChannels(
+		[&](size_t i, cv::Mat& l, cv::Mat& r) { m_pipes[i].setup.channel.convertPair(left, right, l, r); }, calib,
+		timestamp);
+}
+
+TLocalisationUpdate CLocalisationSystem::processChannels(
+	const ChannelImages& images, const geometry::TStereoCalib& calib, double timestamp)
+{
 	TLocalisationUpdate u;
 	u.frame = m_frame++;
 	u.timestamp = timestamp;
 	const size_t n = m_pipes.size();
 	const auto tAll = Clock::now();
 	std::vector<features::TStereoFrame> meas;
-	frontEnd(left, right, calib, timestamp, meas, u);
+	frontEnd(images, calib, timestamp, meas, u);
 
 	// ---- the predictor: the track composed with VO's step
 	const TKeyframePose pred = m_track.predict(u.motion);

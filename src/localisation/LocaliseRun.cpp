@@ -2,7 +2,6 @@
 #include <shadyloc/core/Settings.h>
 #include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/io/Csv.h>
-#include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/localisation/LocaliseRun.h>
 #include <shadyloc/localisation/Oracle.h>
@@ -169,25 +168,39 @@ CLocaliseRun::CLocaliseRun(
 		m_sys->setStartKeyframe(static_cast<uint32_t>(o.startKf));
 	}
 
-	// ---- the live run's colour stereo pair (each channel is made from it)
-	std::vector<std::string> suffixes;
-	for (const auto& l : m_sys->channelLabels()) suffixes.push_back(m_sys->channelSetup(l).channel.suffix());
-	for (const char* s : {"_mono", "_inv", "_lin"}) suffixes.push_back(s);
-	m_label = o.sensorLabel;
-	if (m_label.empty())
-	{
-		m_label = io::findStereoLabel(livePath, io::labelWithoutSuffixes(suffixes));
-		if (m_label.empty())
-		{
-			const std::string any = io::findStereoLabel(livePath, [](const std::string&) { return true; });
-			std::string chans;
-			for (const auto& l : m_sys->channelLabels()) chans += (chans.empty() ? "" : ", ") + l;
-			throw std::runtime_error(
-				"live rawlog '" + livePath + "': no colour stereo observations" +
-				(any.empty() ? std::string(" at all") : " (only derived channel images such as '" + any + "')") +
-				"; the localisers need the colour images to make their channels (" + chans + ")");
-		}
-	}
+	openLive(o.sensorLabel);
+}
+
+void CLocaliseRun::openLive(const std::string& camera)
+{
+	// Each channel read from a filtered rawlog, or made from the colour pair
+	// on the system's threads (as processFrame would).
+	std::vector<filters::TChannel> chans;
+	for (const auto& l : m_sys->channelLabels()) chans.push_back(m_sys->channelSetup(l).channel);
+	filters::TChannelFrameSourceOptions so;
+	so.camera = camera;
+	so.makeChannels = false;
+	m_source = std::make_unique<filters::ChannelFrameSource>(m_livePath, chans, so);
+	for (size_t i = 0; i < chans.size(); i++) checkRecordedFilter(m_source->input(i), chans[i], m_livePath);
+	m_first.emplace();
+	if (!m_source->next(*m_first)) throw std::runtime_error(m_source->noFramesMessage());
+	m_label = m_first->camera;
+}
+
+void checkRecordedFilter(const filters::TChannelInput& in, const filters::TChannel& ch, const std::string& rawlog)
+{
+	if (!in.filtered) return;
+	// The map was checked against the config's filter: images another filter
+	// made would not be what the map's channel compares with.
+	const std::string what = "live rawlog '" + rawlog + "': its " + ch.label + " images '" + in.sensorLabel + "'";
+	if (!in.recorded)
+		throw std::runtime_error(
+			what + " have no filter record" + (in.hasRecord ? " of suffix " + ch.suffix() : std::string()) +
+			": how they were made is unknown (localise the colour original, or filter it again with shadyloc filter)");
+	if (!in.recorded->sameImagesAs(*ch.filter))
+		throw std::runtime_error(
+			what + " were made with " + in.recorded->describe() + " (filter record), not with the config's [" +
+			ch.label + "] " + ch.filter->describe() + " (localise the colour original, or filter it with the config)");
 }
 
 CLocaliseRun::~CLocaliseRun() = default;
@@ -201,29 +214,40 @@ void CLocaliseRun::enableOracle(const io::Trajectory& gt)
 
 const std::vector<TLocalisationUpdate>& CLocaliseRun::run(const std::function<void(const TLocalisationUpdate&)>& onFrame)
 {
-	io::TStereoFrameSourceOptions so;
-	so.sensorLabel = m_label;
-	io::StereoFrameSource source(m_livePath, so);
+	if (!m_first) throw std::logic_error("CLocaliseRun::run: called twice");
 	m_ups.clear();
-	io::TStereoFrame fr;
-	while (source.next(fr))
+	filters::TChannelFrame fr = std::move(*m_first);
+	m_first.reset();
+	do
 	{
-		if (fr.left.type() != CV_8UC3)
-			throw std::runtime_error(source.reader().where(
-				"frame " + std::to_string(fr.index) + ": '" + m_label +
-				"' is not a colour pair; the invariant channel needs colour images"));
+		// A channel read is used as it is; one made from colour is made on
+		// the system's thread for that channel.
+		const auto images = [&](size_t i, cv::Mat& l, cv::Mat& r) {
+			m_source->make(fr, i);
+			l = fr.channels[i].left;
+			r = fr.channels[i].right;
+		};
 		try
 		{
-			m_ups.push_back(m_sys->processFrame(fr.left, fr.right, fr.calib, fr.timestamp));
+			m_ups.push_back(m_sys->processChannels(images, fr.calib, fr.timestamp));
+		}
+		catch (const io::RawlogError&)
+		{
+			throw;	// names file and frame already
 		}
 		catch (const std::exception& e)
 		{
-			throw std::runtime_error(source.reader().where(e.what()));
+			throw std::runtime_error(fr.where + e.what());
 		}
 		if (onFrame) onFrame(m_ups.back());
-	}
-	if (m_ups.empty()) throw std::runtime_error(source.noFramesMessage());
+	} while (m_source->next(fr));
 	return m_ups;
+}
+
+const filters::TChannelFrame& CLocaliseRun::firstFrame() const
+{
+	if (!m_first) throw std::logic_error("CLocaliseRun::firstFrame: the run has started");
+	return *m_first;
 }
 
 // ---------------------------------------------------------------------------

@@ -1,10 +1,13 @@
 /* ShadyLoc — the public face (include/shadyloc/Localiser.h) over the
  * combined localisation system: options through the strict readers, the
- * live camera picked from a stream of observations, the system's per-frame
- * record turned into a MOLA-shaped update. No localisation logic here. */
+ * live camera picked from a stream of observations and its frames paired by
+ * the channels' frame assembler (colour, or a filtered rawlog's channels),
+ * the system's per-frame record turned into a MOLA-shaped update. No
+ * localisation logic here. */
 #include <shadyloc/Localiser.h>
 #include <shadyloc/core/Settings.h>
 #include <shadyloc/geometry/PoseCovariance.h>
+#include <shadyloc/filters/ChannelFrameSource.h>
 #include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/localisation/LocaliseRun.h>
@@ -103,6 +106,10 @@ struct Localiser::Impl
 	std::unique_ptr<CLocalisationSystem> sys;
 	std::string label;	//!< the live camera ("" until chosen)
 	std::function<bool(const std::string&)> notDerived;	//!< false for a label with a channel's suffix (a filtered rawlog's)
+	/** Pairs the live camera's observations into frames: its colour pair,
+	 * or its channels' grey pairs (made when the first live one arrives). */
+	std::unique_ptr<filters::ChannelFrameAssembler> frames;
+	size_t offered = 0;	 //!< stereo observations offered (named in errors)
 	std::optional<TLocalisationUpdate> last;
 
 	Impl(CKeyframeMap::Ptr m, const LocaliserOptions& o) : map(std::move(m)), label(o.sensor_label)
@@ -118,19 +125,58 @@ struct Localiser::Impl
 		notDerived = io::labelWithoutSuffixes(suffixes);
 	}
 
-	/** True for a pair of the live camera; picks it when not given. */
-	bool isLive(const mrpt::obs::CObservationStereoImages& obs)
+	/** The camera whose channel `ch` an observation labelled `l` is, or "". */
+	std::string cameraOfChannel(const std::string& l, const filters::TChannel& ch) const
 	{
-		if (label.empty())
+		const std::string& s = ch.suffix();
+		if (s.empty() || l.size() <= s.size() || l.compare(l.size() - s.size(), s.size(), s) != 0) return "";
+		const std::string cam = l.substr(0, l.size() - s.size());
+		return label.empty() || cam == label ? cam : "";
+	}
+
+	/** The assembler for the camera `label`: colour (every channel made from
+	 * it), or every channel's grey pair read from its own observations. */
+	void assemble(bool read)
+	{
+		filters::TChannelPlan plan;
+		plan.camera = label;
+		for (const auto& l : sys->channelLabels())
 		{
-			if (!notDerived(obs.sensorLabel)) return false;
-			label = obs.sensorLabel;
+			plan.channels.push_back(sys->channelSetup(l).channel);
+			filters::TChannelInput in;
+			in.filtered = read;
+			in.sensorLabel = read ? label + plan.channels.back().suffix() : label;
+			plan.inputs.push_back(in);
 		}
-		if (obs.sensorLabel != label) return false;
-		if (!obs.imageLeft.isColor())
+		frames = std::make_unique<filters::ChannelFrameAssembler>(plan, false);
+	}
+
+	/** At the first live observation: its camera's colour pair, or its
+	 * channels' grey pairs when the observation is one of them. */
+	bool choose(const mrpt::obs::CObservationStereoImages& obs)
+	{
+		std::string cam;
+		for (const auto& l : sys->channelLabels())
+			if (cam.empty()) cam = cameraOfChannel(obs.sensorLabel, sys->channelSetup(l).channel);
+		if (cam.empty() && !(label.empty() ? notDerived(obs.sensorLabel) : obs.sensorLabel == label)) return false;
+		label = cam.empty() ? obs.sensorLabel : cam;
+		assemble(!cam.empty());
+		return true;
+	}
+
+	/** The frame the observation completes, if any. */
+	bool frameOf(const mrpt::obs::CObservationStereoImages::Ptr& obs, filters::TChannelFrame& f)
+	{
+		if (!frames && !choose(*obs)) return false;
+		const bool colour = frames->plan().needsColour();
+		// The colour pair wins while no frame is done: a filtered rawlog
+		// holds both, and colour is what the channels are made from.
+		if (!colour && frames->frames() == 0 && obs->sensorLabel == label) assemble(false);
+		if (frames->plan().needsColour() && obs->sensorLabel == label && !obs->imageLeft.isColor())
 			throw std::invalid_argument(
 				"Localiser: '" + label + "' is a grey stereo pair; the localisers make their channels from colour images");
-		return true;
+		const size_t k = offered++;
+		return frames->add(obs, k, "Localiser: stereo observation #" + std::to_string(k), f);
 	}
 
 	LocalisationUpdate toUpdate(const TLocalisationUpdate& u, mrpt::Clock::time_point stamp) const
@@ -188,8 +234,16 @@ Localiser& Localiser::operator=(Localiser&&) noexcept = default;
 std::optional<LocalisationUpdate> Localiser::process(const mrpt::obs::CObservation::Ptr& obs)
 {
 	const auto stereo = std::dynamic_pointer_cast<mrpt::obs::CObservationStereoImages>(obs);
-	if (!stereo || !m_impl->isLive(*stereo)) return std::nullopt;
-	m_impl->last = m_impl->sys->processObservation(*stereo);
+	filters::TChannelFrame f;
+	if (!stereo || !m_impl->frameOf(stereo, f)) return std::nullopt;
+	// Channels made from colour on the system's threads, as processFrame does.
+	const auto& frames = *m_impl->frames;
+	const auto images = [&](size_t i, cv::Mat& l, cv::Mat& r) {
+		frames.make(f, i);
+		l = f.channels[i].left;
+		r = f.channels[i].right;
+	};
+	m_impl->last = m_impl->sys->processChannels(images, f.calib, f.timestamp);
 	return m_impl->toUpdate(*m_impl->last, stereo->timestamp);
 }
 
@@ -207,6 +261,7 @@ void Localiser::reset()
 {
 	m_impl->sys->reset();
 	m_impl->last.reset();
+	m_impl->frames.reset();  // a new run may come from another kind of input
 }
 
 }  // namespace shadyloc

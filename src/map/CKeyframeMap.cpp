@@ -42,16 +42,6 @@ MAP_DEFINITION_REGISTER("shadyloc::CKeyframeMap,keyframeMap", shadyloc::CKeyfram
 
 namespace
 {
-/** Registered at load time by a static object after the class id is
- * initialised (see src/core/Registration.cpp for why not MRPT_INITIALIZER). */
-struct TRegisterKeyframeMap
-{
-	TRegisterKeyframeMap() { mrpt::rtti::registerClass(CLASS_ID(shadyloc::CKeyframeMap)); }
-} s_registerKeyframeMap;
-}  // namespace
-
-namespace
-{
 constexpr const char* kClass = "shadyloc::CKeyframeMap";
 // Bytes per stored measurement: uL, v, disparity, response (u16 each), zncc
 // (i8), BRIEF (32), patch.

@@ -1,7 +1,7 @@
 /* ShadyLoc — a survey rawlog into a keyframe map (docs/map.md). */
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/features/SurfaceNormals.h>
-#include <shadyloc/io/StereoFrameSource.h>
+#include <shadyloc/filters/ChannelFrameSource.h>
 #include <shadyloc/survey/SurveyBuilder.h>
 #include <shadyloc/survey/SurveyRun.h>
 #include <shadyloc/vo/ChannelOptions.h>
@@ -18,24 +18,14 @@ namespace shadyloc::survey
 {
 namespace
 {
-/** One channel of the survey: the filter that makes it, where its frames
- * come from, and its feature extractor. */
+/** One channel of the survey: the filter that makes it and its feature
+ * extractor (its frames come from the survey's one frame source). */
 struct TSurveyChannel
 {
 	filters::TChannel channel;
-	filters::TChannelInput input;
 	features::StereoFeatureExtractor extractor;
 	map::TChannelParams params;	 //!< what the map records
-	std::unique_ptr<io::StereoFrameSource> source;
-	io::TStereoFrame frame;	 //!< the current frame
 };
-
-bool sameCalib(const geometry::TStereoCalib& a, const geometry::TStereoCalib& b)
-{
-	const auto eq = [](double x, double y) { return std::abs(x - y) <= 1e-9 * std::max(1.0, std::abs(x)); };
-	return eq(a.fx, b.fx) && eq(a.fy, b.fy) && eq(a.cx, b.cx) && eq(a.cy, b.cy) && eq(a.cxR, b.cxR) &&
-		   eq(a.baseline, b.baseline);
-}
 }  // namespace
 
 struct CSurveyRun::TImpl
@@ -44,6 +34,7 @@ struct CSurveyRun::TImpl
 	TSurveyRunOptions opts;
 	CKeyframeMap::Ptr map;
 	std::vector<TSurveyChannel> channels;
+	std::unique_ptr<filters::ChannelFrameSource> source;  //!< every channel's frames, paired
 	vo::TStereoVOOptions voOptions;	 //!< of the chain's VO (its matcher re-finds landmarks)
 	std::unique_ptr<vo::StereoVO> voChain;
 	size_t bridgeIndex = 0;	 //!< the bridge VO's channel (0: none)
@@ -55,6 +46,17 @@ namespace
 {
 /** Run names end up in frames.csv (kf_run), file names and messages:
  * letters, digits, '_', '-' and '.' only, so that none needs quoting. */
+/** The survey's features need grey images: a channel whose filter makes
+ * colour ones (a linearised colour channel) cannot be stored. */
+void checkGrey(const filters::TChannelFrame& fr)
+{
+	for (const auto& c : fr.channels)
+		if (c.left.type() != CV_8UC1)
+			throw std::runtime_error(
+				fr.where + "channel '" + c.label + "': " + std::to_string(c.left.channels()) +
+				"-channel images; the survey needs grey ones");
+}
+
 void checkRunName(const std::string& name, const std::string& what)
 {
 	const auto ok = [](unsigned char c) { return std::isalnum(c) || c == '_' || c == '-' || c == '.'; };
@@ -80,6 +82,32 @@ size_t bridgeChannelIndex(const std::vector<TSurveyChannel>& channels, const std
 }
 }  // namespace
 
+namespace
+{
+/** What the map records for a channel: the filter that made its images
+ * (for a filtered rawlog the one its record names, not the config's) and
+ * its features. Throws for derived images without a record. */
+map::TChannelParams recordedParams(
+	const mrpt::config::CConfigFileBase& cfg, const filters::TChannel& ch, const filters::TChannelInput& in,
+	const std::string& inPath, const std::string& cfgName, std::vector<std::string>& warnings)
+{
+	const auto fo = vo::featureOptionsFor(cfg, ch.label);
+	if (!in.filtered) return channelParams(ch.label, *ch.filter, fo);
+	if (!in.recorded)
+		throw std::runtime_error(
+			inPath + ": holds " + ch.label + " images '" + in.sensorLabel + "' but no filter record" +
+			(in.hasRecord ? " of suffix " + ch.suffix() : std::string()) +
+			": how they were made is unknown, so the map could not be checked against live data (re-filter "
+			"it with shadyloc filter, or survey the unfiltered run)");
+	if (!in.recorded->sameImagesAs(*ch.filter))
+		warnings.push_back(
+			inPath + ": its " + ch.label + " images were made with " + in.recorded->describe() +
+			" (filter record), not with " + cfgName + "'s [" + ch.label + "] " + ch.filter->describe() +
+			"; the map records the filter that made them");
+	return channelParams(ch.label, *in.recorded, fo);
+}
+}  // namespace
+
 CSurveyRun::CSurveyRun(const std::string& inPath, const mrpt::config::CConfigFileBase& cfg, const TSurveyRunOptions& o)
 	: mrpt::system::COutputLogger("CSurveyRun"), m_impl(std::make_unique<TImpl>())
 {
@@ -91,38 +119,23 @@ CSurveyRun::CSurveyRun(const std::string& inPath, const mrpt::config::CConfigFil
 	if (cfg.sectionExists("map")) I.map->options.loadFromConfigFile(cfg, "map");
 	if (o.channels.empty()) throw std::invalid_argument("--channels: no channel named");
 	const std::string& cfgName = o.configName;
+	std::vector<filters::TChannel> chans;
 	for (const auto& name : o.channels)
 	{
-		TSurveyChannel c{
-			filters::channelFromConfig(cfg, name, cfgName), {}, features::StereoFeatureExtractor(), {}, {}, {}};
+		TSurveyChannel c{filters::channelFromConfig(cfg, name, cfgName), features::StereoFeatureExtractor(), {}};
 		for (const auto& other : I.channels)
 			if (other.channel.label == c.channel.label)
 				throw std::invalid_argument("--channels: channel '" + c.channel.label + "' given twice");
-		c.input = filters::resolveChannelInput(inPath, c.channel, o.sensorLabel);
 		const auto fo = vo::featureOptionsFor(cfg, c.channel.label);
 		c.extractor = features::StereoFeatureExtractor(fo);
-		// The map records what made the images: for a filtered rawlog the
-		// filter its record names, not the config's.
-		const CObservationFilter* madeBy = c.channel.filter.get();
-		if (c.input.filtered)
-		{
-			if (!c.input.recorded)
-				throw std::runtime_error(
-					inPath + ": holds " + c.channel.label + " images '" + c.input.sensorLabel + "' but no filter record" +
-					(c.input.hasRecord ? " of suffix " + c.channel.suffix() : std::string()) +
-					": how they were made is unknown, so the map could not be checked against live data (re-filter "
-					"it with shadyloc filter, or survey the unfiltered run)");
-			madeBy = c.input.recorded.get();
-			if (!c.input.recorded->sameImagesAs(*c.channel.filter))
-				m_warnings.push_back(
-					inPath + ": its " + c.channel.label + " images were made with " + c.input.recorded->describe() +
-					" (filter record), not with " + cfgName + "'s [" + c.channel.label + "] " +
-					c.channel.filter->describe() + "; the map records the filter that made them");
-		}
-		c.params = channelParams(c.channel.label, *madeBy, fo);
-		c.source = std::make_unique<io::StereoFrameSource>(inPath, c.input.sourceOptions);
+		chans.push_back(c.channel);
 		I.channels.push_back(std::move(c));
 	}
+	filters::TChannelFrameSourceOptions so;
+	so.camera = o.sensorLabel;
+	I.source = std::make_unique<filters::ChannelFrameSource>(inPath, chans, so);
+	for (size_t i = 0; i < I.channels.size(); i++)
+		I.channels[i].params = recordedParams(cfg, I.channels[i].channel, I.source->input(i), inPath, cfgName, m_warnings);
 	I.voOptions = vo::voOptionsFor(cfg, I.channels[0].channel.label);
 	I.voChain = std::make_unique<vo::StereoVO>(I.voOptions, I.channels[0].extractor.options());
 	I.bridgeIndex = bridgeChannelIndex(I.channels, o.bridgeChannel);
@@ -144,12 +157,8 @@ void CSurveyRun::describe(std::ostream& out) const
 {
 	const auto& I = *m_impl;
 	out << "survey of " << I.inPath << "\n";
-	for (const auto& c : I.channels)
-		out << "channel " << c.params.asString() << "\n  "
-			<< (c.input.filtered ? "from the filtered observations '" + c.input.sensorLabel + "'"
-								 : "filtered on the fly from the colour camera" +
-									   (c.input.sensorLabel.empty() ? std::string() : " '" + c.input.sensorLabel + "'"))
-			<< "\n";
+	for (size_t i = 0; i < I.channels.size(); i++)
+		out << "channel " << I.channels[i].params.asString() << "\n  " << I.source->describeInput(i) << "\n";
 	out << "keyframe chain: the " << I.channels[0].channel.label << " VO"
 		<< (I.voBridge ? ", its breaks bridged by the " + I.channels[I.bridgeIndex].channel.label + " VO" : std::string())
 		<< "\n[map]\n";
@@ -170,59 +179,31 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 	size_t& nFrames = m_stats.frames;
 	std::optional<vo::TChainReference> bridgeAtLast;  // the last map keyframe as the bridge VO saw it
 
-	// The channels' sources walk the rawlog in lockstep: the same frame index
-	// and timestamp from each, or the run is refused.
+	// One frame source pairs the channels' images (read or made) per frame.
+	filters::TChannelFrame fr;
 	for (;;)
 	{
-		const auto tf = std::chrono::steady_clock::now();
-		size_t have = 0;
-		for (auto& c : channels) have += c.source->next(c.frame) ? 1 : 0;
-		if (have == 0) break;
-		const auto& f0 = channels[0].frame;
-		const std::string where0 = "'" + inPath + "': frame " + std::to_string(nFrames);
-		if (have != channels.size())
-		{
-			std::string ended;
-			for (const auto& c : channels)
-				if (c.source->frames() == nFrames) ended += (ended.empty() ? "" : ", ") + c.channel.label;
-			throw std::runtime_error(
-				where0 + ": the frames of channel(s) " + ended +
-				" end here while the other channels have more (a partly filtered rawlog?)");
-		}
-		for (const auto& c : channels)
-		{
-			const auto& f = c.frame;
-			const std::string where = c.source->reader().where(
-				"frame " + std::to_string(f.index) + " (sensor '" + f.sensorLabel + "', channel '" + c.channel.label + "')");
-			if (f.index != f0.index || f.timestamp != f0.timestamp)
-				throw std::runtime_error(
-					where + ": timestamp " + std::to_string(f.timestamp) + " is not channel '" +
-					channels[0].channel.label + "''s frame " + std::to_string(f0.index) + " at " +
-					std::to_string(f0.timestamp) + " (the channels' frames must pair up)");
-			if (f.left.type() != CV_8UC1)
-				throw std::runtime_error(
-					where + ": " + std::to_string(f.left.channels()) + "-channel images; the survey needs grey ones");
-			if (!sameCalib(f.calib, f0.calib) || f.left.size() != f0.left.size())
-				throw std::runtime_error(
-					where + ": calibration or image size differs from channel '" + channels[0].channel.label + "''s");
-		}
+		const auto tf = std::chrono::steady_clock::now();	// reading and filters count too
+		if (!I.source->next(fr)) break;
+		checkGrey(fr);
+		const auto& f0 = fr.channels[0];
 		if (nFrames == 0)
 		{
-			m_stats.calib = f0.calib;
+			m_stats.calib = fr.calib;
 			std::vector<map::TChannelParams> params;
 			for (const auto& c : channels) params.push_back(c.params);
-			kfmap.setup(m_stats.calib, f0.left.cols, f0.left.rows, params);
+			kfmap.setup(m_stats.calib, fr.size.width, fr.size.height, params);
 			builder = std::make_unique<CSurveyBuilder>(kfmap, m_runName, I.voOptions);
 		}
 		const auto& calib = m_stats.calib;
-		const double t = f0.timestamp;
+		const double t = fr.timestamp;
 		const size_t before = voChain.keyframes().size();
 		// Selecting landmarks by re-observation needs every channel's
 		// measurements of every frame; otherwise only at map keyframes.
 		const bool everyFrame = builder->needsFrames();
 		std::vector<features::TStereoFrame> frames(everyFrame ? channels.size() : 0);
 		for (size_t c = 0; c < frames.size(); c++)
-			channels[c].extractor.process(channels[c].frame.left, channels[c].frame.right, calib, frames[c]);
+			channels[c].extractor.process(fr.channels[c].left, fr.channels[c].right, calib, frames[c]);
 		vo::TFrameResult res;
 		if (everyFrame)
 		{
@@ -237,7 +218,6 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 		if (I.voBridge)
 		{
 			auto& vb = *I.voBridge;
-			const auto& cb = channels[I.bridgeIndex];
 			const size_t bBefore = vb.keyframes().size();
 			vo::TFrameResult bres;
 			if (everyFrame)
@@ -246,7 +226,7 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 				bres = vb.commit();
 			}
 			else
-				bres = vb.process(cb.frame.left, cb.frame.right, calib, t);
+				bres = vb.process(fr.channels[I.bridgeIndex].left, fr.channels[I.bridgeIndex].right, calib, t);
 			bridgeNow = vo::chainReference(bres, vb.keyframes(), bBefore);
 		}
 		if (builder->offer(res, voChain.keyframes(), before))
@@ -271,9 +251,9 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 					meas[c] = voChain.keyframes().back().meas;	// the VO just extracted them
 					continue;
 				}
-				features::TStereoFrame fr;
-				channels[c].extractor.process(channels[c].frame.left, channels[c].frame.right, calib, fr);
-				meas[c] = std::move(fr.meas);
+				features::TStereoFrame one;
+				channels[c].extractor.process(fr.channels[c].left, fr.channels[c].right, calib, one);
+				meas[c] = std::move(one.meas);
 			}
 			if (kfmap.options.surface_normals)
 			{
@@ -302,9 +282,9 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 			builder->addFrame(std::move(frames));
 		nFrames++;
 		m_stats.msTotal += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - tf).count();
-		if (onFrame) onFrame(nFrames, channels[0].source->progress());
+		if (onFrame) onFrame(nFrames, I.source->progress());
 	}
-	if (nFrames == 0) throw std::runtime_error(channels[0].source->noFramesMessage());
+	if (nFrames == 0) throw std::runtime_error(I.source->noFramesMessage());
 	builder->finish();
 	m_stats.meanKeptReobservations = builder->meanKeptReobservations();
 	if (kfmap.isEmpty()) throw std::runtime_error(inPath + ": the VO never tracked: no keyframes, no map written");

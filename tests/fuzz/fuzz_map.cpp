@@ -7,7 +7,7 @@
  * libFuzzer's -malloc_limit_mb. */
 #include "FuzzSupport.h"
 
-#include <shadyloc/core/Registration.h>
+#include <shadyloc/Registration.h>
 #include <shadyloc/map/CKeyframeMap.h>
 
 extern "C" int LLVMFuzzerInitialize(int*, char***)

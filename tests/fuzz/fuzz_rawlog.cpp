@@ -4,7 +4,7 @@
  * bound; built without it, fuzz_rawlog_nobound shows the target reaches it). */
 #include "FuzzSupport.h"
 
-#include <shadyloc/core/Registration.h>
+#include <shadyloc/Registration.h>
 #include <shadyloc/io/Rawlog.h>
 
 extern "C" int LLVMFuzzerInitialize(int*, char***)

@@ -4,7 +4,7 @@
  * (errors are exceptions with a message). */
 #include "FuzzSupport.h"
 
-#include <shadyloc/core/Registration.h>
+#include <shadyloc/Registration.h>
 #include <shadyloc/filters/FilterPipeline.h>
 #include <shadyloc/sim/SimOptions.h>
 #include <shadyloc/filters/Channel.h>

@@ -8,7 +8,7 @@
  * OUT_DIR/map: keyframe maps (empty, and the golden populated one) and, for
  *   the header-first check, the golden header with absurd sizes, cut short,
  *   of another class, and files that are no map. */
-#include <shadyloc/core/Registration.h>
+#include <shadyloc/Registration.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/filters/FilterPipeline.h>

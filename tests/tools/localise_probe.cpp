@@ -26,7 +26,7 @@
  *
  * Prints CSV (one row per probed frame), then the scale table. A diagnostic
  * for developers: not part of the test suite. */
-#include <shadyloc/core/Registration.h>
+#include <shadyloc/Registration.h>
 #include <shadyloc/features/Brief.h>
 #include <shadyloc/features/PatchWarp.h>
 #include <shadyloc/io/StereoFrameSource.h>

@@ -1,25 +1,22 @@
 /* Persistent formats: every registered shadyloc:: class round-trips through
  * MRPT serialisation to identical bytes; golden files pin the byte layout of
- * each format (classes, keyframes, the filter record); reads are bounded.
+ * each format (classes, the filter record); reads are bounded (the keyframe
+ * map's own bounded reads: test_map_format.cpp).
  *
  * Golden files live in tests/golden/. After a deliberate format change (with
  * its version bump), regenerate them with
  *   SHADYLOC_UPDATE_GOLDEN=1 build/tests/shadyloc_tests --gtest_filter='FormatsGolden.*'
  * (the run rewrites the files and fails on purpose), then review
  * `git diff tests/golden` and commit. */
-#include <shadyloc/core/Registration.h>
+#include <shadyloc/Registration.h>
 #include <shadyloc/filters/FilterPipeline.h>
 #include <shadyloc/filters/Filters.h>
-#include <shadyloc/io/BoundedReader.h>
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/map/CKeyframeMap.h>
-#include <shadyloc/map/KeyframeIO.h>
 
 #include "../support/TestSupport.h"
 
 #include <mrpt/config/CConfigFileMemory.h>
-#include <mrpt/io/CFileGZInputStream.h>
-#include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/obs/CObservationComment.h>
 #include <mrpt/rtti/CObject.h>
@@ -353,81 +350,6 @@ std::string goldenName(const std::string& className)
 	return className.substr(std::string("shadyloc::").size()) + ".bin";
 }
 
-/** A keyframe with every field non-default and distinct (3 measurements). */
-map::TKeyframe populatedKeyframe()
-{
-	map::TKeyframe kf;
-	kf.id = 7;
-	kf.frame = 1234;
-	kf.timestamp = 1400000000.25;
-	kf.chain_break = true;
-	const Eigen::AngleAxisd r1(0.3, Eigen::Vector3d(1, 2, 3).normalized());
-	const Eigen::AngleAxisd r2(-1.1, Eigen::Vector3d(-2, 0.5, 1).normalized());
-	kf.T_prevkf_kf = Eigen::Translation3d(0.1, -0.2, 1.3) * r1;
-	kf.T_world_kf = Eigen::Translation3d(-5.5, 2.25, 40.75) * r2;
-	for (int i = 0; i < 6; i++)
-		for (int j = 0; j < 6; j++) kf.cov(i, j) = 1e-4 * (1 + i * 6 + j);
-	for (int k = 0; k < 3; k++)
-	{
-		features::TStereoMeasurement m;
-		m.uL = 100.5f + k;
-		m.v = 50.25f + 2 * k;
-		m.uR = 90.75f + 3 * k;
-		m.response = 33.0f + k;
-		m.zncc = 0.875f - 0.01f * k;
-		for (size_t w = 0; w < m.desc.w.size(); w++)
-			m.desc.w[w] = 0x0123456789abcdefull * (w + 1) + static_cast<uint64_t>(k);
-		for (size_t p = 0; p < m.patch.size(); p++) m.patch[p] = static_cast<uint8_t>(3 * p + 11 * k);
-		m.P = Eigen::Vector3d(0.5 + k, -0.25 - k, 7.5 + 2 * k);
-		for (int i = 0; i < 3; i++)
-			for (int j = 0; j < 3; j++) m.cov(i, j) = 1e-3 * (1 + i * 3 + j) + 1e-5 * k;
-		kf.meas.push_back(m);
-	}
-	return kf;
-}
-
-void expectSameKeyframe(const map::TKeyframe& a, const map::TKeyframe& b)
-{
-	EXPECT_EQ(a.id, b.id);
-	EXPECT_EQ(a.frame, b.frame);
-	EXPECT_EQ(a.timestamp, b.timestamp);
-	EXPECT_EQ(a.chain_break, b.chain_break);
-	EXPECT_EQ(a.T_prevkf_kf.matrix(), b.T_prevkf_kf.matrix());
-	EXPECT_EQ(a.T_world_kf.matrix(), b.T_world_kf.matrix());
-	EXPECT_EQ(a.cov, b.cov);
-	ASSERT_EQ(a.meas.size(), b.meas.size());
-	for (size_t i = 0; i < a.meas.size(); i++)
-	{
-		const auto &x = a.meas[i], &y = b.meas[i];
-		EXPECT_EQ(x.uL, y.uL) << i;
-		EXPECT_EQ(x.v, y.v) << i;
-		EXPECT_EQ(x.uR, y.uR) << i;
-		EXPECT_EQ(x.response, y.response) << i;
-		EXPECT_EQ(x.zncc, y.zncc) << i;
-		EXPECT_TRUE(x.desc == y.desc) << i;
-		EXPECT_EQ(x.patch, y.patch) << i;
-		EXPECT_EQ(x.P, y.P) << i;
-		EXPECT_EQ(x.cov, y.cov) << i;
-	}
-}
-
-Bytes keyframeBytes(const map::TKeyframe& kf)
-{
-	mrpt::io::CMemoryStream m;
-	auto ar = mrpt::serialization::archiveFrom(m);
-	map::writeKeyframe(ar, kf);
-	return bytesOf(m);
-}
-map::TKeyframe keyframeFrom(const Bytes& b)
-{
-	mrpt::io::CMemoryStream m;
-	m.assignMemoryNotOwn(b.data(), b.size());
-	map::TKeyframe kf;
-	map::readKeyframe(m, kf);
-	EXPECT_EQ(m.getPosition(), b.size()) << "the reader left bytes unread";
-	return kf;
-}
-
 /** The three populated filters as the pipeline the filter record is made of. */
 filters::FilterPipeline populatedPipeline()
 {
@@ -493,6 +415,22 @@ void checkGolden(const std::string& name, const Bytes& actual)
 
 // ---- the registry: every class listed, each round-trips to identical bytes --
 
+// The one list (src/Registration.cpp) runs when the library loads, after the
+// class ids it names are initialised: a program that calls nothing (this
+// test, alone in its process under ctest) finds every class by name.
+TEST(FormatsRegistry, ClassesAreRegisteredWhenTheLibraryLoads)
+{
+	for (const char* name :
+		 {"shadyloc::CObservationFilter", "shadyloc::CFilterMonochrome", "shadyloc::CFilterInvariant",
+		  "shadyloc::CFilterLinearise", "shadyloc::CKeyframeMap"})
+	{
+		const auto* id = mrpt::rtti::findRegisteredClass(name);
+		ASSERT_NE(id, nullptr) << name << " is not registered at load time";
+		EXPECT_STREQ(id->className, name);
+	}
+	EXPECT_NE(mrpt::rtti::classFactory("shadyloc::CFilterInvariant"), nullptr);
+}
+
 TEST(FormatsRegistry, EveryClassIsListedAndRoundTrips)
 {
 	const auto registered = registeredShadylocClasses();
@@ -502,7 +440,7 @@ TEST(FormatsRegistry, EveryClassIsListedAndRoundTrips)
 			<< name << " is registered but not covered: add it to classCases() in " << __FILE__
 			<< " (a populated instance, a field comparison) and a golden file";
 	for (const auto& [name, c] : classCases())
-		EXPECT_TRUE(registered.count(name)) << name << " is listed but not registered (src/core/Registration.cpp)";
+		EXPECT_TRUE(registered.count(name)) << name << " is listed but not registered (src/Registration.cpp)";
 
 	for (const auto& name : registered)
 	{
@@ -532,19 +470,6 @@ TEST(FormatsRegistry, EveryClassIsListedAndRoundTrips)
 		// A default-constructed instance round-trips too.
 		EXPECT_EQ(serialise(*deserialise(serialise(*fresh))), serialise(*fresh));
 	}
-}
-
-TEST(FormatsRegistry, KeyframeRoundTripsToIdenticalBytes)
-{
-	const auto kf = populatedKeyframe();
-	const Bytes b = keyframeBytes(kf);
-	EXPECT_EQ(b.size(), 3 + 4 + 8 + 8 + 1 + 2 * 12 * 8 + 36 * 8 + 4 + kf.meas.size() * map::kMeasurementBytes);
-	const auto back = keyframeFrom(b);
-	expectSameKeyframe(kf, back);
-	EXPECT_EQ(keyframeBytes(back), b);
-	// An empty keyframe (the first of a run before landmarks) too.
-	map::TKeyframe empty;
-	EXPECT_EQ(keyframeBytes(keyframeFrom(keyframeBytes(empty))), keyframeBytes(empty));
 }
 
 // ---- golden files ----------------------------------------------------------
@@ -580,14 +505,6 @@ TEST(FormatsGolden, InvariantFilterVersion0StillLoads)
 	EXPECT_TRUE(f->params().sameImageAs(expected)) << f->params().asString();
 	EXPECT_FALSE(f->params().hasCompressedTails());
 	EXPECT_EQ(f->common.output_suffix, "_inv9");
-}
-
-TEST(FormatsGolden, KeyframeMatchesItsGoldenFile)
-{
-	const auto kf = populatedKeyframe();
-	checkGolden("keyframe.bin", keyframeBytes(kf));
-	if (updatingGolden()) return;
-	expectSameKeyframe(kf, keyframeFrom(readFile(kGoldenDir + "/keyframe.bin")));
 }
 
 TEST(FormatsGolden, FilterRecordMatchesItsGoldenFile)
@@ -632,107 +549,7 @@ std::string errorOf(const std::function<void()>& f)
 bool has(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
 void putU32(Bytes& b, size_t at, uint32_t v) { std::memcpy(b.data() + at, &v, 4); }
-
-// Offsets in the keyframe layout (docs/architecture.md).
-constexpr size_t kCountOffset = 3 + 4 + 8 + 8 + 1 + 2 * 12 * 8 + 36 * 8;
 }  // namespace
-
-TEST(FormatsBoundedRead, HugeMeasurementCountNamesObjectAndOffset)
-{
-	Bytes b = keyframeBytes(populatedKeyframe());
-	putU32(b, kCountOffset, 0xFFFFFFFFu);
-	// From a memory stream (remaining size known) and through a bare archive
-	// (a caller's budget): an error before any allocation, never bad_alloc.
-	const std::string e1 = errorOf([&] { keyframeFrom(b); });
-	EXPECT_TRUE(has(e1, "keyframe: byte " + std::to_string(kCountOffset) + ": measurement count: count 4294967295"))
-		<< e1;
-	EXPECT_TRUE(has(e1, "can remain")) << e1;
-	const std::string e2 = errorOf([&] {
-		mrpt::io::CMemoryStream m;
-		m.assignMemoryNotOwn(b.data(), b.size());
-		auto ar = mrpt::serialization::archiveFrom(m);
-		map::TKeyframe kf;
-		map::readKeyframe(ar, kf, map::kMaxKeyframeBytes, "keyframe 12");
-	});
-	EXPECT_TRUE(has(e2, "keyframe 12: byte " + std::to_string(kCountOffset) + ": measurement count")) << e2;
-}
-
-TEST(FormatsBoundedRead, OffsetsAreStreamPositions)
-{
-	// Two keyframes back to back: an error in the second names its file offset.
-	Bytes one = keyframeBytes(populatedKeyframe());
-	Bytes b = one;
-	b.insert(b.end(), one.begin(), one.end());
-	putU32(b, one.size() + kCountOffset, 1000000u);
-	mrpt::io::CMemoryStream m;
-	m.assignMemoryNotOwn(b.data(), b.size());
-	map::TKeyframe kf;
-	map::readKeyframe(m, kf);
-	const std::string e = errorOf([&] { map::readKeyframe(m, kf); });
-	EXPECT_TRUE(has(e, "byte " + std::to_string(one.size() + kCountOffset))) << e;
-	EXPECT_EQ(kf.id, 7u) << "a failed read must leave the keyframe untouched";
-}
-
-TEST(FormatsBoundedRead, EveryTruncationIsAnErrorNamingTheOffset)
-{
-	const Bytes full = keyframeBytes(populatedKeyframe());
-	for (size_t n = 0; n < full.size(); n++)
-	{
-		const Bytes cut(full.begin(), full.begin() + static_cast<long>(n));
-		// Remaining size known: the budget catches it first.
-		const std::string e1 = errorOf([&] { keyframeFrom(cut); });
-		EXPECT_TRUE(has(e1, "keyframe: byte ")) << "cut at " << n << ": " << e1;
-		// Remaining size unknown (a generous budget): the stream's end of file,
-		// turned into our error.
-		const std::string e2 = errorOf([&] {
-			mrpt::io::CMemoryStream m;
-			m.assignMemoryNotOwn(cut.data(), cut.size());
-			auto ar = mrpt::serialization::archiveFrom(m);
-			map::TKeyframe kf;
-			map::readKeyframe(ar, kf);
-		});
-		EXPECT_TRUE(has(e2, "keyframe: byte ")) << "cut at " << n << ": " << e2;
-	}
-}
-
-TEST(FormatsBoundedRead, GzStreamUsesTheCallersBudget)
-{
-	const std::string dir = test::tempDir("formats_gz");
-	const auto kf = populatedKeyframe();
-	{
-		mrpt::io::CFileGZOutputStream f(dir + "/kf.gz");
-		auto ar = mrpt::serialization::archiveFrom(f);
-		map::writeKeyframe(ar, kf);
-	}
-	{
-		mrpt::io::CFileGZInputStream f(dir + "/kf.gz");
-		map::TKeyframe back;
-		map::readKeyframe(f, back);
-		expectSameKeyframe(kf, back);
-	}
-	// A budget smaller than the keyframe: refused, naming the count.
-	mrpt::io::CFileGZInputStream f(dir + "/kf.gz");
-	map::TKeyframe back;
-	const std::string e = errorOf([&] { map::readKeyframe(f, back, kCountOffset + 4 + 100); });
-	EXPECT_TRUE(has(e, "measurement count: count 3 needs at least")) << e;
-}
-
-TEST(FormatsBoundedRead, WrongVersionAndHeaderAreRefused)
-{
-	Bytes b = keyframeBytes(populatedKeyframe());
-	Bytes v = b;
-	v[0] = map::kKeyframeFormatVersion + 1;
-	EXPECT_TRUE(has(errorOf([&] { keyframeFrom(v); }), "byte 0: format version: unknown keyframe format version"));
-	v = b;
-	v[0] = 0;
-	EXPECT_TRUE(has(errorOf([&] { keyframeFrom(v); }), "unknown keyframe format version 0"));
-	v = b;
-	v[1] = 11;
-	EXPECT_TRUE(has(errorOf([&] { keyframeFrom(v); }), "byte 1: patch side: measurements carry 11x11 patches"));
-	v = b;
-	v[2] = 8;
-	EXPECT_TRUE(has(errorOf([&] { keyframeFrom(v); }), "byte 2: descriptor words: 512-bit descriptors"));
-}
 
 TEST(FormatsBoundedRead, FilterStringLengthAndEnumsAreChecked)
 {

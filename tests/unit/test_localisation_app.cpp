@@ -7,7 +7,9 @@
  *  - bad input: a map with other descriptor parameters, a live run without
  *    the colour images its channels need, an empty map (errors, non-zero
  *    exit, nothing partial, an earlier OUTDIR untouched); a live run through
- *    another world (another scene seed): zero fixes. */
+ *    another world (another scene seed): zero fixes;
+ *  - a rawlog made by `shadyloc filter` (with or without its colour pairs)
+ *    localises exactly as its colour original. */
 #include "../support/Sequences.h"
 #include "../support/TestSupport.h"
 
@@ -299,6 +301,68 @@ TEST(LocalisationApp, BadInputFailsCleanlyOrGivesNoFix)
 		}
 		EXPECT_EQ(rows, 20);
 	}
+}
+
+// A rawlog made by `shadyloc filter` localises with the same result as its
+// colour original: its channels are read, not made, and are the same
+// images. So does the same rawlog with its colour pairs dropped; one whose
+// channels another filter made is refused, naming its filter record.
+TEST(LocalisationApp, FilteredRawlogLocalisesAsItsColourOriginal)
+{
+	const auto& d = dataset();
+	std::string out;
+	const std::string filt = d.dir + "/overcast_filtered.rawlog";
+	ASSERT_EQ(
+		test::runCommand(
+			test::appPath() + " filter -q -i " + d.overcast + " -o " + filt + " -c " + src("config/filters_sim.ini"), &out),
+		0)
+		<< out;
+	const std::string greyOnly = d.dir + "/overcast_channels_only.rawlog";
+	{
+		// Every object but the colour pairs (the filter record stays).
+		io::RawlogWriter w(greyOnly);
+		io::RawlogReader r(filt);
+		size_t dropped = 0;
+		while (const auto obj = r.next())
+			for (const auto& o : io::observationsIn(obj))
+			{
+				io::loadExternalImages(*o);
+				if (o->sensorLabel == "CAMERA")
+					dropped++;
+				else
+					w.write(*o);
+			}
+		ASSERT_EQ(dropped, size_t(test::kSimFixtureFrames));
+		w.commit();
+	}
+	const std::string colourOut = d.dir + "/colour_out";
+	ASSERT_EQ(test::runCommand(localiseCmd(d.map, d.overcast, colourOut, " --gt " + d.overcastGt), &out), 0) << out;
+	ASSERT_GT(jsonInt(test::fileContents(colourOut + "/summary.json"), "fixes"), 0);
+	for (const auto& live : {filt, greyOnly})
+	{
+		const std::string o = d.dir + "/" + fs::path(live).stem().string() + "_out";
+		ASSERT_EQ(test::runCommand(localiseCmd(d.map, live, o, " --gt " + d.overcastGt), &out), 0) << out;
+		for (const char* f : {"frames.csv", "solves.csv", "trajectory.tum"})
+			EXPECT_EQ(test::fileContents(o + "/" + f), test::fileContents(colourOut + "/" + f)) << live << ": " << f;
+	}
+
+	// Channels another filter made: not what the map was checked against.
+	std::string ini = test::fileContents(src("config/filters_sim.ini"));
+	const auto at = ini.find("peak_wavelength_red_nm = 620");
+	ASSERT_NE(at, std::string::npos) << "config/filters_sim.ini changed";
+	ini.replace(at, std::string("peak_wavelength_red_nm = 620").size(), "peak_wavelength_red_nm = 640");
+	writeText(d.dir + "/filters_other.ini", ini);
+	const std::string other = d.dir + "/overcast_other.rawlog";
+	ASSERT_EQ(
+		test::runCommand(
+			test::appPath() + " filter -q -i " + d.overcast + " -o " + other + " -c " + d.dir + "/filters_other.ini", &out),
+		0)
+		<< out;
+	const std::string refused = d.dir + "/refused_out";
+	EXPECT_NE(test::runCommand(localiseCmd(d.map, other, refused), &out), 0) << out;
+	EXPECT_NE(out.find("overcast_other.rawlog"), std::string::npos) << out;
+	EXPECT_NE(out.find("filter record"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(refused));
 }
 
 }  // namespace

@@ -4,7 +4,8 @@
  * on the simulator's runs (the sim_sequences fixture), a map of the noon run
  * localises the first overcast frames, fed as MRPT observations among the
  * grey channels of a filtered rawlog and another sensor, with the fields an
- * application reads checked against the ground truth. */
+ * application reads checked against the ground truth; the channels' grey
+ * pairs alone localise exactly as the colour pairs. */
 #include "../support/Sequences.h"
 #include "../support/TestSupport.h"
 
@@ -158,6 +159,63 @@ TEST(PublicFace, LocalisesSimulatedFramesAmongOtherObservations)
 	}
 	EXPECT_GE(localised, 8);
 	EXPECT_EQ(loc.sensorLabel(), "CAMERA");
+}
+
+// Without the colour pairs (a filtered rawlog's channels alone, or a driver
+// that gives them), the channels' grey pairs localise exactly as the colour
+// pairs they were made from.
+TEST(PublicFace, LocalisesFromFilteredChannelsAsFromColour)
+{
+	const auto map = noonMap();
+	LocaliserOptions opts;
+	const mrpt::config::CConfigFileMemory cfg(simLocaliseConfig());
+	opts.loadFromConfigFile(cfg, "");
+	Localiser fromColour(mrpt::maps::CMetricMap::Ptr(map), opts), fromChannels(mrpt::maps::CMetricMap::Ptr(map), opts);
+	const auto setup = localisation::CLocalisationSystem::SetupFromConfig(cfg, {}, 0, "sim configs");
+	const auto& live = test::simSequence("overcast");
+	int localised = 0;
+	for (size_t i = 0; i < 10; i++)
+	{
+		const auto a = fromColour.process(std::make_shared<mrpt::obs::CObservationStereoImages>(
+			test::stereoObservation(live.left[i], live.right[i], live.calib, live.t[i], "CAMERA")));
+		std::optional<LocalisationUpdate> b;
+		for (size_t c = 0; c < setup.channels.size(); c++)
+		{
+			const auto& ch = setup.channels[c].channel;
+			cv::Mat gl, gr;
+			ch.convertPair(live.left[i], live.right[i], gl, gr);
+			b = fromChannels.process(std::make_shared<mrpt::obs::CObservationStereoImages>(
+				test::stereoObservation(gl, gr, live.calib, live.t[i], "CAMERA" + ch.suffix())));
+			// A result once every channel's pair of the frame is there.
+			EXPECT_EQ(bool(b), c + 1 == setup.channels.size()) << "frame " << i << " channel " << ch.label;
+		}
+		ASSERT_TRUE(a && b) << "frame " << i;
+		EXPECT_EQ(b->status, a->status) << "frame " << i;
+		EXPECT_EQ(b->method, a->method) << "frame " << i;
+		EXPECT_EQ(b->keyframe_id, a->keyframe_id) << "frame " << i;
+		EXPECT_EQ(b->pose.mean.asString(), a->pose.mean.asString()) << "frame " << i;
+		EXPECT_EQ(b->pose.cov, a->pose.cov) << "frame " << i;
+		localised += a->status == LocalisationStatus::Localised;
+	}
+	EXPECT_GE(localised, 5);
+	EXPECT_EQ(fromChannels.sensorLabel(), "CAMERA");
+	// A frame whose channels do not pair up (a second mono pair before the
+	// invariant one) is an error naming the frame.
+	cv::Mat gl, gr;
+	setup.channels[0].channel.convertPair(live.left[10], live.right[10], gl, gr);
+	const auto mono = std::make_shared<mrpt::obs::CObservationStereoImages>(
+		test::stereoObservation(gl, gr, live.calib, live.t[10], "CAMERA" + setup.channels[0].channel.suffix()));
+	EXPECT_FALSE(fromChannels.process(mono));
+	try
+	{
+		fromChannels.process(mono);
+		FAIL() << "an unpaired channel went unnoticed";
+	}
+	catch (const std::exception& e)
+	{
+		EXPECT_NE(std::string(e.what()).find("frame 10"), std::string::npos) << e.what();
+		EXPECT_NE(std::string(e.what()).find("pair up"), std::string::npos) << e.what();
+	}
 }
 
 TEST(PublicFace, RefusesAGreyLiveCameraAndAnotherKindOfMap)

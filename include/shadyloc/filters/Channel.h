@@ -5,8 +5,9 @@
  * named by the .ini section that defines the filter. One section therefore
  * drives everything: `shadyloc filter` writes the channel's images into a
  * rawlog (sensor label + the filter's output_suffix) and records the filter;
- * `shadyloc vo --channel NAME` (and later the survey and the localisers) read
- * those images, or run the same filter on the fly on an unfiltered rawlog.
+ * the survey, `shadyloc vo --channel NAME` and the localisation read those
+ * images, or run the same filter on the fly on an unfiltered rawlog
+ * (ChannelFrameSource.h).
  *
  *   [invariant]                ; the channel "invariant" (also "inv", its suffix)
  *   class = CFilterInvariant
@@ -18,7 +19,6 @@
 
 #include <shadyloc/filters/CObservationFilter.h>
 #include <shadyloc/filters/FilterPipeline.h>
-#include <shadyloc/io/StereoFrameSource.h>
 
 #include <mrpt/config/CConfigFileBase.h>
 
@@ -87,16 +87,16 @@ struct TChannelInput
 	 * record's filter with the channel's suffix); null if no record says. */
 	CObservationFilter::Ptr recorded;
 	bool hasRecord = false;	 //!< the rawlog starts with a filter pipeline record
-	/** Frame-source options: the label, and, when not filtered, the
-	 * channel's filter as the per-frame transform. */
-	io::TStereoFrameSourceOptions sourceOptions;
+	/** Suffixes of the derived channels the rawlog may hold (this channel's,
+	 * its record's): a colour camera's label ends in none of them. */
+	std::vector<std::string> derivedSuffixes;
 };
 
 /** Finds how to read `channel` from `rawlog`: its derived observations
  * (labelled <camera><suffix>, camera = `cameraLabel` if given) if the first
- * objects hold some, else the colour camera `cameraLabel` (or the first
- * stereo label that is not a derived channel of the record's filters) with
- * the channel's filter applied on the fly. Reads the pipeline record at the
+ * objects hold some, else the colour camera `cameraLabel` (or, when empty,
+ * the first stereo label that is not a derived channel: derivedSuffixes),
+ * through the channel's filter on the fly. Reads the pipeline record at the
  * head of a filtered rawlog. Throws io::RawlogError naming the file. */
 TChannelInput resolveChannelInput(
 	const std::string& rawlog, const TChannel& channel, const std::string& cameraLabel = "");

@@ -1,12 +1,13 @@
-/* ShadyLoc — the stereo frames of a rawlog, one at a time: the loop every
- * command that walks a rawlog's stereo observations shares (VO, exporters,
- * and later the survey and the localisers).
+/* ShadyLoc — the stereo frames of one camera of a rawlog, one at a time.
  *
  * It reads either rawlog style (bare observations, or sensory frames), picks
  * one sensor label, loads external images (from this rawlog's own images
  * folder), checks that the calibration and image size stay those of the first
  * frame, and yields typed frames. Every error names the file, the object and
- * the frame.
+ * the frame. The checks of one camera's observations are StereoFrameChecker,
+ * which the channels' frame source (filters/ChannelFrameSource.h) shares.
+ * Images are yielded as stored: making channels from them is the filters'
+ * business, not this reader's.
  */
 #pragma once
 
@@ -25,8 +26,7 @@
 
 namespace shadyloc::io
 {
-/** One stereo frame. The images share pixels with the observation (no copy)
- * unless a transform made new ones. */
+/** One stereo frame. The images share pixels with the observation (no copy). */
 struct TStereoFrame
 {
 	size_t index = 0;  //!< 0-based among the frames of the chosen label
@@ -39,16 +39,40 @@ struct TStereoFrame
 	mrpt::obs::CObservationStereoImages::Ptr obs;  //!< the observation itself
 };
 
-/** Which stereo observations to read, and what to do with their images. */
+/** Which stereo observations to read. */
 struct TStereoFrameSourceOptions
 {
 	/** Read this label only. Empty: the label of the first stereo observation
 	 * that acceptLabel accepts (every label if acceptLabel is empty). */
 	std::string sensorLabel;
 	std::function<bool(const std::string& label)> acceptLabel;
-	/** Applied to (left, right) of every frame: in -> out, e.g. a channel's
-	 * filter run on the fly. An exception is rethrown naming the frame. */
-	std::function<void(const std::vector<cv::Mat>& in, std::vector<cv::Mat>& out)> transform;
+};
+
+/** What differs between two stored calibrations ("left intrinsics fx=...
+ * (was ...)"), "" if nothing. Exact: every frame of one camera, and every
+ * channel made from it, carries the same copied numbers. */
+std::string calibrationDifference(const mrpt::img::TStereoCamera& a, const mrpt::img::TStereoCamera& b);
+
+/** The checks every frame of one camera passes, in one place: a right
+ * image, external images that load, a timestamp after the previous frame's,
+ * non-empty left/right images of one size, a rectified pair, and the first
+ * frame's calibration and image size. */
+class StereoFrameChecker
+{
+   public:
+	/** Fills f (all but index and object) from the observation and checks
+	 * it. Throws RawlogError(where + what is wrong); `where` names file,
+	 * object, frame and sensor ("'<file>': object #3: frame 2 (sensor 'C'): "). */
+	void take(const mrpt::obs::CObservationStereoImages::Ptr& st, const std::string& where, TStereoFrame& f);
+	size_t frames() const { return m_frames; }	//!< frames taken so far
+
+   private:
+	size_t m_frames = 0;
+	double m_lastTime = 0;	//!< the previous frame's timestamp [s]
+	// The first frame's, which every later frame must match.
+	mrpt::img::TStereoCamera m_camera;
+	geometry::TStereoCalib m_calib;
+	cv::Size m_size;
 };
 
 /** Accepts labels ending in `suffix` and, if `base` is given, equal to
@@ -75,7 +99,7 @@ class StereoFrameSource
 	 * on a missing right image, a timestamp not after the previous frame's,
 	 * empty or mismatched images, a calibration or
 	 * image size other than the first frame's, a pair that is not rectified,
-	 * a failing transform, or any error of the reader. */
+	 * or any error of the reader. */
 	bool next(TStereoFrame& f);
 
 	/** The label being read ("" before the first frame if none was given). */
@@ -99,11 +123,7 @@ class StereoFrameSource
 	std::set<std::string> m_otherLabels;
 	std::vector<mrpt::obs::CObservation::Ptr> m_pending;  //!< rest of the current sensory frame
 	size_t m_pendingObject = 0;
-	double m_lastTime = 0;  //!< the previous frame's timestamp [s]
-	// The first frame's, which every later frame must match.
-	mrpt::img::TStereoCamera m_camera;
-	geometry::TStereoCalib m_calib;
-	cv::Size m_size;
+	StereoFrameChecker m_check;
 };
 
 }  // namespace shadyloc::io

@@ -177,6 +177,13 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	 * channel's filter converts. */
 	TLocalisationUpdate processFrame(
 		const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib, double timestamp);
+	/** Gives channel i's grey pair (channelLabels() order) of the frame being
+	 * processed; called once per channel, channels in parallel. */
+	using ChannelImages = std::function<void(size_t channel, cv::Mat& left, cv::Mat& right)>;
+	/** One stereo frame whose channels' images come from elsewhere (read from
+	 * a filtered rawlog, or made by filters::ChannelFrameSource). */
+	TLocalisationUpdate processChannels(
+		const ChannelImages& images, const geometry::TStereoCalib& calib, double timestamp);
 
 	/** Called at the end of every frame with its update and each channel's
 	 * measurements (channelLabels() order): evaluation probes (Oracle.h). */
@@ -225,7 +232,7 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	std::unique_ptr<TVOTrack> m_voFallback;	 //!< null: no fallback VO
 	/** Each channel's live measurements and their VO's motion (the front end). */
 	void frontEnd(
-		const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib, double timestamp,
+		const ChannelImages& images, const geometry::TStereoCalib& calib, double timestamp,
 		std::vector<features::TStereoFrame>& meas, TLocalisationUpdate& u);
 	/** Runs fn(i) for every localiser's pipe, the first on this thread and
 	 * the others on a second one when threads >= 2. */

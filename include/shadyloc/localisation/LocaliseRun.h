@@ -8,6 +8,7 @@
  */
 #pragma once
 
+#include <shadyloc/filters/ChannelFrameSource.h>
 #include <shadyloc/localisation/Evaluation.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 
@@ -15,6 +16,7 @@
 
 #include <functional>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,7 +44,7 @@ struct TLocaliseRunOptions
 	std::vector<std::string> localisers;  //!< policy order; empty: [localise] localisers
 	int threads = 0;  //!< 0: [localise] threads
 	int startKf = -1;  //!< >= 0: start at this map keyframe instead of by global search
-	std::string sensorLabel;  //!< the live colour stereo camera ("" = the first that is not a channel)
+	std::string sensorLabel;  //!< the live camera ("" = the first colour camera, or that of the derived channels)
 	std::string configWhat = "(no config)";	 //!< names the config in errors
 };
 
@@ -53,8 +55,10 @@ class CLocaliseRun
 {
    public:
 	/** Checks the config's sections, makes the system (descriptor
-	 * parameters checked against the map's), finds the live colour camera
-	 * and opens the rawlog. Errors name the map, the config, the rawlog. */
+	 * parameters checked against the map's), opens the live rawlog's frame
+	 * source (each channel read from a filtered rawlog with the config's
+	 * filter record, or made from the colour pair) and reads its first
+	 * frame. Errors name the map, the config, the rawlog and frame. */
 	CLocaliseRun(
 		const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::string& mapPath,
 		const std::string& livePath, const TLocaliseRunOptions& o);
@@ -65,19 +69,31 @@ class CLocaliseRun
 	const std::string& sensorLabel() const { return m_label; }
 
 	/** Every frame of the live rawlog; onFrame after each. Throws naming
-	 * file, object and frame (a grey pair; no frames at all). */
+	 * file, object and frame. Once only. */
 	const std::vector<TLocalisationUpdate>& run(const std::function<void(const TLocalisationUpdate&)>& onFrame = {});
+	/** The live run's first frame, before run() (its camera, for checks). */
+	const filters::TChannelFrame& firstFrame() const;
+	/** Where channel i (channelLabels() order) comes from. */
+	const filters::ChannelFrameSource& source() const { return *m_source; }
 	const std::vector<TLocalisationUpdate>& updates() const { return m_ups; }
 	/** Probes every frame for the oracle bound against `gt` (Oracle.h;
 	 * evaluation only: the system never sees it). */
 	void enableOracle(const io::Trajectory& gt);
 
    private:
+	void openLive(const std::string& camera);
+
 	std::unique_ptr<CLocalisationSystem> m_sys;
 	std::unique_ptr<COracle> m_oracle;
+	std::unique_ptr<filters::ChannelFrameSource> m_source;
+	std::optional<filters::TChannelFrame> m_first;	//!< read by the constructor
 	std::string m_livePath, m_label;
 	std::vector<TLocalisationUpdate> m_ups;
 };
+
+/** Throws naming the rawlog if channel `ch` is read from derived images
+ * that no filter record describes, or that another filter than `ch`'s made. */
+void checkRecordedFilter(const filters::TChannelInput& in, const filters::TChannel& ch, const std::string& rawlog);
 
 /** Where a run's inputs came from, for summary.json's provenance. */
 struct TLocaliseProvenance

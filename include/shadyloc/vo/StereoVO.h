@@ -22,7 +22,7 @@
 #include <shadyloc/geometry/PoseCovariance.h>
 #include <shadyloc/geometry/PoseSolver.h>
 #include <shadyloc/geometry/StereoCamera.h>
-#include <shadyloc/map/Keyframe.h>
+#include <shadyloc/vo/Keyframe.h>
 #include <shadyloc/vo/KeyframeMatcher.h>
 #include <shadyloc/vo/KeyframePolicy.h>
 #include <shadyloc/vo/RelativePoseEstimator.h>
@@ -58,8 +58,6 @@ inline bool isTracked(FrameStatus s)
 	return s == FrameStatus::Ok || s == FrameStatus::First || s == FrameStatus::Reinit;
 }
 
-/** The VO's keyframes are the map's keyframe type (map/Keyframe.h). */
-using TKeyframe = map::TKeyframe;
 
 /** Frame b's pose in frame a, each given in a keyframe of the VO's list
  * (`T_refA_a` in keyframe refA, `T_refB_b` in refB, refA <= refB), composed

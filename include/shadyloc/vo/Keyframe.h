@@ -1,8 +1,8 @@
-/* ShadyLoc — a keyframe: a pose in the keyframe chain and the stereo
- * measurements of one image channel made there. The VO creates them (one
- * chain per channel run); the survey map stores them, one per channel at the
- * same frames (docs/architecture.md, "Persistent formats"). A data type only:
- * `map` does not depend on `vo`. */
+/* ShadyLoc — a keyframe of the VO: a pose in its keyframe chain and the
+ * stereo measurements of one image channel made there. The VO creates them
+ * (one chain per channel run); the survey (CSurveyBuilder) turns the chain's
+ * keyframes into the map's own records, so `vo` and `map` do not know each
+ * other. Not stored as such: the map's format (docs/map.md) is the one codec. */
 #pragma once
 
 #include <shadyloc/features/StereoFeatures.h>
@@ -14,7 +14,7 @@
 #include <cstdint>
 #include <vector>
 
-namespace shadyloc::map
+namespace shadyloc::vo
 {
 /** A keyframe of one channel: where it is in the chain and what it saw. */
 struct TKeyframe
@@ -36,4 +36,4 @@ struct TKeyframe
 	std::vector<features::TStereoMeasurement> meas;	 //!< landmarks in this keyframe's frame
 };
 
-}  // namespace shadyloc::map
+}  // namespace shadyloc::vo
