@@ -397,8 +397,9 @@ KittiExporter::TResult KittiExporter::run(const std::string& inRawlog, const std
 	{
 		throw DatasetError(e.what());
 	}
-	fs::create_directories(staging / "image_2");
-	fs::create_directories(staging / "image_3");
+	// Inside the staged folder only: never recreate it after an interrupt removed it.
+	fs::create_directory(staging / "image_2");
+	fs::create_directory(staging / "image_3");
 
 	mrpt::img::TCamera left, right;
 	double baseline = 0;

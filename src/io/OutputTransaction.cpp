@@ -120,7 +120,22 @@ void installSignalCleanup()
 			while (sigwait(&set, &sig) != 0)
 			{
 			}
-			const size_t n = removeRegisteredTemporaries();
+			// Other threads run on while this one cleans up: one may create a
+			// temporary it registered just before (a file opened, a folder made)
+			// after the first pass. The registry stays locked, so nothing new is
+			// registered; two later passes take what was still being created.
+			std::unique_lock<std::recursive_mutex> hold(registryMutex());
+			std::set<std::string> all = registry();
+			size_t n = removeRegisteredTemporaries();
+			for (const int waitMs : {50, 100})
+			{
+				std::this_thread::sleep_for(std::chrono::milliseconds(waitMs));
+				for (const auto& p : all)
+				{
+					std::error_code ec;
+					fs::remove_all(p, ec);
+				}
+			}
 			char msg[160];
 			const int len = std::snprintf(
 				msg, sizeof(msg), "\nshadyloc: interrupted by signal %d (%s); %zu temporary output(s) removed\n", sig,

@@ -254,6 +254,25 @@ void RawlogWriter::write(const mrpt::serialization::CSerializable& obj)
 	m_written++;
 }
 
+namespace
+{
+/** Creates the folders between `root` (which must exist) and `dir`, never
+ * `root` itself: once an interrupt has removed the staged images folder, a
+ * writer still running must not bring it back (it would be left behind). */
+void createFoldersInside(const fs::path& root, const fs::path& dir)
+{
+	std::error_code ec;
+	const fs::path rel = dir.lexically_relative(root);
+	fs::path at = root;
+	for (const auto& part : rel)
+	{
+		if (part == "." || part.empty()) continue;
+		at /= part;
+		fs::create_directory(at, root, ec);  // fails, as it should, when `root` is gone
+	}
+}
+}  // namespace
+
 void RawlogWriter::externalise(mrpt::img::CImage& img, const std::string& name)
 {
 	if (!m_externalImages) return;
@@ -261,7 +280,7 @@ void RawlogWriter::externalise(mrpt::img::CImage& img, const std::string& name)
 	std::error_code ec;
 	if (fs::exists(file, ec))
 		throw RawlogError("'" + m_path + "': two images would be written as '" + name + "'");
-	if (file.has_parent_path()) fs::create_directories(file.parent_path(), ec);
+	createFoldersInside(stagedImagesDir(), file.parent_path());
 	if (!img.saveToFile(file.string()))
 		throw RawlogError("'" + m_path + "': cannot write external image '" + file.string() + "'");
 	img.setExternalStorage(name);
@@ -293,7 +312,7 @@ void RawlogWriter::carryExternalImage(mrpt::img::CImage& img, const std::string&
 	}
 	if (!fs::is_regular_file(src, ec))
 		throw RawlogError("external image '" + src.string() + "' is missing");
-	if (dst.has_parent_path()) fs::create_directories(dst.parent_path(), ec);
+	createFoldersInside(stagedImagesDir(), dst.parent_path());
 	// A hard link costs nothing; across file systems, a copy.
 	fs::create_hard_link(src, dst, ec);
 	if (ec)
