@@ -165,7 +165,7 @@ void TRobotCarCameraModel::readLut(const std::string& modelsDir, int width, int 
 	}
 }
 
-cv::Mat TRobotCarCameraModel::rectify(const cv::Mat& raw, const std::string& what) const
+cv::Mat TRobotCarCameraModel::rectify(const cv::Mat& raw, const std::string& what, bool edgeAware) const
 {
 	if (raw.channels() != 1)
 		throw DatasetError(what + ": " + std::to_string(raw.channels()) + " channels, a raw Bayer mosaic has 1 (already demosaiced?)");
@@ -175,9 +175,9 @@ cv::Mat TRobotCarCameraModel::rectify(const cv::Mat& raw, const std::string& wha
 			name + "' is for " + std::to_string(mapX.cols) + "x" + std::to_string(mapX.rows));
 	// The stereo camera's pattern is GBRG (row 0: G B, row 1: R G); OpenCV
 	// names Bayer codes by the second row's 2nd and 3rd pixels, so GBRG is
-	// its BayerGR (alias BayerGBRG). Bilinear, as the SDK demosaics.
+	// its BayerGR (alias BayerGBRG). Bilinear is what the SDK does.
 	cv::Mat bgr, out;
-	cv::cvtColor(raw, bgr, cv::COLOR_BayerGBRG2BGR);
+	cv::cvtColor(raw, bgr, edgeAware ? cv::COLOR_BayerGBRG2BGR_EA : cv::COLOR_BayerGBRG2BGR);
 	// The SDK undistorts after demosaicing, bilinear, zero outside the image.
 	cv::remap(bgr, out, mapX, mapY, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(0));
 	return out;
@@ -397,7 +397,8 @@ TImportResult RobotCarImporter::run(const std::string& traversal, const std::str
 	MRPT_LOG_INFO_STREAM(
 		"RobotCar traversal '" << traversal << "': " << stamps.size() << " frames, importing " << frames.size()
 							   << " (from #" << firstFrame << ", every " << stride << "), " << roi.width << "x" << roi.height
-							   << ", baseline " << baseline << " m, ground truth: " << (groundTruth ? insPath : "none"));
+							   << ", baseline " << baseline << " m, demosaicing " << (edgeAwareDemosaic ? "edge-aware" : "bilinear")
+							   << ", ground truth: " << (groundTruth ? insPath : "none"));
 
 	detail::StereoSink sink(outRawlog, options, *this);
 	sink.addInput(traversal, "RobotCar traversal folder");
@@ -411,7 +412,7 @@ TImportResult RobotCarImporter::run(const std::string& traversal, const std::str
 		const cv::Mat rawL = k == 0 ? first : detail::readImage(imagePath(traversal, "left", t), frame + " left");
 		const cv::Mat rawR = detail::readImage(imagePath(traversal, "right", t), frame + " right");
 		const double seconds = double(t) * 1e-6;
-		sink.add(L.rectify(rawL, frame + " left")(roi), R.rectify(rawR, frame + " right")(roi), seconds, frame);
+		sink.add(L.rectify(rawL, frame + " left", edgeAwareDemosaic)(roi), R.rectify(rawR, frame + " right", edgeAwareDemosaic)(roi), seconds, frame);
 		if (groundTruth)
 			sink.groundTruth.push_back({mrpt::Clock::toDouble(detail::timestampFromSeconds(seconds)), gt[k]});
 	}

@@ -4,6 +4,7 @@
  * from the known poses), and bad input. */
 #include <shadyloc/datasets/RobotCar.h>
 #include <shadyloc/io/Rawlog.h>
+#include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/io/Tum.h>
 
 #include "../support/Sequences.h"
@@ -19,6 +20,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <map>
 
 using namespace shadyloc::datasets;
 namespace fs = std::filesystem;
@@ -85,9 +87,10 @@ cv::Mat mosaicGBRG(const cv::Mat& bgr)
 	return raw;
 }
 
-void writeModel(const std::string& dir, const std::string& name, double cx, const Eigen::Isometry3d& G)
+void writeModel(
+	const std::string& dir, const std::string& name, const shadyloc::geometry::TStereoCalib& c, double cx,
+	const Eigen::Isometry3d& G)
 {
-	const auto& c = corridor().calib;
 	std::ofstream f(dir + "/" + name + ".txt");
 	char b[256];
 	std::snprintf(b, sizeof b, "%.6f %.6f %.6f %.6f\n", c.fx, c.fy, cx, c.cy);
@@ -116,17 +119,37 @@ void writeLut(const std::string& dir, const std::string& name, int w, int h, dou
 	f.write(reinterpret_cast<const char*>(lut.data()), std::streamsize(lut.size() * sizeof(double)));
 }
 
-/** gps/ins.csv with rows every 20 ms, offset 7 ms from the frames, from
- * 60 ms before frame 0 to 60 ms after the last frame. */
-void writeIns(const std::string& path)
+/** Both models of a rectified pair with calibration c, and their LUTs. */
+void writeModels(const std::string& dir, const shadyloc::geometry::TStereoCalib& c, int w, int h, double du, double dv)
+{
+	fs::create_directories(dir);
+	writeModel(dir, "stereo_wide_left", c, c.cx, G_camera_image(0));
+	writeModel(dir, "stereo_wide_right", c, c.cxR, G_camera_image(c.baseline));
+	for (const char* name : {"stereo_wide_left", "stereo_wide_right"}) writeLut(dir, name, w, h, du, dv);
+}
+
+void writeExtrinsics(const std::string& dir)
+{
+	fs::create_directories(dir);
+	auto line = [](const double v[6]) {
+		char b[200];
+		std::snprintf(b, sizeof b, "%.6f %.6f %.6f %.6f %.6f %.6f\n", v[0], v[1], v[2], v[3], v[4], v[5]);
+		return std::string(b);
+	};
+	std::ofstream(dir + "/stereo.txt") << line(kStereoXyzrpy);
+	std::ofstream(dir + "/ins.txt") << line(kInsXyzrpy);
+}
+
+/** gps/ins.csv: one row per (time, T_world_left), as the INS would see it. */
+void writeIns(const std::string& path, const std::vector<std::pair<int64_t, Eigen::Isometry3d>>& poses)
 {
 	std::ofstream f(path);
 	f << "timestamp,ins_status,latitude,longitude,altitude,northing,easting,down,utm_zone,"
 		 "velocity_north,velocity_east,velocity_down,roll,pitch,yaw\n";
 	const Eigen::Isometry3d T_left_ins = T_ins_left().inverse();
-	for (int64_t t = kT0 - 53000; t <= kT0 + (kFrames - 1) * kFramePeriod + 60000; t += 20000)
+	for (const auto& [t, T_world_left] : poses)
 	{
-		const Eigen::Isometry3d T = leftPoseAt(double(t - kT0) / kFramePeriod) * T_left_ins;
+		const Eigen::Isometry3d T = T_world_left * T_left_ins;
 		const Eigen::Vector3d ypr = T.linear().eulerAngles(2, 1, 0);  // R = Rz(yaw) Ry(pitch) Rx(roll)
 		const Eigen::Vector3d p = T.translation();
 		char b[400];
@@ -137,41 +160,42 @@ void writeIns(const std::string& path)
 	}
 }
 
+/** One frame of a traversal: both mosaics, and its stereo.timestamps line. */
+void writeFrame(const std::string& traversal, int64_t t, const cv::Mat& left, const cv::Mat& right)
+{
+	const std::string name = std::to_string(t) + ".png";
+	EXPECT_TRUE(cv::imwrite(traversal + "/stereo/left/" + name, mosaicGBRG(left)));
+	EXPECT_TRUE(cv::imwrite(traversal + "/stereo/right/" + name, mosaicGBRG(right)));
+	std::ofstream(traversal + "/stereo.timestamps", std::ios::app) << t << " 1\n";
+}
+
 struct TReplica
 {
 	std::string traversal, models, extrinsics;
 };
 
+TReplica replicaFolders(const std::string& dir, const std::string& name)
+{
+	TReplica r{dir + "/" + name, dir + "/models", dir + "/extrinsics"};
+	for (const char* sub : {"/stereo/left", "/stereo/right", "/gps", "/vo"}) fs::create_directories(r.traversal + sub);
+	std::ofstream(r.traversal + "/vo/vo.csv") << "source_timestamp,destination_timestamp,x,y,z,roll,pitch,yaw\n";
+	writeExtrinsics(r.extrinsics);
+	return r;
+}
+
 /** A RobotCar traversal of the corridor's frames, with models whose LUT
- * shifts by (du, dv) pixels. */
+ * shifts by (du, dv) pixels, and INS rows every 20 ms, 7 ms off the frames,
+ * from 53 ms before frame 0 to 60 ms after the last. */
 TReplica makeReplica(const std::string& dir, double du = 0, double dv = 0)
 {
-	TReplica r{dir + "/2014-12-12-10-45-15", dir + "/models", dir + "/extrinsics"};
-	for (const char* sub : {"/stereo/left", "/stereo/right", "/gps", "/vo"}) fs::create_directories(r.traversal + sub);
-	fs::create_directories(r.models);
-	fs::create_directories(r.extrinsics);
+	const auto r = replicaFolders(dir, "2014-12-12-10-45-15");
 	const auto& s = corridor();
-	std::ofstream ts(r.traversal + "/stereo.timestamps");
-	for (int k = 0; k < kFrames; k++)
-	{
-		const std::string t = std::to_string(kT0 + k * kFramePeriod);
-		ts << t << " 1\n";
-		EXPECT_TRUE(cv::imwrite(r.traversal + "/stereo/left/" + t + ".png", mosaicGBRG(s.left[k])));
-		EXPECT_TRUE(cv::imwrite(r.traversal + "/stereo/right/" + t + ".png", mosaicGBRG(s.right[k])));
-	}
-	writeModel(r.models, "stereo_wide_left", s.calib.cx, G_camera_image(0));
-	writeModel(r.models, "stereo_wide_right", s.calib.cxR, G_camera_image(s.calib.baseline));
-	for (const char* name : {"stereo_wide_left", "stereo_wide_right"})
-		writeLut(r.models, name, s.left[0].cols, s.left[0].rows, du, dv);
-	auto line = [](const double v[6]) {
-		char b[200];
-		std::snprintf(b, sizeof b, "%.6f %.6f %.6f %.6f %.6f %.6f\n", v[0], v[1], v[2], v[3], v[4], v[5]);
-		return std::string(b);
-	};
-	std::ofstream(r.extrinsics + "/stereo.txt") << line(kStereoXyzrpy);
-	std::ofstream(r.extrinsics + "/ins.txt") << line(kInsXyzrpy);
-	writeIns(r.traversal + "/gps/ins.csv");
-	std::ofstream(r.traversal + "/vo/vo.csv") << "source_timestamp,destination_timestamp,x,y,z,roll,pitch,yaw\n";
+	for (int k = 0; k < kFrames; k++) writeFrame(r.traversal, kT0 + k * kFramePeriod, s.left[k], s.right[k]);
+	writeModels(r.models, s.calib, s.left[0].cols, s.left[0].rows, du, dv);
+	std::vector<std::pair<int64_t, Eigen::Isometry3d>> ins;
+	for (int64_t t = kT0 - 53000; t <= kT0 + (kFrames - 1) * kFramePeriod + 60000; t += 20000)
+		ins.push_back({t, leftPoseAt(double(t - kT0) / kFramePeriod)});
+	writeIns(r.traversal + "/gps/ins.csv", ins);
 	return r;
 }
 
@@ -434,4 +458,106 @@ TEST(DatasetsRobotCar, BadInputNamesTheCulpritAndLeavesNothing)
 		<< text;
 	EXPECT_NE(text.find("stereo_wide_left.txt': no such camera model"), std::string::npos) << text;
 	expectNoOutput(out);
+}
+
+namespace
+{
+/** A number of summary.json's "ground_truth" object. */
+double groundTruthFigure(const std::string& summaryPath, const std::string& key)
+{
+	const std::string text = shadyloc::test::fileContents(summaryPath);
+	const size_t gt = text.find("\"ground_truth\"");
+	const size_t at = text.find("\"" + key + "\": ", gt);
+	if (gt == std::string::npos || at == std::string::npos) return -1;
+	return std::strtod(text.c_str() + at + key.size() + 4, nullptr);
+}
+
+/** A simulator traversal (rawlog + TUM) written as a RobotCar traversal:
+ * raw GBRG mosaics at microsecond times, identity look-up tables, INS rows
+ * at the ground truth's times. */
+void simToReplica(const std::string& rawlog, const std::string& tum, const TReplica& r)
+{
+	namespace io = shadyloc::io;
+	io::TStereoFrameSourceOptions so;
+	so.sensorLabel = io::findStereoLabel(rawlog, io::labelWithoutSuffixes({"_mono", "_inv", "_lin"}));
+	io::StereoFrameSource source(rawlog, so);
+	io::TStereoFrame f;
+	while (source.next(f))
+	{
+		if (f.index == 0) writeModels(r.models, f.calib, f.left.cols, f.left.rows, 0, 0);
+		writeFrame(r.traversal, std::llround(f.timestamp * 1e6), f.left, f.right);
+	}
+	std::vector<std::pair<int64_t, Eigen::Isometry3d>> ins;
+	for (const auto& p : io::readTum(tum)) ins.push_back({std::llround(p.t * 1e6), p.T});
+	writeIns(r.traversal + "/gps/ins.csv", ins);
+}
+}  // namespace
+
+/** "accepted" of one localiser's entry of summary.json. */
+int acceptedBy(const std::string& summaryPath, const std::string& channel)
+{
+	const std::string text = shadyloc::test::fileContents(summaryPath);
+	const size_t at = text.find("{\"channel\": \"" + channel + "\", \"accepted\": ");
+	return at == std::string::npos ? -1 : std::atoi(text.c_str() + at + channel.size() + 28);
+}
+
+// The must-show 1: replica RobotCar traversals (the default data's
+// noon and overcast, as raw mosaics) import, the noon replica surveys, and
+// the overcast replica localises against it; compared with the simulator's
+// own rawlogs of those frames. Measured (2-core VM): simulator 99.2 % true
+// coverage in map; replica with the SDK's bilinear demosaicing 93.5 %, with
+// edge-aware demosaicing 97.6 %; no false fixes. The 1-point target is not
+// reached: demosaicing's colour fringes cost the invariant channel most (115
+// accepted fixes on the simulator's rawlogs, 14 / 19 on the replicas) and
+// its blur costs mono some (115 -> 97 / 110). The bounds below guard those
+// figures (docs/datasets.md). Needs rawlogs/generated (skipped without);
+// about two minutes on two cores.
+TEST(LocalisationRobotCarReplica, CoverageAgainstTheSimulatorsRawlogs)
+{
+	const std::string src = SHADYLOC_SOURCE_DIR, data = src + "/rawlogs/generated";
+	for (const char* f : {"noon.rawlog", "noon.tum", "overcast.rawlog", "overcast.tum"})
+		if (!fs::exists(data + "/" + f))
+			GTEST_SKIP() << "default dataset '" << data << "/" << f
+						 << "' is absent: make it with scripts/make-default-dataset.sh; test skipped";
+	const std::string dir = shadyloc::test::tempDir("robotcar_replica_localise");
+	const std::string app = "'" + shadyloc::test::appPath() + "' ";
+	const std::string cfg = " -c '" + src + "/config/vo_sim.ini' ";
+	auto run = [](const std::string& cmd) {
+		std::string out;
+		EXPECT_EQ(shadyloc::test::runCommand(cmd, &out), 0) << cmd << "\n" << out;
+	};
+	// rawlog and ground truth of each traversal, per source.
+	const std::vector<std::string> sources = {"sim", "bilinear", "edge-aware"};
+	std::map<std::string, std::map<std::string, std::pair<std::string, std::string>>> runs;
+	for (const std::string t : {"noon", "overcast"})
+	{
+		const auto r = replicaFolders(dir, t);
+		simToReplica(data + "/" + t + ".rawlog", data + "/" + t + ".tum", r);
+		runs["sim"][t] = {data + "/" + t + ".rawlog", data + "/" + t + ".tum"};
+		for (const std::string m : {"bilinear", "edge-aware"})
+		{
+			const std::string out = dir + "/" + m + "_" + t + ".rawlog";
+			run(app + "import robotcar -q " + r.traversal + " -m " + r.models + " -e " + r.extrinsics + " --demosaic " + m + " -o " + out);
+			runs[m][t] = {out, groundTruthPathFor(out)};
+		}
+	}
+	std::map<std::string, double> coverage;
+	for (const auto& s : sources)
+	{
+		auto& set = runs[s];
+		const std::string map = dir + "/" + s + "_noon.kfmap", out = dir + "/" + s + "_loc";
+		run(app + "survey -q -i " + set["noon"].first + " -o " + map + cfg + "--gt " + set["noon"].second);
+		run(app + "localise -q -m " + map + " -i " + set["overcast"].first + " -o " + out + cfg + "-c '" + src +
+			"/config/localise_sim.ini' --gt " + set["overcast"].second);
+		const std::string summary = out + "/summary.json";
+		coverage[s] = groundTruthFigure(summary, "true_coverage_in_map");
+		std::printf(
+			"%-10s: overcast against the noon map, true coverage in map %.4f, false fixes %.0f; accepted: mono %d, invariant %d\n",
+			s.c_str(), coverage[s], groundTruthFigure(summary, "false_fixes"), acceptedBy(summary, "mono"),
+			acceptedBy(summary, "invariant"));
+		EXPECT_EQ(groundTruthFigure(summary, "false_fixes"), 0.0) << s;
+	}
+	ASSERT_GT(coverage["sim"], 0.9);
+	EXPECT_GE(coverage["bilinear"], coverage["sim"] - 0.07);
+	EXPECT_GE(coverage["edge-aware"], coverage["sim"] - 0.025);
 }

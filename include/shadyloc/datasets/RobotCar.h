@@ -48,8 +48,9 @@ struct TRobotCarCameraModel
 	/** Reads MODELS/<name>_distortion_lut.bin for w x h images; the file
 	 * must hold exactly 2 w h finite doubles (DatasetError otherwise). */
 	void readLut(const std::string& modelsDir, int width, int height);
-	/** A raw GBRG mosaic (8-bit, 1 channel) -> demosaiced, rectified BGR. */
-	cv::Mat rectify(const cv::Mat& raw, const std::string& what) const;
+	/** A raw GBRG mosaic (8-bit, 1 channel) -> demosaiced (bilinear as the
+	 * SDK, or OpenCV's edge-aware), rectified BGR. */
+	cv::Mat rectify(const cv::Mat& raw, const std::string& what, bool edgeAware = false) const;
 };
 
 /** The SDK's "x y z roll pitch yaw" [m, rad] as a transform, R = Rz Ry Rx. */
@@ -91,6 +92,9 @@ class RobotCarImporter : public mrpt::system::COutputLogger
 	size_t firstFrame = 0;	//!< first line of stereo.timestamps imported (0-based)
 	size_t stride = 1;	//!< import every stride-th frame from firstFrame
 	cv::Rect crop;	//!< of the rectified images (empty: none); intrinsics follow
+	/** OpenCV's edge-aware demosaicing instead of the SDK's bilinear: fewer
+	 * colour fringes, which the invariant channel is sensitive to (docs). */
+	bool edgeAwareDemosaic = false;
 
 	/** DatasetError naming the file / frame at fault; then nothing is written. */
 	TImportResult run(const std::string& traversalDir, const std::string& outRawlog);
