@@ -280,6 +280,7 @@ std::vector<TStereoStamp> readStereoTimestamps(const std::string& path)
 		if (tok.empty()) continue;
 		if (tok.size() > 2) throw DatasetError(at(path, n) + ": expected '<timestamp_us> <chunk>'");
 		const int64_t t = parseInt64(tok[0], at(path, n));
+		if (t <= 0) throw DatasetError(at(path, n) + ": timestamp " + tok[0] + " is not a Unix time in microseconds (> 0)");
 		if (tok.size() == 2) parseInt64(tok[1], at(path, n) + " (chunk)");
 		if (!out.empty() && t <= out.back().t_us)
 			throw DatasetError(at(path, n) + ": timestamp " + tok[0] + " is not after the line before: timestamps must increase");
@@ -384,7 +385,8 @@ TImportResult RobotCarImporter::run(const std::string& traversal, const std::str
 	if (groundTruth) gt = groundTruthPoses(frames, insPath, stampsPath, extrinsicsDir, L);
 
 	// The images give the look-up tables' size.
-	const cv::Mat first = detail::readImage(imagePath(traversal, "left", frames[0].t_us), "frame 0 left");
+	const auto frameName = [&](size_t k) { return "frame " + std::to_string(k) + " (" + std::to_string(frames[k].t_us) + ")"; };
+	const cv::Mat first = detail::readImage(imagePath(traversal, "left", frames[0].t_us), frameName(0) + " left");
 	L.readLut(modelsDir, first.cols, first.rows);
 	R.readLut(modelsDir, first.cols, first.rows);
 	const cv::Rect full(0, 0, first.cols, first.rows);
@@ -408,7 +410,7 @@ TImportResult RobotCarImporter::run(const std::string& traversal, const std::str
 	for (size_t k = 0; k < frames.size(); k++)
 	{
 		const int64_t t = frames[k].t_us;
-		const std::string frame = "frame " + std::to_string(k) + " (" + std::to_string(t) + ")";
+		const std::string frame = frameName(k);
 		const cv::Mat rawL = k == 0 ? first : detail::readImage(imagePath(traversal, "left", t), frame + " left");
 		const cv::Mat rawR = detail::readImage(imagePath(traversal, "right", t), frame + " right");
 		const double seconds = double(t) * 1e-6;

@@ -440,6 +440,8 @@ TEST(DatasetsRobotCar, BadInputNamesTheCulpritAndLeavesNothing)
 	fs::copy_file(stamps, dir + "/stamps");
 	std::ofstream(stamps, std::ios::app) << kT0 << " 1\n";
 	expectError(rep, "stereo.timestamps':7: timestamp");
+	std::ofstream(stamps) << "-" << kT0 << " 1\n";
+	expectError(rep, "stereo.timestamps':1: timestamp -" + std::to_string(kT0) + " is not a Unix time in microseconds");
 	fs::copy_file(dir + "/stamps", stamps, fs::copy_options::overwrite_existing);
 
 	// Good again; then the command line's message and exit status for one case.
