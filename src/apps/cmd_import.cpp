@@ -171,10 +171,10 @@ int runRobotCar(int argc, char** argv)
 	TCLAP::SwitchArg noGt("", "no-ground-truth", "do not read gps/ins.csv (no <out>_gt.tum)", cmd);
 	shadyloc::apps::NumberArg<size_t> first(cli, "", "first-frame", "first frame imported (0-based line of stereo.timestamps)", 0, "N");
 	shadyloc::apps::NumberArg<size_t> stride(cli, "", "stride", "import every K-th frame from --first-frame (>= 1)", 1, "K", 1);
-	std::vector<std::string> methods{"bilinear", "edge-aware"};
+	std::vector<std::string> methods{"bilinear", "edge-aware", "half"};
 	TCLAP::ValuesConstraint<std::string> methodNames(methods);
 	TCLAP::ValueArg<std::string> demosaic(
-		"", "demosaic", "bilinear (the SDK's) or edge-aware (OpenCV's: fewer colour fringes; docs/datasets.md)", false,
+		"", "demosaic", "bilinear (the SDK's), edge-aware (OpenCV's: fewer colour fringes) or half (half resolution, one pixel per Bayer cell: no interpolated colour; intrinsics halved); docs/datasets.md", false,
 		"bilinear", &methodNames, cmd);
 	TCLAP::ValueArg<std::string> crop("", "crop", "keep X,Y,W,H of the rectified images [px] (principal points follow)", false, "", "X,Y,W,H", cmd);
 	CommonArgs common(cli);
@@ -195,7 +195,9 @@ int runRobotCar(int argc, char** argv)
 	imp.groundTruth = !noGt.getValue();
 	imp.firstFrame = first.getValue();
 	imp.stride = stride.getValue();
-	imp.edgeAwareDemosaic = demosaic.getValue() == "edge-aware";
+	imp.demosaic = demosaic.getValue() == "half"		  ? TDemosaic::HalfResolution
+				   : demosaic.getValue() == "edge-aware" ? TDemosaic::EdgeAware
+														 : TDemosaic::Bilinear;
 	common.setup(imp);
 	report(imp.run(root.getValue(), common.out.getValue()));
 	return 0;

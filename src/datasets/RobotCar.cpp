@@ -165,19 +165,59 @@ void TRobotCarCameraModel::readLut(const std::string& modelsDir, int width, int 
 	}
 }
 
-cv::Mat TRobotCarCameraModel::rectify(const cv::Mat& raw, const std::string& what, bool edgeAware) const
+TRobotCarCameraModel TRobotCarCameraModel::halved() const
+{
+	if (mapX.empty() || mapX.cols % 2 || mapX.rows % 2)
+		throw DatasetError(
+			"'" + name + "': half-resolution demosaicing needs an even image size (Bayer cells of 2x2), got " +
+			std::to_string(mapX.cols) + "x" + std::to_string(mapX.rows));
+	TRobotCarCameraModel h = *this;
+	// Pixel centres: full-resolution 2x + 0.5 is half-resolution x.
+	h.fx = fx / 2, h.fy = fy / 2, h.cx = (cx - 0.5) / 2, h.cy = (cy - 0.5) / 2;
+	// INTER_AREA at exactly half size is the mean of each 2x2 block: the
+	// table's value at the block's centre, to first order.
+	cv::resize(mapX, h.mapX, cv::Size(mapX.cols / 2, mapX.rows / 2), 0, 0, cv::INTER_AREA);
+	cv::resize(mapY, h.mapY, cv::Size(mapY.cols / 2, mapY.rows / 2), 0, 0, cv::INTER_AREA);
+	h.mapX = (h.mapX - 0.5) * 0.5;
+	h.mapY = (h.mapY - 0.5) * 0.5;
+	return h;
+}
+
+namespace
+{
+/** One BGR pixel per GBRG cell (row 0: G B, row 1: R G), green the mean of
+ * the two: every value measured, none interpolated. Blue sits a quarter
+ * output pixel up-right of the cell centre and red down-left. */
+cv::Mat superpixels(const cv::Mat& raw)
+{
+	cv::Mat out(raw.rows / 2, raw.cols / 2, CV_8UC3);
+	for (int r = 0; r < out.rows; r++)
+	{
+		const uint8_t* a = raw.ptr<uint8_t>(2 * r);
+		const uint8_t* b = raw.ptr<uint8_t>(2 * r + 1);
+		auto* o = out.ptr<cv::Vec3b>(r);
+		for (int c = 0; c < out.cols; c++)
+			o[c] = cv::Vec3b(a[2 * c + 1], uint8_t((a[2 * c] + b[2 * c + 1] + 1) / 2), b[2 * c]);
+	}
+	return out;
+}
+}  // namespace
+
+cv::Mat TRobotCarCameraModel::rectify(const cv::Mat& raw, const std::string& what, TDemosaic method) const
 {
 	if (raw.channels() != 1)
 		throw DatasetError(what + ": " + std::to_string(raw.channels()) + " channels, a raw Bayer mosaic has 1 (already demosaiced?)");
-	if (raw.cols != mapX.cols || raw.rows != mapX.rows)
+	const int k = method == TDemosaic::HalfResolution ? 2 : 1;	// raw pixels per output pixel
+	if (raw.cols != k * mapX.cols || raw.rows != k * mapX.rows)
 		throw DatasetError(
 			what + ": image is " + std::to_string(raw.cols) + "x" + std::to_string(raw.rows) + ", the look-up table of '" +
-			name + "' is for " + std::to_string(mapX.cols) + "x" + std::to_string(mapX.rows));
+			name + "' is for " + std::to_string(k * mapX.cols) + "x" + std::to_string(k * mapX.rows));
 	// The stereo camera's pattern is GBRG (row 0: G B, row 1: R G); OpenCV
 	// names Bayer codes by the second row's 2nd and 3rd pixels, so GBRG is
 	// its BayerGR (alias BayerGBRG). Bilinear is what the SDK does.
 	cv::Mat bgr, out;
-	cv::cvtColor(raw, bgr, edgeAware ? cv::COLOR_BayerGBRG2BGR_EA : cv::COLOR_BayerGBRG2BGR);
+	if (method == TDemosaic::HalfResolution) bgr = superpixels(raw);
+	else cv::cvtColor(raw, bgr, method == TDemosaic::EdgeAware ? cv::COLOR_BayerGBRG2BGR_EA : cv::COLOR_BayerGBRG2BGR);
 	// The SDK undistorts after demosaicing, bilinear, zero outside the image.
 	cv::remap(bgr, out, mapX, mapY, cv::INTER_LINEAR, cv::BORDER_CONSTANT, cv::Scalar::all(0));
 	return out;
@@ -389,17 +429,19 @@ TImportResult RobotCarImporter::run(const std::string& traversal, const std::str
 	const cv::Mat first = detail::readImage(imagePath(traversal, "left", frames[0].t_us), frameName(0) + " left");
 	L.readLut(modelsDir, first.cols, first.rows);
 	R.readLut(modelsDir, first.cols, first.rows);
-	const cv::Rect full(0, 0, first.cols, first.rows);
+	if (demosaic == TDemosaic::HalfResolution) L = L.halved(), R = R.halved();
+	const cv::Rect full(0, 0, L.mapX.cols, L.mapX.rows);  // the output images
 	const cv::Rect roi = crop.empty() ? full : crop;
 	if ((roi & full) != roi)
 		throw DatasetError(
 			"crop " + std::to_string(roi.width) + "x" + std::to_string(roi.height) + "+" + std::to_string(roi.x) + "+" +
-			std::to_string(roi.y) + " is not inside the " + std::to_string(first.cols) + "x" + std::to_string(first.rows) + " images");
+			std::to_string(roi.y) + " is not inside the " + std::to_string(full.width) + "x" + std::to_string(full.height) + " output images");
 
 	MRPT_LOG_INFO_STREAM(
 		"RobotCar traversal '" << traversal << "': " << stamps.size() << " frames, importing " << frames.size()
 							   << " (from #" << firstFrame << ", every " << stride << "), " << roi.width << "x" << roi.height
-							   << ", baseline " << baseline << " m, demosaicing " << (edgeAwareDemosaic ? "edge-aware" : "bilinear")
+							   << ", baseline " << baseline << " m, demosaicing "
+							   << (demosaic == TDemosaic::Bilinear ? "bilinear" : demosaic == TDemosaic::EdgeAware ? "edge-aware" : "half")
 							   << ", ground truth: " << (groundTruth ? insPath : "none"));
 
 	detail::StereoSink sink(outRawlog, options, *this);
@@ -414,7 +456,7 @@ TImportResult RobotCarImporter::run(const std::string& traversal, const std::str
 		const cv::Mat rawL = k == 0 ? first : detail::readImage(imagePath(traversal, "left", t), frame + " left");
 		const cv::Mat rawR = detail::readImage(imagePath(traversal, "right", t), frame + " right");
 		const double seconds = double(t) * 1e-6;
-		sink.add(L.rectify(rawL, frame + " left", edgeAwareDemosaic)(roi), R.rectify(rawR, frame + " right", edgeAwareDemosaic)(roi), seconds, frame);
+		sink.add(L.rectify(rawL, frame + " left", demosaic)(roi), R.rectify(rawR, frame + " right", demosaic)(roi), seconds, frame);
 		if (groundTruth)
 			sink.groundTruth.push_back({mrpt::Clock::toDouble(detail::timestampFromSeconds(seconds)), gt[k]});
 	}

@@ -29,6 +29,16 @@
 
 namespace shadyloc::datasets
 {
+/** How the raw mosaic becomes colour: bilinear (the SDK's), OpenCV's
+ * edge-aware interpolation, or half resolution (one BGR pixel per 2x2 Bayer
+ * cell, green averaged: no interpolated colour at all). */
+enum class TDemosaic
+{
+	Bilinear,
+	EdgeAware,
+	HalfResolution
+};
+
 /** One camera model of the SDK's models folder.
  *   <name>.txt: "fx fy cx cy" [px], then 4 lines of the 4x4 G_camera_image
  *     (the lens's image frame, z forward, into the camera's base frame,
@@ -48,9 +58,15 @@ struct TRobotCarCameraModel
 	/** Reads MODELS/<name>_distortion_lut.bin for w x h images; the file
 	 * must hold exactly 2 w h finite doubles (DatasetError otherwise). */
 	void readLut(const std::string& modelsDir, int width, int height);
-	/** A raw GBRG mosaic (8-bit, 1 channel) -> demosaiced (bilinear as the
-	 * SDK, or OpenCV's edge-aware), rectified BGR. */
-	cv::Mat rectify(const cv::Mat& raw, const std::string& what, bool edgeAware = false) const;
+	/** The same camera at half resolution (TDemosaic::HalfResolution): a
+	 * half-resolution pixel x covers full-resolution 2x .. 2x+1, centre
+	 * 2x + 0.5, so fx/2, fy/2, (cx - 0.5)/2, (cy - 0.5)/2; the table is
+	 * averaged over each 2x2 block and mapped the same way. Needs the table
+	 * read, of even width and height. */
+	TRobotCarCameraModel halved() const;
+	/** A raw GBRG mosaic (8-bit, 1 channel) -> demosaiced, rectified BGR
+	 * (HalfResolution: on a halved() model, the raw image twice its size). */
+	cv::Mat rectify(const cv::Mat& raw, const std::string& what, TDemosaic method = TDemosaic::Bilinear) const;
 };
 
 /** The SDK's "x y z roll pitch yaw" [m, rad] as a transform, R = Rz Ry Rx. */
@@ -92,9 +108,9 @@ class RobotCarImporter : public mrpt::system::COutputLogger
 	size_t firstFrame = 0;	//!< first line of stereo.timestamps imported (0-based)
 	size_t stride = 1;	//!< import every stride-th frame from firstFrame
 	cv::Rect crop;	//!< of the rectified images (empty: none); intrinsics follow
-	/** OpenCV's edge-aware demosaicing instead of the SDK's bilinear: fewer
-	 * colour fringes, which the invariant channel is sensitive to (docs). */
-	bool edgeAwareDemosaic = false;
+	/** The SDK's bilinear by default; the others leave fewer or no colour
+	 * fringes, which the invariant channel is sensitive to (docs). */
+	TDemosaic demosaic = TDemosaic::Bilinear;
 
 	/** DatasetError naming the file / frame at fault; then nothing is written. */
 	TImportResult run(const std::string& traversalDir, const std::string& outRawlog);
