@@ -131,6 +131,29 @@ int runFolder(int argc, char** argv)
 	return 0;
 }
 
+/** n comma-separated numbers; nullopt with `why` (naming `flag`) if malformed. */
+std::optional<std::vector<double>> parseNumbers(const std::string& text, size_t n, const std::string& flag, std::string& why)
+{
+	std::vector<double> v;
+	std::string tok;
+	std::istringstream ss(text);
+	try
+	{
+		while (std::getline(ss, tok, ',')) v.push_back(shadyloc::apps::parseNumber<double>(tok));
+	}
+	catch (const std::invalid_argument& e)
+	{
+		why = flag + ": " + e.what();
+		return std::nullopt;
+	}
+	if (v.size() != n)
+	{
+		why = flag + ": '" + text + "' is not " + std::to_string(n) + " comma-separated numbers";
+		return std::nullopt;
+	}
+	return v;
+}
+
 /** "X,Y,W,H" [px] -> rect; nullopt with `why` set if malformed. */
 std::optional<cv::Rect> parseCrop(const std::string& text, std::string& why)
 {
@@ -169,6 +192,9 @@ int runRobotCar(int argc, char** argv)
 	TCLAP::ValueArg<std::string> models("m", "models", "the SDK's camera models folder", true, "", "MODELS_DIR", cmd);
 	TCLAP::ValueArg<std::string> extr("e", "extrinsics", "the SDK's extrinsics folder (stereo.txt, ins.txt); needed for ground truth", false, "", "EXTRINSICS_DIR", cmd);
 	TCLAP::SwitchArg noGt("", "no-ground-truth", "do not read gps/ins.csv (no <out>_gt.tum)", cmd);
+	TCLAP::ValueArg<std::string> origin(
+		"", "gt-origin", "subtract this UTM point from the ground truth [m] (the same for every traversal of a route)",
+		false, "", "NORTHING,EASTING,DOWN", cmd);
 	shadyloc::apps::NumberArg<size_t> first(cli, "", "first-frame", "first frame imported (0-based line of stereo.timestamps)", 0, "N");
 	shadyloc::apps::NumberArg<size_t> stride(cli, "", "stride", "import every K-th frame from --first-frame (>= 1)", 1, "K", 1);
 	std::vector<std::string> methods{"bilinear", "edge-aware", "half"};
@@ -188,6 +214,14 @@ int runRobotCar(int argc, char** argv)
 		const auto r = parseCrop(crop.getValue(), why);
 		if (!r) return cli.usageError(why);
 		imp.crop = *r;
+	}
+	if (origin.isSet())
+	{
+		std::string why;
+		const auto o = parseNumbers(origin.getValue(), 3, "--gt-origin", why);
+		if (!o) return cli.usageError(why);
+		if (noGt.getValue()) return cli.usageError("--gt-origin goes with the ground truth (not with --no-ground-truth)");
+		imp.groundTruthOrigin = Eigen::Vector3d((*o)[0], (*o)[1], (*o)[2]);
 	}
 	imp.options = common.options();
 	imp.modelsDir = models.getValue();

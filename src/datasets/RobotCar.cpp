@@ -423,6 +423,7 @@ TImportResult RobotCarImporter::run(const std::string& traversal, const std::str
 	std::vector<Eigen::Isometry3d> gt;
 	const std::string insPath = (fs::path(traversal) / "gps" / "ins.csv").string();
 	if (groundTruth) gt = groundTruthPoses(frames, insPath, stampsPath, extrinsicsDir, L);
+	for (auto& T : gt) T.translation() -= groundTruthOrigin;
 
 	// The images give the look-up tables' size.
 	const auto frameName = [&](size_t k) { return "frame " + std::to_string(k) + " (" + std::to_string(frames[k].t_us) + ")"; };

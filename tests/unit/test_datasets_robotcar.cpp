@@ -297,6 +297,23 @@ TEST(DatasetsRobotCar, RoundTripImagesCalibrationAndGroundTruth)
 		EXPECT_LT(E.translation().norm(), 1e-4) << "frame " << k;
 		EXPECT_LT(Eigen::AngleAxisd(E.linear()).angle(), 1e-5) << "frame " << k;
 	}
+
+	// --gt-origin shifts the positions only.
+	std::string text;
+	ASSERT_EQ(
+		shadyloc::test::runCommand(
+			shadyloc::test::appPath() + " import robotcar -q " + rep.traversal + " -m " + rep.models + " -e " +
+				rep.extrinsics + " --gt-origin 1.5,-2,0.25 -o " + dir + "/shifted.rawlog",
+			&text),
+		0)
+		<< text;
+	const auto shifted = shadyloc::io::readTum(groundTruthPathFor(dir + "/shifted.rawlog"));
+	ASSERT_EQ(shifted.size(), gt.size());
+	for (size_t k = 0; k < gt.size(); k++)
+	{
+		EXPECT_LT((shifted[k].T.translation() + Eigen::Vector3d(1.5, -2, 0.25) - gt[k].T.translation()).norm(), 3e-9);
+		EXPECT_LT((shifted[k].T.linear() - gt[k].T.linear()).norm(), 1e-8);
+	}
 }
 
 TEST(DatasetsRobotCar, HalfResolutionDemosaicingMeasuresEveryColour)
@@ -380,7 +397,9 @@ TEST(DatasetsRobotCar, CommandWithLutShiftCropAndFrameRange)
 	for (const std::string& args :
 		 {" -m " + rep.models + " -o " + bad,	// neither --extrinsics nor --no-ground-truth
 		  " -m " + rep.models + " --no-ground-truth --crop 1,2,3 -o " + bad,
-		  " -m " + rep.models + " --no-ground-truth --stride 0 -o " + bad})
+		  " -m " + rep.models + " --no-ground-truth --stride 0 -o " + bad,
+		  " -m " + rep.models + " -e " + rep.extrinsics + " --gt-origin 1,2 -o " + bad,
+		  " -m " + rep.models + " --no-ground-truth --gt-origin 1,2,3 -o " + bad})
 	{
 		EXPECT_EQ(shadyloc::test::runCommand(shadyloc::test::appPath() + " import robotcar " + rep.traversal + args, &text), 2)
 			<< args << "\n" << text;

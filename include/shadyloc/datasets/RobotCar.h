@@ -96,7 +96,8 @@ Eigen::Isometry3d interpolateRobotCarIns(
  *   T_world_left(t) = T_world_ins(t) * (G_stereo_vehicle * G_vehicle_ins)^-1 * G_camera_image(left)
  * with G_stereo_vehicle from EXTRINSICS/stereo.txt and G_vehicle_ins from
  * EXTRINSICS/ins.txt, composed as the SDK's project_laser_into_camera does.
- * World = UTM north, east, down (absolute: traversals share it). */
+ * World = UTM north, east, down (absolute: traversals share it), shifted
+ * by -groundTruthOrigin. */
 class RobotCarImporter : public mrpt::system::COutputLogger
 {
    public:
@@ -105,6 +106,10 @@ class RobotCarImporter : public mrpt::system::COutputLogger
 	std::string modelsDir;	//!< the SDK's models folder (required)
 	std::string extrinsicsDir;	//!< the SDK's extrinsics folder (required with groundTruth)
 	bool groundTruth = true;  //!< write <stem>_gt.tum from gps/ins.csv
+	/** Subtracted from every ground-truth position (UTM northing, easting,
+	 * down [m]): float consumers (OpenGL rendering) lose half a metre at
+	 * 5.7e6 m; give every traversal of a route the same origin. */
+	Eigen::Vector3d groundTruthOrigin = Eigen::Vector3d::Zero();
 	size_t firstFrame = 0;	//!< first line of stereo.timestamps imported (0-based)
 	size_t stride = 1;	//!< import every stride-th frame from firstFrame
 	cv::Rect crop;	//!< of the rectified images (empty: none); intrinsics follow
