@@ -183,7 +183,7 @@ int runRobotCar(int argc, char** argv)
 	shadyloc::apps::CommandLine cli(
 		"Imports the wide stereo pair of an Oxford RobotCar traversal (stereo.timestamps, stereo/left and "
 		"stereo/right raw Bayer GBRG PNGs, gps/ins.csv) with the RobotCar SDK's camera models "
-		"(stereo_wide_left/right .txt and _distortion_lut.bin): images demosaiced (bilinear) and remapped "
+		"(stereo_wide_left/right .txt and _distortion_lut.bin): images demosaiced (bilinear unless --demosaic) and remapped "
 		"through the SDK's look-up tables (undistorted and rectified), calibration from the models; ground "
 		"truth of the left camera from the INS, interpolated to image times, with the SDK's extrinsics "
 		"(stereo.txt, ins.txt) -> <out>_gt.tum (docs/datasets.md).");
