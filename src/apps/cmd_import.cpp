@@ -1,13 +1,17 @@
-/* shadyloc import <kitti|middlebury|folder>: datasets -> stereo rawlog. */
+/* shadyloc import <kitti|middlebury|folder|robotcar>: datasets -> stereo rawlog. */
 #include "Command.h"
 #include "CommandLine.h"
 
 #include <shadyloc/datasets/Folder.h>
 #include <shadyloc/datasets/Kitti.h>
 #include <shadyloc/datasets/Middlebury.h>
+#include <shadyloc/datasets/RobotCar.h>
 
 
 #include <cstring>
+#include <optional>
+#include <sstream>
+#include <vector>
 #include <iostream>
 #include <memory>
 
@@ -127,15 +131,122 @@ int runFolder(int argc, char** argv)
 	return 0;
 }
 
+/** n comma-separated numbers; nullopt with `why` (naming `flag`) if malformed. */
+std::optional<std::vector<double>> parseNumbers(const std::string& text, size_t n, const std::string& flag, std::string& why)
+{
+	std::vector<double> v;
+	std::string tok;
+	std::istringstream ss(text);
+	try
+	{
+		while (std::getline(ss, tok, ',')) v.push_back(shadyloc::apps::parseNumber<double>(tok));
+	}
+	catch (const std::invalid_argument& e)
+	{
+		why = flag + ": " + e.what();
+		return std::nullopt;
+	}
+	if (v.size() != n)
+	{
+		why = flag + ": '" + text + "' is not " + std::to_string(n) + " comma-separated numbers";
+		return std::nullopt;
+	}
+	return v;
+}
+
+/** "X,Y,W,H" [px] -> rect; nullopt with `why` set if malformed. */
+std::optional<cv::Rect> parseCrop(const std::string& text, std::string& why)
+{
+	std::vector<int> v;
+	std::string tok;
+	std::istringstream ss(text);
+	try
+	{
+		while (std::getline(ss, tok, ','))
+			v.push_back(shadyloc::apps::parseNumber<int>(tok));
+	}
+	catch (const std::invalid_argument& e)
+	{
+		why = std::string("--crop: ") + e.what();
+		return std::nullopt;
+	}
+	if (v.size() != 4 || v[0] < 0 || v[1] < 0 || v[2] < 1 || v[3] < 1)
+	{
+		why = "--crop: '" + text + "' is not X,Y,W,H (pixels, X and Y >= 0, W and H >= 1)";
+		return std::nullopt;
+	}
+	return cv::Rect(v[0], v[1], v[2], v[3]);
+}
+
+int runRobotCar(int argc, char** argv)
+{
+	shadyloc::apps::CommandLine cli(
+		"Imports the wide stereo pair of an Oxford RobotCar traversal (stereo.timestamps, stereo/left and "
+		"stereo/right raw Bayer GBRG PNGs, gps/ins.csv) with the RobotCar SDK's camera models "
+		"(stereo_wide_left/right .txt and _distortion_lut.bin): images demosaiced (bilinear unless --demosaic) and remapped "
+		"through the SDK's look-up tables (undistorted and rectified), calibration from the models; ground "
+		"truth of the left camera from the INS, interpolated to image times, with the SDK's extrinsics "
+		"(stereo.txt, ins.txt) -> <out>_gt.tum (docs/datasets.md).");
+	auto& cmd = cli.cmd();
+	TCLAP::UnlabeledValueArg<std::string> root("traversal", "RobotCar traversal folder (holds stereo/, stereo.timestamps, gps/)", true, "", "TRAVERSAL", cmd);
+	TCLAP::ValueArg<std::string> models("m", "models", "the SDK's camera models folder", true, "", "MODELS_DIR", cmd);
+	TCLAP::ValueArg<std::string> extr("e", "extrinsics", "the SDK's extrinsics folder (stereo.txt, ins.txt); needed for ground truth", false, "", "EXTRINSICS_DIR", cmd);
+	TCLAP::SwitchArg noGt("", "no-ground-truth", "do not read gps/ins.csv (no <out>_gt.tum)", cmd);
+	TCLAP::ValueArg<std::string> origin(
+		"", "gt-origin", "subtract this UTM point from the ground truth [m] (the same for every traversal of a route)",
+		false, "", "NORTHING,EASTING,DOWN", cmd);
+	shadyloc::apps::NumberArg<size_t> first(cli, "", "first-frame", "first frame imported (0-based line of stereo.timestamps)", 0, "N");
+	shadyloc::apps::NumberArg<size_t> stride(cli, "", "stride", "import every K-th frame from --first-frame (>= 1)", 1, "K", 1);
+	std::vector<std::string> methods{"bilinear", "edge-aware", "half"};
+	TCLAP::ValuesConstraint<std::string> methodNames(methods);
+	TCLAP::ValueArg<std::string> demosaic(
+		"", "demosaic", "bilinear (the SDK's), edge-aware (OpenCV's: fewer colour fringes) or half (half resolution, one pixel per Bayer cell: no interpolated colour; intrinsics halved); docs/datasets.md", false,
+		"bilinear", &methodNames, cmd);
+	TCLAP::ValueArg<std::string> crop("", "crop", "keep X,Y,W,H of the rectified images [px] (principal points follow)", false, "", "X,Y,W,H", cmd);
+	CommonArgs common(cli);
+	if (const auto rc = cli.parse(argc, argv)) return *rc;
+	if (noGt.getValue() == extr.isSet())
+		return cli.usageError("give --extrinsics DIR (ground truth from gps/ins.csv) or --no-ground-truth");
+	RobotCarImporter imp;
+	if (crop.isSet())
+	{
+		std::string why;
+		const auto r = parseCrop(crop.getValue(), why);
+		if (!r) return cli.usageError(why);
+		imp.crop = *r;
+	}
+	if (origin.isSet())
+	{
+		std::string why;
+		const auto o = parseNumbers(origin.getValue(), 3, "--gt-origin", why);
+		if (!o) return cli.usageError(why);
+		if (noGt.getValue()) return cli.usageError("--gt-origin goes with the ground truth (not with --no-ground-truth)");
+		imp.groundTruthOrigin = Eigen::Vector3d((*o)[0], (*o)[1], (*o)[2]);
+	}
+	imp.options = common.options();
+	imp.modelsDir = models.getValue();
+	imp.extrinsicsDir = extr.getValue();
+	imp.groundTruth = !noGt.getValue();
+	imp.firstFrame = first.getValue();
+	imp.stride = stride.getValue();
+	imp.demosaic = demosaic.getValue() == "half"		  ? TDemosaic::HalfResolution
+				   : demosaic.getValue() == "edge-aware" ? TDemosaic::EdgeAware
+														 : TDemosaic::Bilinear;
+	common.setup(imp);
+	report(imp.run(root.getValue(), common.out.getValue()));
+	return 0;
+}
+
 int run(int argc, char** argv)
 {
 	static const std::pair<const char*, int (*)(int, char**)> kinds[] = {
-		{"kitti", runKitti}, {"middlebury", runMiddlebury}, {"folder", runFolder}};
+		{"kitti", runKitti}, {"middlebury", runMiddlebury}, {"folder", runFolder}, {"robotcar", runRobotCar}};
 	auto usage = [&](std::ostream& o) {
 		o << "usage: shadyloc import <kind> [options]   (shadyloc import <kind> --help)\nkinds:\n"
 			 "  kitti ROOT --sequence NN -o out.rawlog     KITTI odometry, colour cameras\n"
 			 "  middlebury SCENE_DIR -o out.rawlog          Middlebury 2014 scene\n"
-			 "  folder --left DIR --right DIR --calib calib.ini -o out.rawlog (--rate HZ | --times FILE)\n";
+			 "  folder --left DIR --right DIR --calib calib.ini -o out.rawlog (--rate HZ | --times FILE)\n"
+			 "  robotcar TRAVERSAL -m MODELS (-e EXTRINSICS | --no-ground-truth) -o out.rawlog   Oxford RobotCar\n";
 	};
 	if (argc >= 2 && !std::strcmp(argv[1], "--version"))
 	{
@@ -160,5 +271,5 @@ int run(int argc, char** argv)
 }
 
 shadyloc::apps::RegisterCommand reg(
-	"import", {"KITTI / Middlebury / image folders -> stereo rawlog (import <kind> --help)", run});
+	"import", {"KITTI / Middlebury / image folders / RobotCar -> stereo rawlog (import <kind> --help)", run});
 }  // namespace

@@ -99,14 +99,15 @@ TEST(CommandLine, EveryCommandRefusesUnknownFlagsAndBadNumbers)
 		 {"import folder --left " + dir + " --right " + dir + " --calib x.ini --rate 10 -o " + o + " --max-frames -1",
 		  "max-frames"},
 		 {"import folder --left " + dir + " --right " + dir + " --calib x.ini --rate inf -o " + o, "rate"},
-		 {"import middlebury " + dir + " -o " + o + " --timestamp abc", "timestamp"}},
+		 {"import middlebury " + dir + " -o " + o + " --timestamp abc", "timestamp"},
+		 {"import robotcar " + dir + " -m " + dir + " --no-ground-truth -o " + o + " --first-frame -3", "first-frame"}},
 		o);
 }
 
 TEST(CommandLine, HelpAndVersionExitZero)
 {
 	for (const char* c : {"image", "vo", "filter", "sim", "traj-error", "render", "render-traj", "survey", "map-info", "localise", "eval", "calibrate-alpha", "figures", "export kitti",
-								"import kitti", "import folder", "import middlebury"})
+								"import kitti", "import folder", "import middlebury", "import robotcar"})
 	{
 		std::string out;
 		EXPECT_EQ(test::runCommand(test::appPath() + " " + c + " --help", &out), 0) << c << "\n" << out;
