@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 namespace shadyloc::features
 {
@@ -70,20 +71,35 @@ bool locateWarpedPatch(
 	// The keyframe's pixel grid around (x0, y0): the patch, its search
 	// radius and the margin refinePatch2D's cubic interpolation reads.
 	const int half = kPatchSize / 2 + radius_px + 4, side = 2 * half + 1;
+	// (x0, y0) + A (c - half, r - half), written out (an Eigen temporary
+	// returned from here trips GCC 12's uninitialised-value warning).
+	const auto at = [&](int c, int r) {
+		const double dc = c - half, dr = r - half;
+		return std::pair<double, double>(x0 + (A(0, 0) * dc + A(0, 1) * dr), y0 + (A(1, 0) * dc + A(1, 1) * dr));
+	};
+	// An affine map takes the grid's extremes to its corners: when they read
+	// inside the image, every pixel does, and the truncating casts below are
+	// floor and round (the coordinates and values are >= 0). Hot: a call
+	// to floor or lround per pixel cost more than the interpolation.
+	for (const int c : {0, side - 1})
+		for (const int r : {0, side - 1})
+		{
+			const auto [px, py] = at(c, r);
+			if (!(px >= 0 && py >= 0 && std::floor(px) + 1 < img.cols && std::floor(py) + 1 < img.rows)) return false;
+		}
 	cv::Mat local(side, side, CV_8UC1);
 	for (int r = 0; r < side; r++)
 	{
 		uint8_t* row = local.ptr<uint8_t>(r);
 		for (int c = 0; c < side; c++)
 		{
-			const Eigen::Vector2d p = Eigen::Vector2d(x0, y0) + A * Eigen::Vector2d(c - half, r - half);
-			const int ix = static_cast<int>(std::floor(p.x())), iy = static_cast<int>(std::floor(p.y()));
-			if (ix < 0 || iy < 0 || ix + 1 >= img.cols || iy + 1 >= img.rows) return false;
-			const double fx = p.x() - ix, fy = p.y() - iy;
+			const auto [px, py] = at(c, r);
+			const int ix = static_cast<int>(px), iy = static_cast<int>(py);
+			const double fx = px - ix, fy = py - iy;
 			const uint8_t* a = img.ptr<uint8_t>(iy) + ix;
 			const uint8_t* b = img.ptr<uint8_t>(iy + 1) + ix;
 			const double v = (1 - fy) * ((1 - fx) * a[0] + fx * a[1]) + fy * ((1 - fx) * b[0] + fx * b[1]);
-			row[c] = static_cast<uint8_t>(std::lround(v));
+			row[c] = static_cast<uint8_t>(v + 0.5);
 		}
 	}
 	float xl, yl;

@@ -380,30 +380,49 @@ bool refinePatch2D(
 		double wx[4], dwx[4], wy[4], dwy[4];
 		keysWeights(x - ix, wx, dwx);
 		keysWeights(y - iy, wy, dwy);
-		Eigen::Matrix4d H = Eigen::Matrix4d::Zero();
-		Eigen::Vector4d b = Eigen::Vector4d::Zero();
-		for (int dy = -h; dy <= h; dy++)
-			for (int dx = -h; dx <= h; dx++)
+		// The cubic is separable: each image row's horizontal sums once
+		// (size + 3 rows), then the vertical sums per template pixel, in the
+		// same order as the direct 4x4 sum, so the result is the same.
+		const int rows = size + 3;
+		thread_local std::vector<double> S, SD;
+		S.resize(size_t(rows) * size);
+		SD.resize(size_t(rows) * size);
+		for (int k = 0; k < rows; k++)
+		{
+			const uint8_t* row = img.ptr<uint8_t>(iy - h - 1 + k) + ix - h - 1;
+			for (int dx = 0; dx < size; dx++)
+			{
+				const uint8_t* q = row + dx;
+				S[k * size + dx] = wx[0] * q[0] + wx[1] * q[1] + wx[2] * q[2] + wx[3] * q[3];
+				SD[k * size + dx] = dwx[0] * q[0] + dwx[1] * q[1] + dwx[2] * q[2] + dwx[3] * q[3];
+			}
+		}
+		double H[4][4] = {}, b[4] = {};
+		for (int ty = 0; ty < size; ty++)
+			for (int tx = 0; tx < size; tx++)
 			{
 				double I = 0, Ix = 0, Iy = 0;
 				for (int k = 0; k < 4; k++)
 				{
-					const uint8_t* row = img.ptr<uint8_t>(iy + dy - 1 + k) + ix + dx - 1;
-					const double s = wx[0] * row[0] + wx[1] * row[1] + wx[2] * row[2] + wx[3] * row[3];
-					const double sd = dwx[0] * row[0] + dwx[1] * row[1] + dwx[2] * row[2] + dwx[3] * row[3];
+					const double s = S[(ty + k) * size + tx], sd = SD[(ty + k) * size + tx];
 					I += wy[k] * s;
 					Iy += dwy[k] * s;
 					Ix += wy[k] * sd;
 				}
-				const double T = tmpl[(dy + h) * size + dx + h];
+				const double T = tmpl[ty * size + tx];
 				const double e = I - g * T - c;
-				const Eigen::Vector4d J(Ix, Iy, -T, -1);
-				H.noalias() += J * J.transpose();
-				b.noalias() += J * e;
+				const double J[4] = {Ix, Iy, -T, -1};
+				for (int i = 0; i < 4; i++)
+				{
+					for (int j = 0; j <= i; j++) H[i][j] += J[i] * J[j];
+					b[i] += J[i] * e;
+				}
 			}
-		const Eigen::LDLT<Eigen::Matrix4d> ldlt(H);
+		const Eigen::Matrix4d Hm = Eigen::Matrix4d::Map(&H[0][0]).selfadjointView<Eigen::Upper>();
+		const Eigen::Vector4d bv(b[0], b[1], b[2], b[3]);
+		const Eigen::LDLT<Eigen::Matrix4d> ldlt(Hm);
 		if (ldlt.info() != Eigen::Success || !(ldlt.rcond() > 1e-12)) return false;
-		const Eigen::Vector4d d = -ldlt.solve(b);
+		const Eigen::Vector4d d = -ldlt.solve(bv);
 		x += d[0];
 		y += d[1];
 		g += d[2];

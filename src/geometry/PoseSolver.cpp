@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <random>
+#include <stdexcept>
 
 namespace shadyloc::geometry
 {
@@ -250,16 +251,20 @@ bool normalTerms(
 	const Eigen::Matrix3d W = S.inverse();
 	const double e = std::sqrt(std::max(0.0, r.dot(W * r)));  // whitened norm
 	const double w = e <= o.huber_k ? 1.0 : o.huber_k / e;
-	H = w * J.transpose() * W * J;
-	g = w * J.transpose() * W * r;
+	const Eigen::Matrix<double, 6, 3> JtW = w * J.transpose() * W;
+	H.noalias() = JtW * J;
+	g.noalias() = JtW * r;
 	sqNorm = r.squaredNorm();
 	return true;
 }
 }  // namespace
 
-TPoseSolution solveStereoPose(
-	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c,
-	const std::vector<uint8_t>& use, const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o)
+namespace
+{
+/** Robust Gauss-Newton from T_init; accumulate(T, iteration, H, g, sumSq,
+ * used) adds the normal-equation terms at T. */
+template <class Accumulate>
+TPoseSolution gaussNewton(const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o, Accumulate&& accumulate)
 {
 	TPoseSolution sol;
 	Eigen::Isometry3d T = T_init;
@@ -272,18 +277,7 @@ TPoseSolution solveStereoPose(
 		Vector6d g = Vector6d::Zero();
 		sumSq = 0;
 		used = 0;
-		for (size_t i = 0; i < c.size(); i++)
-		{
-			if (!use.empty() && !use[i]) continue;
-			Matrix6d Hi;
-			Vector6d gi;
-			double sq;
-			if (!normalTerms(calib, T, c[i], o, Hi, gi, sq)) continue;
-			H += Hi;
-			g += gi;
-			sumSq += sq;
-			used++;
-		}
+		accumulate(T, it, H, g, sumSq, used);
 		if (used < 3) return sol;
 		if (it == o.max_iterations) break;
 		const Vector6d dx = H.ldlt().solve(-g);
@@ -301,6 +295,59 @@ TPoseSolution solveStereoPose(
 	sol.rms_px = std::sqrt(sumSq / std::max(1, used) / 3.0);
 	sol.ok = sol.cov_T_ref_curr.allFinite();
 	return sol;
+}
+}  // namespace
+
+TPoseSolution solveStereoPose(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c,
+	const std::vector<uint8_t>& use, const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o)
+{
+	return gaussNewton(T_init, o, [&](const Eigen::Isometry3d& T, int, Matrix6d& H, Vector6d& g, double& sumSq, int& used) {
+		for (size_t i = 0; i < c.size(); i++)
+		{
+			if (!use.empty() && !use[i]) continue;
+			Matrix6d Hi;
+			Vector6d gi;
+			double sq;
+			if (!normalTerms(calib, T, c[i], o, Hi, gi, sq)) continue;
+			H += Hi;
+			g += gi;
+			sumSq += sq;
+			used++;
+		}
+	});
+}
+
+std::vector<TNormalTerms> normalTermsAt(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const Eigen::Isometry3d& T,
+	const TPoseSolverOptions& o)
+{
+	std::vector<TNormalTerms> out(c.size());
+	for (size_t i = 0; i < c.size(); i++) out[i].ok = normalTerms(calib, T, c[i], o, out[i].H, out[i].g, out[i].sq);
+	return out;
+}
+
+TPoseSolution solveStereoPoseCounted(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const std::vector<int>& count,
+	const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o, const std::vector<TNormalTerms>* atInit)
+{
+	if (count.size() != c.size() || (atInit && atInit->size() != c.size()))
+		throw std::invalid_argument("solveStereoPoseCounted: count or atInit not one per correspondence");
+	TNormalTerms t;
+	return gaussNewton(T_init, o, [&](const Eigen::Isometry3d& T, int it, Matrix6d& H, Vector6d& g, double& sumSq, int& used) {
+		for (size_t i = 0; i < c.size(); i++)
+		{
+			if (count[i] <= 0) continue;
+			const bool cached = it == 0 && atInit;
+			if (!cached) t.ok = normalTerms(calib, T, c[i], o, t.H, t.g, t.sq);
+			const TNormalTerms& ti = cached ? (*atInit)[i] : t;
+			if (!ti.ok) continue;
+			H += double(count[i]) * ti.H;
+			g += double(count[i]) * ti.g;
+			sumSq += count[i] * ti.sq;
+			used += count[i];
+		}
+	});
 }
 
 }  // namespace shadyloc::geometry

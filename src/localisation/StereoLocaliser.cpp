@@ -84,24 +84,28 @@ Matrix6d bootstrapCovariance(
 	const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
 	const std::vector<uint8_t>& inlier, const Eigen::Isometry3d& T_curr_ref, const TLocaliserOptions& o, uint32_t seed)
 {
-	std::vector<size_t> idx;
+	std::vector<geometry::TStereoCorrespondence> in;
 	for (size_t i = 0; i < corr.size(); i++)
-		if (i >= inlier.size() || inlier[i]) idx.push_back(i);
+		if (i >= inlier.size() || inlier[i]) in.push_back(corr[i]);
 	Matrix6d C = Matrix6d::Zero();
-	if (idx.size() < 4 || o.bootstrap_samples < 2) return C;
+	if (in.size() < 4 || o.bootstrap_samples < 2) return C;
 	std::mt19937 rng(seed);
-	std::uniform_int_distribution<size_t> pick(0, idx.size() - 1);
+	std::uniform_int_distribution<size_t> pick(0, in.size() - 1);
 	geometry::TPoseSolverOptions so;
 	so.sigma_px = o.sigma_px;
 	so.huber_k = o.huber_k;
 	so.max_iterations = 5;
 	const Eigen::Isometry3d T_ref_curr = T_curr_ref.inverse();
-	std::vector<geometry::TStereoCorrespondence> sample(idx.size());
+	// Every resample starts at the solve: its first linearisation is shared,
+	// and a resample is a count per inlier rather than a copied list.
+	const auto atSolve = geometry::normalTermsAt(calib, in, T_curr_ref, so);
+	std::vector<int> count(in.size());
 	int solved = 0;
 	for (int b = 0; b < o.bootstrap_samples; b++)
 	{
-		for (auto& c : sample) c = corr[idx[pick(rng)]];
-		const auto sol = geometry::solveStereoPose(calib, sample, {}, T_curr_ref, so);
+		std::fill(count.begin(), count.end(), 0);
+		for (size_t k = 0; k < in.size(); k++) count[pick(rng)]++;
+		const auto sol = geometry::solveStereoPoseCounted(calib, in, count, T_curr_ref, so, &atSolve);
 		if (!sol.ok) continue;
 		const Vector6d xi = geometry::localLeft(sol.T_curr_ref.inverse(), T_ref_curr);
 		C += xi * xi.transpose();

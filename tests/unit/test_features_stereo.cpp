@@ -190,6 +190,27 @@ TEST(FeaturesBrief, PatternIsFixedAndDescriptorsDiscriminate)
 	EXPECT_LT(features::hamming(d1, d2), 60);
 }
 
+TEST(FeaturesBrief, HammingCountsEveryDifferingBit)
+{
+	// The hand-written popcount against the compiler's, on edge words and
+	// random ones (a wrong mask or shift shows on either).
+	std::mt19937_64 rng(7);
+	std::vector<uint64_t> words = {0, ~0ULL, 1, 1ULL << 63, 0x8000000000000001ULL, 0x5555555555555555ULL};
+	for (int i = 0; i < 2000; i++) words.push_back(rng());
+	for (const uint64_t w : words) ASSERT_EQ(features::popcount64(w), __builtin_popcountll(w)) << std::hex << w;
+	features::TBriefDescriptor a, b;
+	for (int i = 0; i < 200; i++)
+	{
+		for (int k = 0; k < 4; k++) a.w[k] = rng(), b.w[k] = rng();
+		int expected = 0;
+		for (int k = 0; k < 4; k++) expected += __builtin_popcountll(a.w[k] ^ b.w[k]);
+		ASSERT_EQ(features::hamming(a, b), expected);
+	}
+	b.w = {~0ULL, ~0ULL, ~0ULL, ~0ULL};
+	a.w = {0, 0, 0, 0};
+	EXPECT_EQ(features::hamming(a, b), 256);
+}
+
 TEST(FeaturesStereo, TriangulationJacobianMatchesNumeric)
 {
 	geometry::TStereoCalib c;

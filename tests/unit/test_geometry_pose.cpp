@@ -383,3 +383,47 @@ TEST(GeometryPose, TwoViewAdjustmentUsesTheReferenceCalibration)
 	use[7] = 0;	 // ... unless it is not used
 	EXPECT_TRUE(solveStereoPoseTwoView(live, missing, use, T0, so).ok);
 }
+
+TEST(GeometryPose, CountedSolveEqualsTheSolveOverTheRepeatedList)
+{
+	// A bootstrap resample as counts must solve as the list it stands for,
+	// with or without the shared first linearisation; a Huber-weighted
+	// outlier keeps the robust weights in play.
+	const Eigen::Isometry3d T = somePose();
+	const auto c = makeProblem(T, 40, 2, 0.5, 5);
+	TPoseSolverOptions so;
+	so.max_iterations = 5;
+	const auto fit = solveStereoPose(calib(), c, {}, T, so);
+	ASSERT_TRUE(fit.ok);
+	std::mt19937 rng(3);
+	std::uniform_int_distribution<size_t> pick(0, c.size() - 1);
+	const auto atFit = normalTermsAt(calib(), c, fit.T_curr_ref, so);
+	for (int b = 0; b < 5; b++)
+	{
+		std::vector<int> count(c.size(), 0);
+		std::vector<TStereoCorrespondence> repeated;
+		for (size_t k = 0; k < c.size(); k++)
+		{
+			const size_t i = pick(rng);
+			count[i]++;
+			repeated.push_back(c[i]);
+		}
+		const auto ref = solveStereoPose(calib(), repeated, {}, fit.T_curr_ref, so);
+		for (const auto* terms : {static_cast<const std::vector<TNormalTerms>*>(nullptr), &atFit})
+		{
+			const auto got = solveStereoPoseCounted(calib(), c, count, fit.T_curr_ref, so, terms);
+			ASSERT_EQ(got.ok, ref.ok);
+			EXPECT_LT(transErr(got.T_curr_ref, ref.T_curr_ref), 1e-9);
+			EXPECT_LT(rotErrDeg(got.T_curr_ref, ref.T_curr_ref), 1e-7);
+			EXPECT_LT((got.cov_T_ref_curr - ref.cov_T_ref_curr).norm(), 1e-9 * ref.cov_T_ref_curr.norm());
+			EXPECT_EQ(got.iterations, ref.iterations);
+		}
+		// A resample that differs from the list does not solve as it.
+		std::vector<int> other = count;
+		std::fill(other.begin(), other.begin() + 10, 0);
+		const auto off = solveStereoPoseCounted(calib(), c, other, fit.T_curr_ref, so, &atFit);
+		ASSERT_TRUE(off.ok);
+		EXPECT_GT(transErr(off.T_curr_ref, ref.T_curr_ref), 1e-6);
+	}
+	EXPECT_THROW(solveStereoPoseCounted(calib(), c, std::vector<int>(3, 1), T, so), std::invalid_argument);
+}

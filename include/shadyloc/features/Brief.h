@@ -26,11 +26,23 @@ struct TBriefDescriptor
 	bool operator==(const TBriefDescriptor& o) const { return w == o.w; }
 };
 
-/** Hamming distance (number of differing bits, 0..256) via popcount. */
+/** Bits set in x, by the classic SWAR reduction (Knuth, TAOCP 4A 7.1.3):
+ * inlined, and several times faster than the library call that
+ * __builtin_popcountll becomes without -mpopcnt (the build sets no global
+ * target flags, so a binary runs on every x86-64). */
+inline int popcount64(uint64_t x)
+{
+	x = x - ((x >> 1) & 0x5555555555555555ULL);
+	x = (x & 0x3333333333333333ULL) + ((x >> 2) & 0x3333333333333333ULL);
+	x = (x + (x >> 4)) & 0x0f0f0f0f0f0f0f0fULL;
+	return static_cast<int>((x * 0x0101010101010101ULL) >> 56);
+}
+
+/** Hamming distance (number of differing bits, 0..256). */
 inline int hamming(const TBriefDescriptor& a, const TBriefDescriptor& b)
 {
-	return __builtin_popcountll(a.w[0] ^ b.w[0]) + __builtin_popcountll(a.w[1] ^ b.w[1]) +
-		   __builtin_popcountll(a.w[2] ^ b.w[2]) + __builtin_popcountll(a.w[3] ^ b.w[3]);
+	return popcount64(a.w[0] ^ b.w[0]) + popcount64(a.w[1] ^ b.w[1]) + popcount64(a.w[2] ^ b.w[2]) +
+		   popcount64(a.w[3] ^ b.w[3]);
 }
 
 /** The 256 intensity tests of `tests` (pairs of offsets dx1, dy1, dx2, dy2)

@@ -123,6 +123,29 @@ TPoseSolution solveStereoPose(
 	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c,
 	const std::vector<uint8_t>& use, const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o);
 
+/** One correspondence's robust normal-equation terms at a pose: J^T W J,
+ * J^T W r (W the residual's inverse covariance times the Huber weight) and
+ * |r|^2 [px^2]; ok is false when the landmark does not project. */
+struct TNormalTerms
+{
+	Matrix6d H = Matrix6d::Zero();
+	Vector6d g = Vector6d::Zero();
+	double sq = 0;
+	bool ok = false;
+};
+
+/** The terms of every correspondence at T. */
+std::vector<TNormalTerms> normalTermsAt(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const Eigen::Isometry3d& T,
+	const TPoseSolverOptions& o);
+
+/** solveStereoPose over c[i] taken count[i] times (a bootstrap resample
+ * drawn with replacement). atInit, when given, holds normalTermsAt(T_init):
+ * resamples that all start at one pose share their first linearisation. */
+TPoseSolution solveStereoPoseCounted(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const std::vector<int>& count,
+	const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o, const std::vector<TNormalTerms>* atInit = nullptr);
+
 
 /** Two-view bundle adjustment from T_init: the pose and every used landmark
  * are unknowns; each landmark has its stereo measurement z_ref in the
