@@ -95,6 +95,7 @@ void TSystemOptions::load(const mrpt::config::CConfigFileBase& c, const std::str
 	r.read("relocalise_max_angle_deg", track.relocalise_max_angle_deg);
 	r.read("relocalise_at_dead_reckoning", track.relocalise_at_dead_reckoning);
 	r.read("fuse_prediction", track.fuse_prediction);
+	r.read("cross_check_fixes", track.cross_check_fixes);
 	r.read("global_search_after_frames", track.global_search_after_frames);
 	r.read("seed_with_unconfirmed", track.seed_with_unconfirmed);
 	r.read("global_sigma_m", track.global_sigma_m);
@@ -132,6 +133,7 @@ void TSystemOptions::dump(std::ostream& out) const
 	w.value("relocalise_max_angle_deg", track.relocalise_max_angle_deg, "... a keyframe of another segment facing within this [deg]");
 	w.value("relocalise_at_dead_reckoning", track.relocalise_at_dead_reckoning, "... first matching each candidate where dead reckoning projects it, warped");
 	w.value("fuse_prediction", track.fuse_prediction, "while the track is confirmed, a fix is the solve fused with the prediction");
+	w.value("cross_check_fixes", track.cross_check_fixes, "where the localisers' fixes of a frame disagree, the most certain is used");
 	w.value("global_search_after_frames", track.global_search_after_frames, "... and the whole map after this [frames]");
 	w.value("seed_with_unconfirmed", track.seed_with_unconfirmed,
 			"a consistent but unconfirmed solve narrows the next search (never a fix, never validates)");
@@ -462,6 +464,31 @@ void CLocalisationSystem::forLocalisers(F&& fn)
 	both(par, runFirst, runRest);
 }
 
+const TLocaliserResult* CLocalisationSystem::policyFix(
+	const std::vector<TLocaliserResult>& res, const std::vector<size_t>& order) const
+{
+	std::vector<size_t> accepted;
+	for (const size_t i : order)
+		if (res[i].accepted()) accepted.push_back(i);
+	if (accepted.empty()) return nullptr;
+	if (!m_opts.track.cross_check_fixes || accepted.size() < 2) return &res[accepted.front()];
+	std::vector<TKeyframePose> fixes;
+	std::vector<double> sigma;
+	for (const size_t i : accepted)
+	{
+		fixes.push_back(res[i].pose());
+		sigma.push_back(res[i].sigma_m);
+	}
+	const auto& L = *m_pipes[accepted.front()].localiser;
+	const KeyframeLink link = [&L](uint32_t a, uint32_t b) { return L.between(a, b); };
+	const size_t k = chooseFix(fixes, sigma, link, L.options().prediction_chi2);
+	if (k != 0)
+		MRPT_LOG_DEBUG_FMT(
+			"frame %zu: the fixes disagree; %s (sigma %.3f m) used, not %s (%.3f m)", res[accepted[k]].frame,
+			res[accepted[k]].channel.c_str(), sigma[k], res[accepted.front()].channel.c_str(), sigma.front());
+	return &res[accepted[k]];
+}
+
 TKeyframePose CLocalisationSystem::fusedFix(const TLocaliserResult& r, const TKeyframePose& pred, bool confirmed) const
 {
 	TKeyframePose f = r.pose();
@@ -594,14 +621,9 @@ TLocalisationUpdate CLocalisationSystem::processChannels(
 	std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return m_pipes[a].policyRank < m_pipes[b].policyRank; });
 	for (const size_t i : order) u.localisers.push_back(res[i]);
 
-	// ---- the policy: the first accepted fix in policy order, else dead reckoning
-	const TLocaliserResult* fix = nullptr;
-	for (const size_t i : order)
-		if (res[i].accepted())
-		{
-			fix = &res[i];
-			break;
-		}
+	// ---- the policy: the first accepted fix in policy order (the most certain
+	// where they disagree), else dead reckoning
+	const TLocaliserResult* fix = policyFix(res, order);
 	if (fix)
 	{
 		u.used = fix->channel;

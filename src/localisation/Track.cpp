@@ -3,7 +3,9 @@
 
 #include <Eigen/Eigenvalues>
 
+#include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 namespace shadyloc::localisation
 {
@@ -128,6 +130,16 @@ bool CTrack::placeFound(const TKeyframePose& place, bool agrees, bool certain, i
 bool placeAgrees(const TKeyframePose& place, const TKeyframePose& pred, const KeyframeLink& link, double chi2)
 {
 	return place.valid && pred.valid && predictionDistance2(place, pred, link) <= chi2;
+}
+
+size_t chooseFix(
+	const std::vector<TKeyframePose>& fixes, const std::vector<double>& sigma_m, const KeyframeLink& link, double chi2)
+{
+	if (fixes.size() != sigma_m.size()) throw std::invalid_argument("chooseFix: one sigma per fix");
+	bool disagree = false;
+	for (size_t j = 1; j < fixes.size() && !disagree; j++) disagree = predictionDistance2(fixes[j], fixes[0], link) > chi2;
+	if (!disagree) return 0;
+	return static_cast<size_t>(std::min_element(sigma_m.begin(), sigma_m.end()) - sigma_m.begin());
 }
 
 }  // namespace shadyloc::localisation

@@ -355,3 +355,24 @@ TEST(LocalisationStages, APlaceAcrossAVoBreakOfTheMapIsJudgedNotThrown)
 	place.T_kf_live.translation().z() += 12.0;
 	EXPECT_FALSE(placeAgrees(place, pred, through, 16.81));
 }
+
+TEST(LocalisationStages, DisagreeingFixesOfOneFrameGoToTheMoreCertain)
+{
+	const double chi2 = 16.81;
+	// Agreeing fixes: the policy order holds, even when the second is tighter.
+	EXPECT_EQ(chooseFix({poseAt(1.00, 0.05), poseAt(1.03, 0.02)}, {0.05, 0.02}, identityLink, chi2), 0u);
+	// 0.6 m apart at sigmas 0.12 and 0.02 m (4.9 sigma): the more certain.
+	EXPECT_EQ(chooseFix({poseAt(1.0, 0.12), poseAt(1.6, 0.02)}, {0.12, 0.02}, identityLink, chi2), 1u);
+	EXPECT_EQ(chooseFix({poseAt(1.0, 0.02), poseAt(1.6, 0.12)}, {0.02, 0.12}, identityLink, chi2), 0u);
+	EXPECT_EQ(chooseFix({poseAt(1.0, 0.05)}, {0.05}, identityLink, chi2), 0u);
+	// Through the link: the second fix in keyframe 1, 0.6 m ahead of keyframe 0.
+	const KeyframeLink ahead06 = [](uint32_t a, uint32_t b) {
+		geometry::TPoseWithCov l;
+		l.T = ahead(a == b ? 0.0 : (a == 1 ? -0.6 : 0.6));
+		l.cov = diag(0.001, 0.01);
+		return l;
+	};
+	EXPECT_EQ(chooseFix({poseAt(1.0, 0.12), poseAt(0.4, 0.02, 1)}, {0.12, 0.02}, ahead06, chi2), 0u);
+	EXPECT_EQ(chooseFix({poseAt(1.0, 0.12), poseAt(1.0, 0.02, 1)}, {0.12, 0.02}, ahead06, chi2), 1u);
+	EXPECT_THROW(chooseFix({poseAt(1.0, 0.1)}, {}, identityLink, chi2), std::invalid_argument);
+}

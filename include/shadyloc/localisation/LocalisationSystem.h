@@ -240,6 +240,8 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	void forLocalisers(F&& fn);
 	/** The accepted solve `r` as the track takes it (fused with the
 	 * prediction while the track is confirmed). */
+	/** The accepted fix the frame uses (chooseFix over `order`), or null. */
+	const TLocaliserResult* policyFix(const std::vector<TLocaliserResult>& res, const std::vector<size_t>& order) const;
 	TKeyframePose fusedFix(const TLocaliserResult& r, const TKeyframePose& pred, bool confirmed) const;
 	/** Searches for the place (scope) and adopts the first verified one in
 	 * policy order: a fix when it agrees with a confirmed track, or when it
