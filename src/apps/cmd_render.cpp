@@ -7,10 +7,10 @@
 
 #include <shadyloc/eval/Figures.h>
 #include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/io/FileHash.h>
 #include <shadyloc/io/ImageFile.h>
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Tum.h>
-#include <shadyloc/localisation/LocaliseRun.h>
 #include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/render/TrajectorySnapshot.h>
 
@@ -85,13 +85,13 @@ render::TrajectoryLayer localisedLayer(const std::string& dir, const std::string
 void checkLocalisedInputs(const std::string& dir, const std::string& mapFile, const std::string& gtFile)
 {
 	const std::string mapHash = apps::localiseProvenance(dir, "map_fnv1a64");
-	if (!mapHash.empty() && mapHash != localisation::fnv1a64File(mapFile))
+	if (!mapHash.empty() && mapHash != io::fnv1a64File(mapFile))
 		throw std::invalid_argument(
 			"--localised '" + dir + "' was localised against map '" + apps::localiseProvenance(dir, "map") +
 			"' (its summary.json), not against -m '" + mapFile + "' (another file): give the run's own map first");
 	if (gtFile.empty()) return;
 	const std::string gtHash = apps::localiseProvenance(dir, "gt_fnv1a64");
-	if (!gtHash.empty() && gtHash != localisation::fnv1a64File(gtFile))
+	if (!gtHash.empty() && gtHash != io::fnv1a64File(gtFile))
 		throw std::invalid_argument(
 			"--gt '" + gtFile + "' is not the ground truth '" + apps::localiseProvenance(dir, "gt") + "' that --localised '" + dir +
 			"' was localised with (its summary.json)");

@@ -5,11 +5,12 @@
 #include <shadyloc/eval/Figures.h>
 #include <shadyloc/eval/LeaveOneOut.h>
 #include <shadyloc/io/OutputTransaction.h>
-#include <shadyloc/localisation/Evaluation.h>
-#include <shadyloc/localisation/LocaliseRun.h>
+#include <shadyloc/eval/Evaluation.h>
+#include <shadyloc/io/FileHash.h>
 #include <shadyloc/map/CKeyframeMap.h>
 
 #include "EvalRecords.h"
+#include "Json.h"
 
 #include <algorithm>
 #include <cmath>
@@ -24,8 +25,6 @@
 namespace shadyloc::eval
 {
 namespace fs = std::filesystem;
-using localisation::jsonNumber;
-using localisation::jsonString;
 
 namespace
 {
@@ -37,7 +36,7 @@ double ratio(size_t a, size_t b) { return b ? static_cast<double>(a) / static_ca
  * localisation issue's "under 0.1 %" is judged by (NaN without fixes). */
 double falseShareUpper(size_t falseFixes, size_t fixes)
 {
-	return fixes ? localisation::clopperPearson(falseFixes, fixes, 0.95).hi : kNaN;
+	return fixes ? clopperPearson(falseFixes, fixes, 0.95).hi : kNaN;
 }
 
 /** Mean of the finite values; NaN if none. */
@@ -280,9 +279,9 @@ TMergeResult merge(const std::string& outDir, const TEvalInputs& in, const std::
 		P.binFrames += p.in_map_frames;
 		for (size_t b = 0; b < 3; b++) P.bins[b] += p.bins[b];
 	}
-	const localisation::TEvalOptions evo;
-	localisation::TBlindProbability bp[2];
-	for (int s = 0; s < 2; s++) bp[s] = localisation::blindProbability(pooled[s].between, evo);
+	const TEvalOptions evo;
+	TBlindProbability bp[2];
+	for (int s = 0; s < 2; s++) bp[s] = blindProbability(pooled[s].between, evo);
 	const bool anyGt = pooled[0].gtPairs + pooled[1].gtPairs > 0;
 	const char* sysName[2] = {"baseline", "combined"};
 
@@ -418,10 +417,10 @@ TMergeResult merge(const std::string& outDir, const TEvalInputs& in, const std::
 		const std::string mapRel = "jobs/map_" + r.name + "/map.kfmap";
 		js << (i ? ",\n    " : "\n    ") << "{\"name\": " << jsonString(r.name) << ", \"line\": " << r.line
 		   << ", \"rawlog\": " << jsonString(r.rawlog)
-		   << ", \"rawlog_fnv1a64\": " << jsonString(localisation::fnv1a64File(r.rawlogPath)) << ", \"gt\": "
+		   << ", \"rawlog_fnv1a64\": " << jsonString(io::fnv1a64File(r.rawlogPath)) << ", \"gt\": "
 		   << (r.hasGt() ? jsonString(r.gt) : "null") << ", \"gt_fnv1a64\": "
-		   << (r.hasGt() ? jsonString(localisation::fnv1a64File(r.gtPath)) : "null") << ", \"map\": {\"file\": "
-		   << jsonString(mapRel) << ", \"fnv1a64\": " << jsonString(localisation::fnv1a64File((out / mapRel).string()))
+		   << (r.hasGt() ? jsonString(io::fnv1a64File(r.gtPath)) : "null") << ", \"map\": {\"file\": "
+		   << jsonString(mapRel) << ", \"fnv1a64\": " << jsonString(io::fnv1a64File((out / mapRel).string()))
 		   << ", \"frames\": " << m.frames << ", \"keyframes\": " << m.keyframes << ", \"gt_keyframes\": "
 		   << m.gt_keyframes << ", \"breaks\": " << m.breaks << ", \"path_m\": " << num(m.path_m, 3) << "}}";
 	}

@@ -1,7 +1,7 @@
 /* ShadyLoc — the job records of the leave-one-out evaluation. */
 #include "EvalRecords.h"
 
-#include <shadyloc/localisation/LocaliseRun.h>
+#include <shadyloc/io/AtomicFile.h>
 
 #include <algorithm>
 #include <charconv>
@@ -24,12 +24,12 @@ std::string g17(double v)
 	return b;
 }
 
-const char* kindName(localisation::TBlindEpisode::Kind k)
+const char* kindName(TBlindEpisode::Kind k)
 {
 	switch (k)
 	{
-		case localisation::TBlindEpisode::Between: return "between";
-		case localisation::TBlindEpisode::AtEnd: return "at_end";
+		case TBlindEpisode::Between: return "between";
+		case TBlindEpisode::AtEnd: return "at_end";
 		default: return "before_first_fix";
 	}
 }
@@ -174,9 +174,8 @@ const TPairChannel* TPairRecord::channel(const std::string& name) const
 
 TPairRecord makePairRecord(
 	const std::string& live, const std::string& map, EvalSystem system,
-	const std::vector<localisation::TLocalisationUpdate>& ups, const localisation::TEvaluation& ev)
+	const std::vector<localisation::TLocalisationUpdate>& ups, const TEvaluation& ev)
 {
-	using localisation::FixTruth;
 	TPairRecord r;
 	r.live = live;
 	r.map = map;
@@ -231,7 +230,7 @@ void writeMapRecord(const std::string& path, const TMapRecord& r)
 	std::ostringstream s;
 	s << kMapHeader << "\nrun\t" << r.run << "\nframes\t" << r.frames << "\nkeyframes\t" << r.keyframes
 	  << "\ngt_keyframes\t" << r.gt_keyframes << "\nbreaks\t" << r.breaks << "\npath_m\t" << g17(r.path_m) << "\n";
-	localisation::writeTextFile(path, s.str());
+	io::writeTextFile(path, s.str());
 }
 
 TMapRecord readMapRecord(const std::string& path)
@@ -267,7 +266,7 @@ void writePairRecord(const std::string& path, const TPairRecord& r)
 	for (const auto& e : r.fix_errors) s << "fix_error\t" << g17(e[0]) << '\t' << g17(e[1]) << "\n";
 	for (const auto& e : r.episodes) s << "episode\t" << e.first << '\t' << g17(e.second) << "\n";
 	s << "end\n";  // a record cut short lacks it
-	localisation::writeTextFile(path, s.str());
+	io::writeTextFile(path, s.str());
 }
 
 TPairRecord readPairRecord(const std::string& path)

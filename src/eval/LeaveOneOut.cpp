@@ -4,6 +4,9 @@
 #include <shadyloc/core/Settings.h>
 #include <shadyloc/eval/LeaveOneOut.h>
 #include <shadyloc/filters/ChannelFrameSource.h>
+#include <shadyloc/eval/LocaliseOutputs.h>
+#include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/io/FileHash.h>
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/localisation/LocaliseRun.h>
@@ -11,6 +14,7 @@
 #include <shadyloc/survey/SurveyRun.h>
 
 #include "EvalRecords.h"
+#include "Json.h"
 
 #include <algorithm>
 #include <chrono>
@@ -27,8 +31,8 @@
 namespace shadyloc::eval
 {
 namespace fs = std::filesystem;
-using localisation::fnv1a64;
-using localisation::fnv1a64File;
+using io::fnv1a64;
+using io::fnv1a64File;
 
 const char* toString(EvalSystem s) { return s == EvalSystem::Baseline ? "baseline" : "combined"; }
 
@@ -108,9 +112,9 @@ std::string jobCommand(const TEvalInputs& in, const std::string& outDir, size_t 
 void writeJobTime(const std::string& dir, double wall_s)
 {
 	std::ostringstream s;
-	s << "{\"format\": \"shadyloc eval job timing\", \"version\": 1, \"wall_s\": " << localisation::jsonNumber(wall_s, 3)
+	s << "{\"format\": \"shadyloc eval job timing\", \"version\": 1, \"wall_s\": " << jsonNumber(wall_s, 3)
 	  << "}\n";
-	localisation::writeTextFile((fs::path(dir) / "job_timing.json").string(), s.str());
+	io::writeTextFile((fs::path(dir) / "job_timing.json").string(), s.str());
 }
 
 double runMapJob(const std::string& outDir, const TEvalInputs& in, const TEvalJob& job, const TJobOptions& o)
@@ -192,7 +196,7 @@ double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJ
 	ro.threads = o.threads;
 	ro.configWhat = in.configWhat;
 	std::vector<localisation::TLocalisationUpdate> ups;
-	localisation::TEvaluation ev;
+	TEvaluation ev;
 	localisation::TSystemOptions sysOpts;
 	try
 	{
@@ -201,7 +205,7 @@ double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJ
 		if (gt) lr.enableOracle(*gt);
 		ups = lr.run();
 		sysOpts = lr.system().options();
-		ev = localisation::evaluate(ups, *map, gt ? &*gt : nullptr);
+		ev = evaluate(ups, *map, gt ? &*gt : nullptr);
 	}
 	catch (const std::exception& e)
 	{
@@ -213,11 +217,7 @@ double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJ
 	tx.addInput(live.rawlogPath, "rawlog of run '" + live.name + "'");
 	tx.addInput(mapFile, "map of run '" + mapRun.name + "'");
 	const std::string dir = tx.addDirectory(jobDir(outDir, job), "output of " + what, "shadyloc eval job output");
-	const auto file = [&](const char* n) { return (fs::path(dir) / n).string(); };
-	localisation::writeFramesCsv(file("frames.csv"), ups, ev, *map);
-	localisation::writeSolvesCsv(file("solves.csv"), ups, ev);
-	localisation::writeTrajectory(file("trajectory.tum"), ups);
-	localisation::TLocaliseProvenance prov;
+	TLocaliseProvenance prov;
 	prov.program = "shadyloc eval";
 	prov.buildCommit = in.buildCommit;
 	prov.configWhat = in.configWhat;
@@ -233,9 +233,8 @@ double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJ
 		prov.gtPath = live.gt;
 		prov.gtHash = fnv1a64File(live.gtPath);
 	}
-	localisation::writeTextFile(file("summary.json"), localisation::summaryJson(ups, ev, sysOpts, prov));
-	localisation::writeTextFile(file("timing.json"), localisation::timingJson(ups, sysOpts.threads));
-	writePairRecord(file("pair.tsv"), makePairRecord(live.name, mapRun.name, job.system, ups, ev));
+	writeLocaliseOutputs(dir, ups, ev, *map, sysOpts, prov);
+	writePairRecord((fs::path(dir) / "pair.tsv").string(), makePairRecord(live.name, mapRun.name, job.system, ups, ev));
 	const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 	writeJobTime(dir, wall);
 	tx.commit();
@@ -352,7 +351,7 @@ void writePlan(const std::string& outDir, const TEvalInputs& in, const std::vect
 		s << j.index << '\t' << (j.isMap ? "map" : "pair") << '\t' << in.runs[j.run].name << '\t'
 		  << (j.isMap ? "-" : in.runs[j.map].name) << '\t' << (j.isMap ? "-" : toString(j.system)) << '\t' << j.name
 		  << '\n';
-	localisation::writeTextFile((fs::path(outDir) / "plan.tsv").string(), s.str());
+	io::writeTextFile((fs::path(outDir) / "plan.tsv").string(), s.str());
 }
 
 std::vector<TEvalJob> readPlan(const std::string& outDir, const TEvalInputs& in)

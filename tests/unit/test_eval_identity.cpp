@@ -12,9 +12,10 @@
  */
 #include "../support/TestSupport.h"
 
+#include <shadyloc/eval/Evaluation.h>
 #include <shadyloc/eval/LeaveOneOut.h>
-#include <shadyloc/localisation/Evaluation.h>
-#include <shadyloc/localisation/LocaliseRun.h>
+#include <shadyloc/eval/LocaliseOutputs.h>
+#include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/map/CKeyframeMap.h>
 
 #include <gtest/gtest.h>
@@ -29,6 +30,7 @@
 namespace fs = std::filesystem;
 using namespace shadyloc;
 using namespace shadyloc::localisation;
+using namespace shadyloc::eval;
 
 namespace
 {
@@ -209,7 +211,7 @@ TLocaliseProvenance provenance(bool withGt)
 }
 
 /** localise's five files of the synthetic run, with or without ground truth, into dir. */
-void writeLocaliseOutputs(const std::string& dir, bool withGt)
+void writeSyntheticOutputs(const std::string& dir, bool withGt)
 {
 	const auto map = syntheticMap();
 	io::Trajectory gt;
@@ -218,11 +220,7 @@ void writeLocaliseOutputs(const std::string& dir, bool withGt)
 	TSystemOptions sys;
 	sys.threads = 3;
 	fs::create_directories(dir);
-	writeFramesCsv(dir + "/frames.csv", ups, ev, *map);
-	writeSolvesCsv(dir + "/solves.csv", ups, ev);
-	writeTrajectory(dir + "/trajectory.tum", ups);
-	writeTextFile(dir + "/summary.json", summaryJson(ups, ev, sys, provenance(withGt)));
-	writeTextFile(dir + "/timing.json", timingJson(ups, sys.threads));
+	writeLocaliseOutputs(dir, ups, ev, *map, sys, provenance(withGt));
 }
 
 // ---- a leave-one-out evaluation's job outputs ---------------------------------------------------
@@ -309,7 +307,7 @@ std::vector<eval::TEvalJob> writeJobOutputs(const std::string& dir, const std::s
 TEST(EvalIdentity, LocaliseOutputsWithGroundTruth)
 {
 	const std::string dir = test::tempDir("eval_identity_gt");
-	writeLocaliseOutputs(dir, true);
+	writeSyntheticOutputs(dir, true);
 	for (const char* f : {"frames.csv", "solves.csv", "trajectory.tum", "summary.json", "timing.json"})
 		checkGolden(std::string("localise_gt/") + f, dir + "/" + f);
 }
@@ -317,7 +315,7 @@ TEST(EvalIdentity, LocaliseOutputsWithGroundTruth)
 TEST(EvalIdentity, LocaliseOutputsWithoutGroundTruth)
 {
 	const std::string dir = test::tempDir("eval_identity_nogt");
-	writeLocaliseOutputs(dir, false);
+	writeSyntheticOutputs(dir, false);
 	for (const char* f : {"frames.csv", "solves.csv", "trajectory.tum", "summary.json", "timing.json"})
 		checkGolden(std::string("localise_nogt/") + f, dir + "/" + f);
 }

@@ -1,10 +1,10 @@
 /* ShadyLoc — blind episodes (docs/localisation.md, Definitions). */
-#include <shadyloc/localisation/BlindEpisodes.h>
+#include <shadyloc/eval/BlindEpisodes.h>
 
 #include <stdexcept>
 #include <string>
 
-namespace shadyloc::localisation
+namespace shadyloc::eval
 {
 std::vector<TBlindEpisode> blindEpisodes(const std::vector<bool>& fix, const std::vector<double>& dist)
 {
@@ -36,4 +36,4 @@ std::vector<TBlindEpisode> blindEpisodes(const std::vector<bool>& fix, const std
 	return episodes;
 }
 
-}  // namespace shadyloc::localisation
+}  // namespace shadyloc::eval
