@@ -6,6 +6,16 @@
 
 namespace shadyloc::eval
 {
+const char* toString(TBlindEpisode::Kind k)
+{
+	switch (k)
+	{
+		case TBlindEpisode::Between: return "between";
+		case TBlindEpisode::AtEnd: return "at_end";
+		default: return "before_first_fix";
+	}
+}
+
 std::vector<TBlindEpisode> blindEpisodes(const std::vector<bool>& fix, const std::vector<double>& dist)
 {
 	if (fix.size() != dist.size())

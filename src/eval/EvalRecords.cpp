@@ -24,16 +24,6 @@ std::string g17(double v)
 	return b;
 }
 
-const char* kindName(TBlindEpisode::Kind k)
-{
-	switch (k)
-	{
-		case TBlindEpisode::Between: return "between";
-		case TBlindEpisode::AtEnd: return "at_end";
-		default: return "before_first_fix";
-	}
-}
-
 /** Lines "key<TAB>v1<TAB>v2..." after a header line; each key's handler. */
 class RecordReader
 {
@@ -221,7 +211,7 @@ TPairRecord makePairRecord(
 		for (size_t b = 0; b < kAccuracyBins.size(); b++)
 			r.bins[b] += f.used_err_m <= kAccuracyBins[b][0] && f.used_err_deg <= kAccuracyBins[b][1];
 	}
-	for (const auto& e : ev.episodes) r.episodes.push_back({kindName(e.kind), e.length_m});
+	for (const auto& e : ev.episodes) r.episodes.push_back({toString(e.kind), e.length_m});
 	return r;
 }
 

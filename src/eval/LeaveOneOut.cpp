@@ -109,12 +109,11 @@ std::string jobCommand(const TEvalInputs& in, const std::string& outDir, size_t 
 	return cmd + " --job " + std::to_string(k);
 }
 
+/** job_timing.json: the job's wall time, one line (the merge gathers them into timing.json). */
 void writeJobTime(const std::string& dir, double wall_s)
 {
-	std::ostringstream s;
-	s << "{\"format\": \"shadyloc eval job timing\", \"version\": 1, \"wall_s\": " << jsonNumber(wall_s, 3)
-	  << "}\n";
-	io::writeTextFile((fs::path(dir) / "job_timing.json").string(), s.str());
+	const Json doc = {{"format", "shadyloc eval job timing"}, {"version", 1}, {"wall_s", fixedNumber(wall_s, 3)}};
+	io::writeTextFile((fs::path(dir) / "job_timing.json").string(), writeJson(doc, {}));
 }
 
 double runMapJob(const std::string& outDir, const TEvalInputs& in, const TEvalJob& job, const TJobOptions& o)

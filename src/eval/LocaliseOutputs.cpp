@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <sstream>
+#include <vector>
 
 namespace shadyloc::eval
 {
@@ -165,117 +166,161 @@ void writeTrajectory(const std::string& path, const Updates& ups)
 
 namespace
 {
-/** summary.json's oracle bound (Oracle.h) inside "ground_truth", when probed. */
-std::string oracleJson(const TEvaluation& ev, const localisation::TSystemOptions& sys)
+/** summary.json's oracle bound (Oracle.h) inside "ground_truth": in-map
+ * frames with a true single-shot fix by either localiser and each one's share. */
+Json oracleJson(const TEvaluation& ev, const localisation::TSystemOptions& sys)
 {
-	if (!ev.oracle) return "";
 	auto share = [&](size_t k) { return ev.in_map_frames ? double(k) / double(ev.in_map_frames) : 0.0; };
-	std::ostringstream js;
-	js << ", \"oracle\": {\"any_in_map\": " << ev.oracle_any_in_map << ", \"any_coverage_in_map\": "
-	   << jsonNumber(ev.oracle_any_coverage, 6);
+	Json o = {{"any_in_map", ev.oracle_any_in_map}, {"any_coverage_in_map", fixedNumber(ev.oracle_any_coverage)}};
 	for (size_t c = 0; c < ev.oracle_in_map.size() && c < sys.localisers.size(); c++)
-		js << ", " << jsonString(sys.localisers[c] + "_coverage_in_map") << ": " << jsonNumber(share(ev.oracle_in_map[c]), 6);
-	js << "}";
-	return js.str();
+		o[sys.localisers[c] + "_coverage_in_map"] = fixedNumber(share(ev.oracle_in_map[c]));
+	return o;
 }
-}  // namespace
 
-std::string summaryJson(
-	const Updates& ups, const TEvaluation& ev, const localisation::TSystemOptions& sys,
-	const TLocaliseProvenance& prov)
+/** Each localiser's accepted and used fixes (true and false ones with ground truth). */
+Json localisersJson(const TEvaluation& ev)
 {
-	const bool gt = ev.ground_truth;
-	const auto num = [](double v, int prec = 6) { return jsonNumber(v, prec); };
-	std::ostringstream js;
-	js << "{\n  \"format\": \"shadyloc localise summary\",\n  \"version\": " << kSummaryVersion << ",\n";
-	js << "  \"frames\": " << ups.size() << ",\n  \"in_map_frames\": " << ev.in_map_frames
-	   << ",\n  \"in_map_from\": " << jsonString(gt ? "ground truth" : "own estimate") << ",\n  \"fixes\": " << ev.fixes
-	   << ",\n  \"fixes_in_map\": " << ev.fixes_in_map << ",\n  \"coverage_in_map\": " << num(ev.coverage_in_map)
-	   << ",\n  \"coverage_all\": " << num(ev.coverage_all) << ",\n";
-	// Steps the fallback VO measured where the VO channel's could not.
-	size_t fallbackSteps = 0;
-	for (const auto& u : ups) fallbackSteps += !u.motion_from.empty() && u.motion_from != sys.vo_channel;
-	js << "  \"vo\": {\"channel\": " << jsonString(sys.vo_channel) << ", \"fallback_steps\": " << fallbackSteps
-	   << "},\n";
-	js << "  \"localisers\": [";
-	for (size_t c = 0; c < ev.channels.size(); c++)
+	Json list = Json::array();
+	for (const auto& s : ev.channels)
 	{
-		const auto& s = ev.channels[c];
-		js << (c ? ", " : "") << "{\"channel\": " << jsonString(s.channel) << ", \"accepted\": " << s.accepted
-		   << ", \"used\": " << s.used;
-		if (gt)
-			js << ", \"true_fixes\": " << s.true_fixes << ", \"false_fixes\": " << s.false_fixes
-			   << ", \"unverifiable\": " << s.unverifiable << ", \"false_share\": "
-			   << num(s.true_fixes + s.false_fixes ? double(s.false_fixes) / double(s.true_fixes + s.false_fixes) : 0.0);
-		js << "}";
+		Json c = {{"channel", s.channel}, {"accepted", s.accepted}, {"used", s.used}};
+		if (ev.ground_truth)
+		{
+			const size_t judged = s.true_fixes + s.false_fixes;
+			c["true_fixes"] = s.true_fixes;
+			c["false_fixes"] = s.false_fixes;
+			c["unverifiable"] = s.unverifiable;
+			c["false_share"] = fixedNumber(judged ? double(s.false_fixes) / double(judged) : 0.0);
+		}
+		list.push_back(c);
 	}
-	js << "],\n";
-	if (gt)
-		js << "  \"ground_truth\": {\"associated\": " << ev.associated << ", \"true_fixes\": " << ev.true_fixes
-		   << ", \"true_fixes_in_map\": " << ev.true_fixes_in_map << ", \"false_fixes\": " << ev.false_fixes
-		   << ", \"unverifiable\": " << ev.unverifiable << ", \"true_coverage_in_map\": " << num(ev.true_coverage_in_map)
-		   << ", \"true_coverage_all\": " << num(ev.true_coverage_all) << ", \"false_fix_share\": "
-		   << num(ev.false_fix_share) << oracleJson(ev, sys) << "},\n";
-	else
-		js << "  \"ground_truth\": null,\n";
-	js << "  \"blind\": {\"distance_from\": " << jsonString(gt ? "ground truth" : "VO") << ", \"total_m\": "
-	   << num(ev.total_m, 3) << ", \"blind_m\": " << num(ev.blind_m, 3) << ", \"blind_m_per_km\": "
-	   << num(ev.blind_m_per_km, 3) << ", \"episodes_between_fixes\": " << ev.episodes_between
-	   << ", \"episodes_reaching_m\": " << num(TEvalOptions().blind_long_m, 1) << ", \"episodes_long\": "
-	   << ev.episodes_long << ", \"p_long\": " << num(ev.p_long) << ", \"p_long_ci95_exact\": ["
-	   << num(ev.p_long_exact_lo) << ", " << num(ev.p_long_exact_hi) << "], \"p_long_ci95\": [" << num(ev.p_long_lo)
-	   << ", " << num(ev.p_long_hi) << "], \"first_fix_frame\": " << ev.first_fix_frame << ", \"before_first_fix_m\": "
-	   << num(ev.before_first_fix_m, 3) << ", \"episodes\": [";
-	for (size_t i = 0; i < ev.episodes.size(); i++)
-	{
-		const auto& e = ev.episodes[i];
-		js << (i ? ", " : "") << "{\"first\": " << e.first << ", \"last\": " << e.last << ", \"length_m\": "
-		   << num(e.length_m, 3) << ", \"kind\": "
-		   << jsonString(
-				  e.kind == TBlindEpisode::Between ? "between" : (e.kind == TBlindEpisode::AtEnd ? "at_end" : "before_first_fix"))
-		   << "}";
-	}
-	js << "]},\n  \"global_searches\": " << ev.global_searches << ",\n";
+	return list;
+}
+
+/** The fixes against ground truth; null without it. */
+Json groundTruthJson(const TEvaluation& ev, const localisation::TSystemOptions& sys)
+{
+	if (!ev.ground_truth) return nullptr;
+	Json g = {{"associated", ev.associated},
+			  {"true_fixes", ev.true_fixes},
+			  {"true_fixes_in_map", ev.true_fixes_in_map},
+			  {"false_fixes", ev.false_fixes},
+			  {"unverifiable", ev.unverifiable},
+			  {"true_coverage_in_map", fixedNumber(ev.true_coverage_in_map)},
+			  {"true_coverage_all", fixedNumber(ev.true_coverage_all)},
+			  {"false_fix_share", fixedNumber(ev.false_fix_share)}};
+	if (ev.oracle) g["oracle"] = oracleJson(ev, sys);
+	return g;
+}
+
+/** Distances without a fix and the blind episodes. */
+Json blindJson(const TEvaluation& ev)
+{
+	Json episodes = Json::array();
+	for (const auto& e : ev.episodes)
+		episodes.push_back(
+			{{"first", e.first}, {"last", e.last}, {"length_m", fixedNumber(e.length_m, 3)}, {"kind", toString(e.kind)}});
+	return {{"distance_from", ev.ground_truth ? "ground truth" : "VO"},
+			{"total_m", fixedNumber(ev.total_m, 3)},
+			{"blind_m", fixedNumber(ev.blind_m, 3)},
+			{"blind_m_per_km", fixedNumber(ev.blind_m_per_km, 3)},
+			{"episodes_between_fixes", ev.episodes_between},
+			{"episodes_reaching_m", fixedNumber(TEvalOptions().blind_long_m, 1)},
+			{"episodes_long", ev.episodes_long},
+			{"p_long", fixedNumber(ev.p_long)},
+			{"p_long_ci95_exact", {fixedNumber(ev.p_long_exact_lo), fixedNumber(ev.p_long_exact_hi)}},
+			{"p_long_ci95", {fixedNumber(ev.p_long_lo), fixedNumber(ev.p_long_hi)}},
+			{"first_fix_frame", ev.first_fix_frame},
+			{"before_first_fix_m", fixedNumber(ev.before_first_fix_m, 3)},
+			{"episodes", episodes}};
+}
+
+/** What the run was made from, each input with its fingerprint. */
+Json provenanceJson(const localisation::TSystemOptions& sys, const TLocaliseProvenance& prov)
+{
 	std::string locList;
 	for (const auto& l : sys.localisers) locList += (locList.empty() ? "" : ",") + l;
 	const auto hashOf = [](const std::string& given, const std::string& path) {
 		return given.empty() ? io::fnv1a64File(path) : given;
 	};
-	js << "  \"provenance\": {\"program\": " << jsonString(prov.program) << ", \"build_commit\": "
-	   << jsonString(prov.buildCommit) << ", \"localisers\": " << jsonString(locList)
-	   << ", \"start_kf\": " << prov.startKf << ", \"config\": " << jsonString(prov.configWhat)
-	   << ", \"config_fnv1a64\": " << jsonString(io::fnv1a64(prov.configText)) << ", \"map\": " << jsonString(prov.mapPath)
-	   << ", \"map_fnv1a64\": " << jsonString(hashOf(prov.mapHash, prov.mapPath))
-	   << ", \"live\": " << jsonString(prov.livePath)
-	   << ", \"live_fnv1a64\": " << jsonString(hashOf(prov.liveHash, prov.livePath));
+	Json p = {{"program", prov.program},
+			  {"build_commit", prov.buildCommit},
+			  {"localisers", locList},
+			  {"start_kf", prov.startKf},
+			  {"config", prov.configWhat},
+			  {"config_fnv1a64", io::fnv1a64(prov.configText)},
+			  {"map", prov.mapPath},
+			  {"map_fnv1a64", hashOf(prov.mapHash, prov.mapPath)},
+			  {"live", prov.livePath},
+			  {"live_fnv1a64", hashOf(prov.liveHash, prov.livePath)}};
 	if (!prov.gtPath.empty())
-		js << ", \"gt\": " << jsonString(prov.gtPath) << ", \"gt_fnv1a64\": " << jsonString(hashOf(prov.gtHash, prov.gtPath));
-	js << "}\n}\n";
-	return js.str();
+	{
+		p["gt"] = prov.gtPath;
+		p["gt_fnv1a64"] = hashOf(prov.gtHash, prov.gtPath);
+	}
+	return p;
+}
+
+/** Median and 95th percentile of times [ms], 3 decimals. */
+Json timesJson(const std::vector<double>& ms, bool p95 = true)
+{
+	Json t = {{"median", fixedNumber(percentile(ms, 0.5), 3)}};
+	if (p95) t["p95"] = fixedNumber(percentile(ms, 0.95), 3);
+	return t;
+}
+}  // namespace
+
+std::string summaryJson(
+	const Updates& ups, const TEvaluation& ev, const localisation::TSystemOptions& sys, const TLocaliseProvenance& prov)
+{
+	// Steps the fallback VO measured where the VO channel's could not.
+	size_t fallbackSteps = 0;
+	for (const auto& u : ups) fallbackSteps += !u.motion_from.empty() && u.motion_from != sys.vo_channel;
+	const Json doc = {{"format", "shadyloc localise summary"},
+					  {"version", kSummaryVersion},
+					  {"frames", ups.size()},
+					  {"in_map_frames", ev.in_map_frames},
+					  {"in_map_from", ev.ground_truth ? "ground truth" : "own estimate"},
+					  {"fixes", ev.fixes},
+					  {"fixes_in_map", ev.fixes_in_map},
+					  {"coverage_in_map", fixedNumber(ev.coverage_in_map)},
+					  {"coverage_all", fixedNumber(ev.coverage_all)},
+					  {"vo", {{"channel", sys.vo_channel}, {"fallback_steps", fallbackSteps}}},
+					  {"localisers", localisersJson(ev)},
+					  {"ground_truth", groundTruthJson(ev, sys)},
+					  {"blind", blindJson(ev)},
+					  {"global_searches", ev.global_searches},
+					  {"provenance", provenanceJson(sys, prov)}};
+	return writeJson(doc, {""});
 }
 
 std::string timingJson(const Updates& ups, int threads)
 {
-	const auto num = [](double v, int prec) { return jsonNumber(v, prec); };
-	std::vector<double> tot;
+	std::vector<double> total, vo;
 	std::vector<std::vector<double>> perLoc(ups.empty() ? 0 : ups.front().localisers.size());
-	std::vector<double> voMs;
 	for (const auto& u : ups)
 	{
-		tot.push_back(u.ms_total);
-		voMs.push_back(u.vo.ms.total);
+		total.push_back(u.ms_total);
+		vo.push_back(u.vo.ms.total);
 		for (size_t c = 0; c < u.localisers.size() && c < perLoc.size(); c++) perLoc[c].push_back(u.localisers[c].ms);
 	}
-	std::ostringstream tj;
-	tj << "{\n  \"format\": \"shadyloc localise timing\",\n  \"version\": 1,\n  \"threads\": " << threads
-	   << ",\n  \"frames\": " << ups.size() << ",\n  \"ms_per_frame\": {\"median\": " << num(percentile(tot, 0.5), 3)
-	   << ", \"p95\": " << num(percentile(tot, 0.95), 3) << "},\n  \"vo_ms\": {\"median\": "
-	   << num(percentile(voMs, 0.5), 3) << "},\n  \"localiser_ms\": {";
-	for (size_t c = 0; c < perLoc.size(); c++)
-		tj << (c ? ", " : "") << jsonString(ups.front().localisers[c].channel) << ": {\"median\": "
-		   << num(percentile(perLoc[c], 0.5), 3) << ", \"p95\": " << num(percentile(perLoc[c], 0.95), 3) << "}";
-	tj << "}\n}\n";
-	return tj.str();
+	Json localisers = Json::object();
+	for (size_t c = 0; c < perLoc.size(); c++) localisers[ups.front().localisers[c].channel] = timesJson(perLoc[c]);
+	const Json doc = {{"format", "shadyloc localise timing"},
+					  {"version", 1},
+					  {"threads", threads},
+					  {"frames", ups.size()},
+					  {"ms_per_frame", timesJson(total)},
+					  {"vo_ms", timesJson(vo, false)},
+					  {"localiser_ms", localisers}};
+	return writeJson(doc, {""});
+}
+
+std::string localiseProvenance(const std::string& dir, const std::string& key)
+{
+	const Json doc = readJsonFile((std::filesystem::path(dir) / "summary.json").string());
+	const Json* p = doc.is_object() && doc.contains("provenance") ? &doc["provenance"] : nullptr;
+	return p && p->is_object() && p->contains(key) && (*p)[key].is_string() ? (*p)[key].get<std::string>() : "";
 }
 
 void writeLocaliseOutputs(

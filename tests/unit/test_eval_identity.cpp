@@ -19,6 +19,7 @@
 #include <shadyloc/map/CKeyframeMap.h>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -346,4 +347,41 @@ TEST(EvalIdentity, MergeOutputsWithGroundTruth)
 TEST(EvalIdentity, MergeOutputsWithoutGroundTruth)
 {
 	checkMerge("merge_nogt", "b b.rawlog\nc c.rawlog\n");
+}
+
+TEST(EvalIdentity, JsonOutputsAreJsonAndKeepEveryString)
+{
+	// Every golden JSON file parses (a parser of the tests' own).
+	size_t files = 0;
+	for (const auto& f : fs::recursive_directory_iterator(kGoldenDir))
+		if (f.path().extension() == ".json")
+		{
+			files++;
+			EXPECT_NO_THROW((void)nlohmann::json::parse(readText(f.path().string()))) << f.path();
+		}
+	EXPECT_EQ(files, 10u);  // summary and timing of localise twice, eval and timing of the merge thrice
+
+	// Strings that need escaping come back as they were: quotes, backslashes,
+	// control characters, UTF-8.
+	const auto map = syntheticMap();
+	io::Trajectory gt;
+	const auto ups = syntheticRun(*map, gt);
+	const TEvaluation ev = evaluate(ups, *map, &gt);
+	TLocaliseProvenance prov = provenance(true);
+	prov.configWhat = "tab\there, line\nbreak, \x01 bell \"quoted\" back\\slash, caf\xc3\xa9";
+	const auto doc = nlohmann::json::parse(summaryJson(ups, ev, TSystemOptions(), prov));
+	EXPECT_EQ(doc["provenance"]["config"], prov.configWhat);
+	EXPECT_DOUBLE_EQ(doc["coverage_in_map"].get<double>(), 0.55);  // written "0.550000"
+	EXPECT_TRUE(doc["blind"]["episodes"].is_array());
+
+	// What the drawing commands read back from a localise folder.
+	const std::string dir = test::tempDir("eval_identity_provenance");
+	writeSyntheticOutputs(dir, true);
+	EXPECT_EQ(localiseProvenance(dir, "live"), "live/run b.rawlog");
+	EXPECT_EQ(localiseProvenance(dir, "gt_fnv1a64"), "00000000000000cc");
+	EXPECT_EQ(localiseProvenance(dir, "localisers"), "mono,invariant");
+	EXPECT_EQ(localiseProvenance(dir, "no_such_key"), "");
+	writeText(dir + "/summary.json", "{\"provenance\": {\"live\": ");	// cut short
+	EXPECT_EQ(localiseProvenance(dir, "live"), "");
+	EXPECT_EQ(localiseProvenance(dir + "/missing", "live"), "");
 }

@@ -22,6 +22,9 @@ struct TBlindEpisode
 	} kind = Between;
 };
 
+/** A kind as the outputs name it: "between", "before_first_fix", "at_end". */
+const char* toString(TBlindEpisode::Kind k);
+
 /** The blind episodes of a run: `fix[i]` tells whether frame i has a fix,
  * `distance_m[i]` is the distance travelled up to frame i [m] (ground
  * truth's where given, else VO's). An episode's length runs from the fix

@@ -46,6 +46,13 @@ std::string summaryJson(
 /** timing.json's text: per-frame times, median and 95th percentile. */
 std::string timingJson(const Updates& ups, int threads);
 
+/** A string of a localise output folder's provenance (summary.json's
+ * "provenance": "map", "map_fnv1a64", "live", "live_fnv1a64", "gt",
+ * "gt_fnv1a64", "localisers"); "" if absent (no summary.json, or not
+ * JSON: an older or hand-made folder). For the commands that draw such
+ * folders (figures, render). */
+std::string localiseProvenance(const std::string& dir, const std::string& key);
+
 /** All five files into folder `dir` (timing.json with sys.threads). */
 void writeLocaliseOutputs(
 	const std::string& dir, const Updates& ups, const TEvaluation& ev, const CKeyframeMap& map,
