@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <fstream>
 #include <iomanip>
 #include <locale>
@@ -84,35 +83,6 @@ Json fixedNumber(double v, int decimals)
 	s << std::fixed << std::setprecision(decimals) << v;
 	const std::string text = s.str();
 	return Json::binary(std::vector<std::uint8_t>(text.begin(), text.end()), kFixedNumber);
-}
-
-std::string jsonString(const std::string& s)
-{
-	std::string o = "\"";
-	for (const char c : s)
-	{
-		if (c == '"' || c == '\\')
-			o += std::string("\\") + c;
-		else if (c == '\n')
-			o += "\\n";
-		else if (static_cast<unsigned char>(c) < 0x20)
-		{
-			char b[8];
-			std::snprintf(b, sizeof b, "\\u%04x", c);
-			o += b;
-		}
-		else
-			o += c;
-	}
-	return o + "\"";
-}
-
-std::string jsonNumber(double v, int prec)
-{
-	if (!std::isfinite(v)) return "null";
-	std::ostringstream s;
-	s << std::fixed << std::setprecision(prec) << v;
-	return s.str();
 }
 
 std::string writeJson(const Json& doc, const std::vector<std::string>& broken)

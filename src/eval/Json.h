@@ -38,8 +38,4 @@ std::string writeJson(const Json& doc, const std::vector<std::string>& broken);
 /** The JSON document in a file; null when the file is missing or is not JSON. */
 Json readJsonFile(const std::string& path);
 
-/** The merge's hand-written text (until it is built as a document too). */
-std::string jsonString(const std::string& s);
-std::string jsonNumber(double v, int prec = 6);
-
 }  // namespace shadyloc::eval
