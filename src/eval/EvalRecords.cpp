@@ -164,7 +164,7 @@ const TPairChannel* TPairRecord::channel(const std::string& name) const
 
 TPairRecord makePairRecord(
 	const std::string& live, const std::string& map, EvalSystem system,
-	const std::vector<localisation::TLocalisationUpdate>& ups, const TEvaluation& ev)
+	const Updates& ups, const TEvaluation& ev)
 {
 	TPairRecord r;
 	r.live = live;

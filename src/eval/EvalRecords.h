@@ -51,7 +51,7 @@ struct TPairRecord
 
 TPairRecord makePairRecord(
 	const std::string& live, const std::string& map, EvalSystem system,
-	const std::vector<localisation::TLocalisationUpdate>& ups, const TEvaluation& ev);
+	const Updates& ups, const TEvaluation& ev);
 
 void writeMapRecord(const std::string& path, const TMapRecord& r);
 TMapRecord readMapRecord(const std::string& path);

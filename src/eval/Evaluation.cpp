@@ -120,128 +120,147 @@ TBlindProbability blindProbability(const std::vector<double>& lengths, const TEv
 	return r;
 }
 
-TEvaluation evaluate(
-	const std::vector<TLocalisationUpdate>& ups, const CKeyframeMap& map, const io::Trajectory* gt,
-	const TEvalOptions& o)
+namespace
 {
-	TEvaluation ev;
-	const size_t n = ups.size();
-	ev.frames.resize(n);
-	ev.ground_truth = gt != nullptr;
-	size_t nCh = ups.empty() ? 0 : ups.front().localisers.size();
-	for (size_t c = 0; c < nCh; c++) ev.channels.push_back({ups.front().localisers[c].channel});
+/** The live run's ground truth: sorted, and the index of each frame's pose
+ * in it (-1: none within assoc_dt_s). */
+struct TLiveTruth
+{
+	io::Trajectory poses;
+	std::vector<int> of;
+};
 
-	// ---- ground truth of the live frames
-	std::vector<int> gtOf(n, -1);
-	if (gt)
+/** Associates the frames with the ground truth (throwing when too few do)
+ * and measures the distance travelled along it (VO's across frames without it). */
+TLiveTruth associateTruth(TEvaluation& ev, const Updates& ups, const io::Trajectory& gt, const TEvalOptions& o)
+{
+	const size_t n = ups.size();
+	TLiveTruth t{gt, std::vector<int>(n, -1)};
+	io::Trajectory est;
+	for (const auto& u : ups) est.push_back({u.timestamp, Eigen::Isometry3d::Identity()});
+	io::sortByTime(t.poses);  // associate() refers to the sorted copy
+	for (const auto& p : io::associate(t.poses, est, o.assoc_dt_s)) t.of[p.second] = static_cast<int>(p.first);
+	ev.associated = static_cast<size_t>(std::count_if(t.of.begin(), t.of.end(), [](int i) { return i >= 0; }));
+	if (n > 0 && ev.associated < o.min_associated * n)
+		throw std::runtime_error(
+			"ground truth: only " + std::to_string(ev.associated) + " of " + std::to_string(n) +
+			" live frames have a pose within " + std::to_string(o.assoc_dt_s) + " s (at least " +
+			std::to_string(static_cast<int>(o.min_associated * 100)) + " % needed)");
+	double d = 0;
+	for (size_t i = 0; i < n; i++)
 	{
-		io::Trajectory est;
-		for (const auto& u : ups) est.push_back({u.timestamp, Eigen::Isometry3d::Identity()});
-		io::Trajectory g = *gt;
-		io::sortByTime(g);
-		for (const auto& p : io::associate(g, est, o.assoc_dt_s)) gtOf[p.second] = static_cast<int>(p.first);
-		// associate() refers to the sorted copy.
-		ev.associated = static_cast<size_t>(std::count_if(gtOf.begin(), gtOf.end(), [](int i) { return i >= 0; }));
-		if (n > 0 && ev.associated < o.min_associated * n)
-			throw std::runtime_error(
-				"ground truth: only " + std::to_string(ev.associated) + " of " + std::to_string(n) +
-				" live frames have a pose within " + std::to_string(o.assoc_dt_s) + " s (at least " +
-				std::to_string(static_cast<int>(o.min_associated * 100)) + " % needed)");
-		// Distance from ground truth, VO's across frames without it.
-		double d = 0;
-		for (size_t i = 0; i < n; i++)
+		if (i > 0)
 		{
-			if (i > 0)
-			{
-				if (gtOf[i] >= 0 && gtOf[i - 1] >= 0)
-					d += (g[gtOf[i]].T.translation() - g[gtOf[i - 1]].T.translation()).norm();
-				else
-					d += ups[i].distance_m - ups[i - 1].distance_m;
-			}
-			ev.frames[i].distance_m = d;
-			ev.frames[i].has_truth = gtOf[i] >= 0;
+			if (t.of[i] >= 0 && t.of[i - 1] >= 0)
+				d += (t.poses[t.of[i]].T.translation() - t.poses[t.of[i - 1]].T.translation()).norm();
+			else
+				d += ups[i].distance_m - ups[i - 1].distance_m;
 		}
-		// ---- in_map from both runs' ground truth
-		bool mapHasGt = true;
-		for (const auto& k : map.keyframes()) mapHasGt &= k.T_gt_kf.has_value();
-		if (mapHasGt)
-		{
-			PointGrid grid(o.in_map_m);
-			for (const auto& k : map.keyframes()) grid.add(k.T_gt_kf->translation(), k.id);
-			for (size_t i = 0; i < n; i++)
-			{
-				if (gtOf[i] < 0) continue;
-				const auto& T = g[gtOf[i]].T;
-				bool in = false;
-				grid.near(T.translation(), [&](size_t id) {
-					const auto& K = *map.keyframe(static_cast<uint32_t>(id)).T_gt_kf;
-					in |= (K.translation() - T.translation()).norm() <= o.in_map_m && axesAngleDeg(K, T) <= o.in_map_deg;
-				});
-				ev.frames[i].in_map = in;
-			}
-		}
-		else
+		ev.frames[i].distance_m = d;
+		ev.frames[i].has_truth = t.of[i] >= 0;
+	}
+	return t;
+}
+
+/** in_map from both runs' ground truth: a keyframe's within in_map_m and in_map_deg. */
+void inMapFromTruth(TEvaluation& ev, const CKeyframeMap& map, const TLiveTruth& t, const TEvalOptions& o)
+{
+	for (const auto& k : map.keyframes())
+		if (!k.T_gt_kf)
 			throw std::runtime_error(
 				"ground truth: the map's keyframes carry no ground truth (survey it with --gt): fixes cannot be checked");
-		// ---- truth of the fixes
-		for (size_t i = 0; i < n; i++)
-		{
-			auto& f = ev.frames[i];
-			f.channel.assign(nCh, FixTruth::None);
-			f.solve_err_m.assign(nCh, -1);
-			f.solve_err_deg.assign(nCh, -1);
-			f.solve_nees.assign(nCh, -1);
-			if (gtOf[i] < 0) continue;
-			const auto& T = g[gtOf[i]].T;
-			for (size_t c = 0; c < nCh; c++)
-			{
-				const auto& r = ups[i].localisers[c];
-				if (r.accepted()) f.channel[c] = judge(map, r.kf_id, r.T_kf_live, T, o);
-				if (r.solved) solveError(map, r, T, o, f, c);
-			}
-			if (ups[i].localised()) f.used = judge(map, ups[i].kf_id, ups[i].T_kf_live, T, o, &f.used_err_m, &f.used_err_deg);
-		}
-	}
-	else
+	PointGrid grid(o.in_map_m);
+	for (const auto& k : map.keyframes()) grid.add(k.T_gt_kf->translation(), k.id);
+	for (size_t i = 0; i < ev.frames.size(); i++)
 	{
-		for (size_t i = 0; i < n; i++)
-		{
-			ev.frames[i].distance_m = ups[i].distance_m;
-			ev.frames[i].channel.assign(nCh, FixTruth::None);
-			// Without ground truth: the system's own estimate.
-			if (!ups[i].placeKnown)
-			{
-				ev.frames[i].in_map = true;
-				continue;
-			}
-			map::TNearestQuery q;
-			q.max_distance_m = o.in_map_m;
-			q.max_angle_deg = o.in_map_deg;
-			q.max_results = 1;
-			ev.frames[i].in_map = !map.nearestKeyframes(ups[i].T_map_live, q).empty();
-		}
+		if (t.of[i] < 0) continue;
+		const auto& T = t.poses[t.of[i]].T;
+		bool in = false;
+		grid.near(T.translation(), [&](size_t id) {
+			const auto& K = *map.keyframe(static_cast<uint32_t>(id)).T_gt_kf;
+			in |= (K.translation() - T.translation()).norm() <= o.in_map_m && axesAngleDeg(K, T) <= o.in_map_deg;
+		});
+		ev.frames[i].in_map = in;
 	}
+}
 
-	// ---- the oracle bound, when probed
-	ev.oracle = n > 0 && !ups.front().oracle.empty();
-	if (ev.oracle)
+/** The truth of every localiser's fix and solve, and of the fix used. */
+void judgeFixes(TEvaluation& ev, const Updates& ups, const CKeyframeMap& map, const TLiveTruth& t, const TEvalOptions& o)
+{
+	const size_t nCh = ev.channels.size();
+	for (size_t i = 0; i < ups.size(); i++)
 	{
-		ev.oracle_in_map.assign(ups.front().oracle.size(), 0);
-		for (size_t i = 0; i < n; i++)
+		auto& f = ev.frames[i];
+		f.channel.assign(nCh, FixTruth::None);
+		f.solve_err_m.assign(nCh, -1);
+		f.solve_err_deg.assign(nCh, -1);
+		f.solve_nees.assign(nCh, -1);
+		if (t.of[i] < 0) continue;
+		const auto& T = t.poses[t.of[i]].T;
+		for (size_t c = 0; c < nCh; c++)
 		{
-			if (!ev.frames[i].in_map || ups[i].oracle.size() != ev.oracle_in_map.size()) continue;
-			bool any = false;
-			for (size_t c = 0; c < ev.oracle_in_map.size(); c++)
-			{
-				ev.oracle_in_map[c] += ups[i].oracle[c] == 1;
-				any |= ups[i].oracle[c] == 1;
-			}
-			ev.oracle_any_in_map += any;
+			const auto& r = ups[i].localisers[c];
+			if (r.accepted()) f.channel[c] = judge(map, r.kf_id, r.T_kf_live, T, o);
+			if (r.solved) solveError(map, r, T, o, f, c);
 		}
+		if (ups[i].localised()) f.used = judge(map, ups[i].kf_id, ups[i].T_kf_live, T, o, &f.used_err_m, &f.used_err_deg);
 	}
+}
 
-	// ---- counts
-	for (size_t i = 0; i < n; i++)
+/** Without ground truth: VO's distance, in_map from the system's own
+ * estimate (frames with no known place count as in the map). */
+void inMapFromEstimate(TEvaluation& ev, const Updates& ups, const CKeyframeMap& map, const TEvalOptions& o)
+{
+	map::TNearestQuery q;
+	q.max_distance_m = o.in_map_m;
+	q.max_angle_deg = o.in_map_deg;
+	q.max_results = 1;
+	for (size_t i = 0; i < ups.size(); i++)
+	{
+		auto& f = ev.frames[i];
+		f.distance_m = ups[i].distance_m;
+		f.channel.assign(ev.channels.size(), FixTruth::None);
+		f.in_map = !ups[i].placeKnown || !map.nearestKeyframes(ups[i].T_map_live, q).empty();
+	}
+}
+
+/** The oracle bound, when the run was probed: in-map frames with a true single-shot fix. */
+void oracleBound(TEvaluation& ev, const Updates& ups)
+{
+	ev.oracle = !ups.empty() && !ups.front().oracle.empty();
+	if (!ev.oracle) return;
+	ev.oracle_in_map.assign(ups.front().oracle.size(), 0);
+	for (size_t i = 0; i < ups.size(); i++)
+	{
+		if (!ev.frames[i].in_map || ups[i].oracle.size() != ev.oracle_in_map.size()) continue;
+		bool any = false;
+		for (size_t c = 0; c < ev.oracle_in_map.size(); c++)
+		{
+			ev.oracle_in_map[c] += ups[i].oracle[c] == 1;
+			any |= ups[i].oracle[c] == 1;
+		}
+		ev.oracle_any_in_map += any;
+	}
+}
+
+/** Localiser r's accepted fix on frame u, into its counts. */
+void countChannelFix(TChannelSummary& cs, const TLocalisationUpdate& u, const TLocaliserResult& r, FixTruth truth, bool withGt)
+{
+	cs.accepted++;
+	cs.used += u.used == r.channel;
+	if (truth == FixTruth::True)
+		cs.true_fixes++;
+	else if (truth == FixTruth::False)
+		cs.false_fixes++;
+	else if (withGt)
+		cs.unverifiable++;
+}
+
+/** Fixes used (true, false, unverifiable), per localiser, and the coverages. */
+void countFixes(TEvaluation& ev, const Updates& ups)
+{
+	const bool gt = ev.ground_truth;
+	for (size_t i = 0; i < ups.size(); i++)
 	{
 		const auto& u = ups[i];
 		const auto& f = ev.frames[i];
@@ -251,62 +270,43 @@ TEvaluation evaluate(
 		{
 			ev.fixes++;
 			ev.fixes_in_map += f.in_map;
-			if (f.used == FixTruth::True)
-			{
-				ev.true_fixes++;
-				ev.true_fixes_in_map += f.in_map;
-			}
-			else if (f.used == FixTruth::False)
-				ev.false_fixes++;
-			else if (gt)
-				ev.unverifiable++;
+			ev.true_fixes += f.used == FixTruth::True;
+			ev.true_fixes_in_map += f.used == FixTruth::True && f.in_map;
+			ev.false_fixes += f.used == FixTruth::False;
+			ev.unverifiable += f.used == FixTruth::None && gt;
 		}
-		for (size_t c = 0; c < nCh; c++)
-		{
-			const auto& r = u.localisers[c];
-			if (!r.accepted()) continue;
-			auto& cs = ev.channels[c];
-			cs.accepted++;
-			cs.used += u.used == r.channel;
-			if (f.channel[c] == FixTruth::True)
-				cs.true_fixes++;
-			else if (f.channel[c] == FixTruth::False)
-				cs.false_fixes++;
-			else if (gt)
-				cs.unverifiable++;
-		}
+		for (size_t c = 0; c < ev.channels.size(); c++)
+			if (u.localisers[c].accepted()) countChannelFix(ev.channels[c], u, u.localisers[c], f.channel[c], gt);
 	}
 	auto ratio = [](size_t a, size_t b) { return b ? static_cast<double>(a) / static_cast<double>(b) : 0.0; };
 	ev.coverage_in_map = ratio(ev.fixes_in_map, ev.in_map_frames);
-	ev.coverage_all = ratio(ev.fixes, n);
+	ev.coverage_all = ratio(ev.fixes, ups.size());
 	ev.true_coverage_in_map = ratio(ev.true_fixes_in_map, ev.in_map_frames);
 	ev.oracle_any_coverage = ratio(ev.oracle_any_in_map, ev.in_map_frames);
-	ev.true_coverage_all = ratio(ev.true_fixes, n);
+	ev.true_coverage_all = ratio(ev.true_fixes, ups.size());
 	ev.false_fix_share = ratio(ev.false_fixes, ev.true_fixes + ev.false_fixes);
+}
 
-	// ---- blind episodes
-	{
-		std::vector<bool> fix(n);
-		std::vector<double> dist(n);
-		for (size_t i = 0; i < n; i++) fix[i] = ups[i].localised(), dist[i] = ev.frames[i].distance_m;
-		ev.episodes = blindEpisodes(fix, dist);
-	}
+/** The blind episodes, the distance without a fix and P(an episode reaches blind_long_m). */
+void blindSummary(TEvaluation& ev, const Updates& ups, const TEvalOptions& o)
+{
+	const size_t n = ups.size();
+	std::vector<bool> fix(n);
+	std::vector<double> dist(n);
+	for (size_t i = 0; i < n; i++) fix[i] = ups[i].localised(), dist[i] = ev.frames[i].distance_m;
+	ev.episodes = blindEpisodes(fix, dist);
 	std::vector<double> between;
+	double before = 0;	// a run that starts with a fix has no such episode
 	for (const auto& e : ev.episodes)
 	{
 		ev.blind_m += e.length_m;
 		if (e.kind == TBlindEpisode::Between) between.push_back(e.length_m);
-		if (e.kind == TBlindEpisode::BeforeFirstFix) ev.before_first_fix_m = e.length_m;
+		if (e.kind == TBlindEpisode::BeforeFirstFix) before = e.length_m;
 	}
-	for (size_t i = 0; i < n; i++)
-		if (ups[i].localised())
-		{
-			ev.first_fix_frame = static_cast<int>(i);
-			if (ev.before_first_fix_m < 0) ev.before_first_fix_m = 0;
-			break;
-		}
-	if (ev.first_fix_frame < 0) ev.before_first_fix_m = -1;
-	ev.total_m = n ? ev.frames[n - 1].distance_m - ev.frames[0].distance_m : 0;
+	const auto first = std::find(fix.begin(), fix.end(), true);
+	ev.first_fix_frame = first == fix.end() ? -1 : static_cast<int>(first - fix.begin());
+	ev.before_first_fix_m = ev.first_fix_frame < 0 ? -1 : before;
+	ev.total_m = n ? dist[n - 1] - dist[0] : 0;
 	ev.blind_m_per_km = ev.total_m > 0 ? 1000 * ev.blind_m / ev.total_m : 0;
 	ev.episodes_between = between.size();
 	const TBlindProbability bp = blindProbability(between, o);
@@ -316,6 +316,27 @@ TEvaluation evaluate(
 	ev.p_long_hi = bp.hi;
 	ev.p_long_exact_lo = bp.exact_lo;
 	ev.p_long_exact_hi = bp.exact_hi;
+}
+}  // namespace
+
+TEvaluation evaluate(const Updates& ups, const CKeyframeMap& map, const io::Trajectory* gt, const TEvalOptions& o)
+{
+	TEvaluation ev;
+	ev.frames.resize(ups.size());
+	ev.ground_truth = gt != nullptr;
+	if (!ups.empty())
+		for (const auto& r : ups.front().localisers) ev.channels.push_back({r.channel});
+	if (gt)
+	{
+		const TLiveTruth truth = associateTruth(ev, ups, *gt, o);
+		inMapFromTruth(ev, map, truth, o);
+		judgeFixes(ev, ups, map, truth, o);
+	}
+	else
+		inMapFromEstimate(ev, ups, map, o);
+	oracleBound(ev, ups);
+	countFixes(ev, ups);
+	blindSummary(ev, ups, o);
 	return ev;
 }
 

@@ -161,68 +161,70 @@ double runMapJob(const std::string& outDir, const TEvalInputs& in, const TEvalJo
 	return wall;
 }
 
-double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJob& job, const TJobOptions& o)
+/** The map a pair job localises against, or an error naming the map job to run (again). */
+CKeyframeMap::Ptr loadPairMap(const std::string& outDir, const TEvalInputs& in, const TEvalJob& job, const std::string& mapFile)
 {
-	const auto t0 = std::chrono::steady_clock::now();
-	const TRun& live = in.runs[job.run];
-	const TRun& mapRun = in.runs[job.map];
-	const std::string mapRel = "jobs/map_" + mapRun.name + "/map.kfmap";
-	const std::string mapFile = (fs::path(outDir) / mapRel).string();
-	const std::string what = jobWhat(in.runs, job);
-	const std::string redo = jobCommand(in, outDir, job.map);
+	const std::string& name = in.runs[job.map].name;
+	const std::string what = jobWhat(in.runs, job), redo = jobCommand(in, outDir, job.map);
 	if (!fs::exists(mapFile))
 		throw std::runtime_error(
-			what + ": the map of run '" + mapRun.name + "' is missing ('" + mapFile + "'): run map job " +
+			what + ": the map of run '" + name + "' is missing ('" + mapFile + "'): run map job " +
 			std::to_string(job.map) + " first (" + redo + ")");
-	CKeyframeMap::Ptr map;
 	try
 	{
-		map = CKeyframeMap::LoadFromFile(mapFile);
+		return CKeyframeMap::LoadFromFile(mapFile);
 	}
 	catch (const std::exception& e)
 	{
 		throw std::runtime_error(
-			what + ": the map of run '" + mapRun.name + "' ('" + mapFile + "', from map job " + std::to_string(job.map) +
+			what + ": the map of run '" + name + "' ('" + mapFile + "', from map job " + std::to_string(job.map) +
 			") fails to load: " + e.what() + "; run map job " + std::to_string(job.map) + " again (" + redo + ")");
 	}
-	// Ground truth only where both runs have it: the map's keyframes carry
-	// the survey's, the live frames the live run's.
-	std::optional<io::Trajectory> gt;
-	if (live.hasGt() && mapRun.hasGt()) gt = io::readTum(live.gtPath);
+}
 
+/** A pair's localised run, evaluated. */
+struct TPairRun
+{
+	Updates ups;
+	TEvaluation ev;
+	localisation::TSystemOptions sys;
+};
+
+TPairRun localisePair(
+	const TEvalInputs& in, const TEvalJob& job, CKeyframeMap::Ptr map, const std::string& mapRel,
+	const std::optional<io::Trajectory>& gt, const TJobOptions& o)
+{
 	localisation::TLocaliseRunOptions ro;
 	ro.localisers = localisersOf(job.system);
 	ro.threads = o.threads;
 	ro.configWhat = in.configWhat;
-	std::vector<localisation::TLocalisationUpdate> ups;
-	TEvaluation ev;
-	localisation::TSystemOptions sysOpts;
+	TPairRun r;
 	try
 	{
-		localisation::CLocaliseRun lr(in.config(), map, mapRel, live.rawlogPath, ro);
+		localisation::CLocaliseRun lr(in.config(), map, mapRel, in.runs[job.run].rawlogPath, ro);
 		lr.system().setMinLoggingLevel(o.verbosity);
 		if (gt) lr.enableOracle(*gt);
-		ups = lr.run();
-		sysOpts = lr.system().options();
-		ev = evaluate(ups, *map, gt ? &*gt : nullptr);
+		r.ups = lr.run();
+		r.sys = lr.system().options();
+		r.ev = evaluate(r.ups, *map, gt ? &*gt : nullptr);
 	}
 	catch (const std::exception& e)
 	{
-		throw std::runtime_error(what + ": " + e.what());
+		throw std::runtime_error(jobWhat(in.runs, job) + ": " + e.what());
 	}
+	return r;
+}
 
-	io::OutputTransaction tx;
-	tx.setMinLoggingLevel(mrpt::system::LVL_ERROR);
-	tx.addInput(live.rawlogPath, "rawlog of run '" + live.name + "'");
-	tx.addInput(mapFile, "map of run '" + mapRun.name + "'");
-	const std::string dir = tx.addDirectory(jobDir(outDir, job), "output of " + what, "shadyloc eval job output");
+/** summary.json's provenance of a pair: paths as the run list writes them
+ * and the map relative to OUTDIR, so the summary does not depend on where
+ * the evaluation ran. */
+TLocaliseProvenance pairProvenance(const TEvalInputs& in, const TRun& live, const std::string& mapRel, const std::string& mapFile, bool gt)
+{
 	TLocaliseProvenance prov;
 	prov.program = "shadyloc eval";
 	prov.buildCommit = in.buildCommit;
 	prov.configWhat = in.configWhat;
 	prov.configText = in.configText;
-	// Paths as the run list writes them and the map relative to OUTDIR: the
-	// summary does not depend on where the evaluation ran.
 	prov.mapPath = mapRel;
 	prov.mapHash = fnv1a64File(mapFile);
 	prov.livePath = live.rawlog;
@@ -232,8 +234,31 @@ double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJ
 		prov.gtPath = live.gt;
 		prov.gtHash = fnv1a64File(live.gtPath);
 	}
-	writeLocaliseOutputs(dir, ups, ev, *map, sysOpts, prov);
-	writePairRecord((fs::path(dir) / "pair.tsv").string(), makePairRecord(live.name, mapRun.name, job.system, ups, ev));
+	return prov;
+}
+
+double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJob& job, const TJobOptions& o)
+{
+	const auto t0 = std::chrono::steady_clock::now();
+	const TRun& live = in.runs[job.run];
+	const TRun& mapRun = in.runs[job.map];
+	const std::string mapRel = "jobs/map_" + mapRun.name + "/map.kfmap";
+	const std::string mapFile = (fs::path(outDir) / mapRel).string();
+	const CKeyframeMap::Ptr map = loadPairMap(outDir, in, job, mapFile);
+	// Ground truth only where both runs have it: the map's keyframes carry
+	// the survey's, the live frames the live run's.
+	std::optional<io::Trajectory> gt;
+	if (live.hasGt() && mapRun.hasGt()) gt = io::readTum(live.gtPath);
+	const TPairRun r = localisePair(in, job, map, mapRel, gt, o);
+
+	io::OutputTransaction tx;
+	tx.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+	tx.addInput(live.rawlogPath, "rawlog of run '" + live.name + "'");
+	tx.addInput(mapFile, "map of run '" + mapRun.name + "'");
+	const std::string dir =
+		tx.addDirectory(jobDir(outDir, job), "output of " + jobWhat(in.runs, job), "shadyloc eval job output");
+	writeLocaliseOutputs(dir, r.ups, r.ev, *map, r.sys, pairProvenance(in, live, mapRel, mapFile, gt.has_value()));
+	writePairRecord((fs::path(dir) / "pair.tsv").string(), makePairRecord(live.name, mapRun.name, job.system, r.ups, r.ev));
 	const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 	writeJobTime(dir, wall);
 	tx.commit();

@@ -36,92 +36,131 @@ void poseFields(std::ostream& o, const Eigen::Isometry3d& T)
 }
 }  // namespace
 
+namespace
+{
+/** frames.csv's columns: the mono and invariant localisers by name, any
+ * other after them; ground-truth and oracle columns when there are such. */
+struct TFramesColumns
+{
+	std::vector<std::string> extra;	 //!< localisers with other names
+	std::vector<std::string> perChannel;  //!< mono, invariant, then the extra ones
+	std::vector<std::string> localisers;  //!< policy order
+	bool gt = false, oracle = false;
+
+	TFramesColumns(const Updates& ups, const TEvaluation& ev) : gt(ev.ground_truth)
+	{
+		perChannel = {"mono", "invariant"};
+		for (const auto& r : ups.front().localisers)
+		{
+			localisers.push_back(r.channel);
+			if (std::find(perChannel.begin(), perChannel.begin() + 2, r.channel) == perChannel.begin() + 2)
+				extra.push_back(r.channel);
+		}
+		perChannel.insert(perChannel.end(), extra.begin(), extra.end());
+		oracle = !ups.front().oracle.empty();
+	}
+
+	std::string header() const
+	{
+		std::string h =
+			"frame,stamp,distance_m,in_map,mono_ok,invariant_ok,used,kf_run,kf_frame,kf_id,kf_stamp,mono_inliers,"
+			"invariant_inliers,rel_x,rel_y,rel_z,rel_qx,rel_qy,rel_qz,rel_qw";
+		for (const auto& e : extra) h += "," + e + "_ok," + e + "_inliers";
+		for (const auto& c : perChannel)
+			for (const char* f : {"status", "matches", "gate_px", "sigma_m", "kf_id", "rel_x", "rel_y", "rel_z", "rel_qx", "rel_qy", "rel_qz", "rel_qw"})
+				h += "," + c + "_" + f;
+		h += ",global_search,global_inliers,global_runner_up,frames_since_fix,vo_from";
+		if (gt) h += ",gt_distance_m,used_true,used_err_m,used_err_deg";
+		if (oracle)
+			for (const auto& l : localisers) h += "," + l + "_oracle";
+		return h;
+	}
+};
+
+/** The fix used (keyframe, pose in it) and each named localiser's verdict and inliers. */
+void fixColumns(std::ostream& o, const localisation::TLocalisationUpdate& u, const CKeyframeMap& map, const TFramesColumns& cols)
+{
+	const auto okOf = [&](const std::string& c) {
+		const auto* r = u.result(c);
+		return r ? std::to_string(int(r->accepted())) : std::string();
+	};
+	const auto inlOf = [&](const std::string& c) {
+		const auto* r = u.result(c);
+		return r ? std::to_string(r->inliers) : std::string();
+	};
+	o << ',' << okOf("mono") << ',' << okOf("invariant") << ',' << (u.localised() ? u.used : "none");
+	if (u.localised())
+		o << ',' << map.runs().at(u.kf_run) << ',' << u.kf_frame << ',' << u.kf_id << ',' << std::setprecision(6) << u.kf_stamp;
+	else
+		o << ",,,,";
+	o << ',' << inlOf("mono") << ',' << inlOf("invariant") << ',';
+	if (u.localised())
+		poseFields(o, u.T_kf_live);
+	else
+		o << ",,,,,,";
+	for (const auto& e : cols.extra) o << ',' << okOf(e) << ',' << inlOf(e);
+}
+
+/** Each localiser's status, matches, gate, sigma and accepted pose. */
+void channelColumns(std::ostream& o, const localisation::TLocalisationUpdate& u, const TFramesColumns& cols)
+{
+	for (const auto& c : cols.perChannel)
+	{
+		const auto* r = u.result(c);
+		o << ',' << (r ? toString(r->status) : std::string()) << ',' << (r ? std::to_string(r->matches) : std::string())
+		  << ',';
+		if (r) o << std::setprecision(1) << r->gate.median_axis_px;
+		o << ',';
+		if (r && r->solved) o << std::setprecision(4) << r->sigma_m;
+		if (r && r->accepted())
+		{
+			o << ',' << r->kf_id << ',';
+			poseFields(o, r->T_kf_live);
+		}
+		else
+			o << ",,,,,,,,";
+	}
+}
+
+/** Ground truth's distance and the used fix's truth and error. */
+void truthColumns(std::ostream& o, const TFrameEval& f)
+{
+	o << ',' << std::setprecision(3) << f.distance_m << ','
+	  << (f.used == FixTruth::None ? std::string() : std::to_string(int(f.used))) << ',';
+	if (f.used_err_m >= 0)
+		o << std::setprecision(4) << f.used_err_m << ',' << f.used_err_deg;
+	else
+		o << ',';
+}
+
+void frameRow(
+	std::ostream& o, const localisation::TLocalisationUpdate& u, const TFrameEval& f, const CKeyframeMap& map,
+	const TFramesColumns& cols)
+{
+	o << u.frame << ',' << std::setprecision(6) << u.timestamp << ',' << std::setprecision(3) << u.distance_m << ','
+	  << int(f.in_map);
+	fixColumns(o, u, map, cols);
+	channelColumns(o, u, cols);
+	o << ',' << int(u.global_search) << ',';
+	if (u.global_search)
+		o << u.place.inliers << ',' << u.place.runner_up_inliers;
+	else
+		o << ',';
+	o << ',' << u.frames_since_fix << ',' << u.motion_from;
+	if (cols.gt) truthColumns(o, f);
+	if (cols.oracle)
+		for (size_t c = 0; c < cols.localisers.size(); c++)
+			o << ',' << (c < u.oracle.size() && u.oracle[c] >= 0 ? std::to_string(int(u.oracle[c])) : std::string());
+	o << '\n';
+}
+}  // namespace
+
 void writeFramesCsv(const std::string& path, const Updates& ups, const TEvaluation& ev, const CKeyframeMap& map)
 {
-	const bool gt = ev.ground_truth;
-	const std::vector<std::string> named = {"mono", "invariant"};
-	std::vector<std::string> extra;	 // localisers with other names
-	for (const auto& r : ups.front().localisers)
-		if (std::find(named.begin(), named.end(), r.channel) == named.end()) extra.push_back(r.channel);
-	std::vector<std::string> perChannel = named;
-	perChannel.insert(perChannel.end(), extra.begin(), extra.end());
-	std::string header =
-		"frame,stamp,distance_m,in_map,mono_ok,invariant_ok,used,kf_run,kf_frame,kf_id,kf_stamp,mono_inliers,"
-		"invariant_inliers,rel_x,rel_y,rel_z,rel_qx,rel_qy,rel_qz,rel_qw";
-	for (const auto& e : extra) header += "," + e + "_ok," + e + "_inliers";
-	for (const auto& c : perChannel)
-		for (const char* f : {"status", "matches", "gate_px", "sigma_m", "kf_id", "rel_x", "rel_y", "rel_z", "rel_qx", "rel_qy", "rel_qz", "rel_qw"})
-			header += "," + c + "_" + f;
-	header += ",global_search,global_inliers,global_runner_up,frames_since_fix,vo_from";
-	if (gt) header += ",gt_distance_m,used_true,used_err_m,used_err_deg";
-	const bool oracle = !ups.front().oracle.empty();
-	if (oracle)
-		for (const auto& r : ups.front().localisers) header += "," + r.channel + "_oracle";
-	io::CsvWriter csv(path, header);
-	auto& o = csv.out();
-	o << std::fixed;
-	for (size_t i = 0; i < ups.size(); i++)
-	{
-		const auto& u = ups[i];
-		const auto& f = ev.frames[i];
-		o << u.frame << ',' << std::setprecision(6) << u.timestamp << ',' << std::setprecision(3) << u.distance_m << ','
-		  << int(f.in_map);
-		auto okOf = [&](const std::string& c) {
-			const auto* r = u.result(c);
-			return r ? std::to_string(int(r->accepted())) : std::string();
-		};
-		auto inlOf = [&](const std::string& c) {
-			const auto* r = u.result(c);
-			return r ? std::to_string(r->inliers) : std::string();
-		};
-		o << ',' << okOf("mono") << ',' << okOf("invariant") << ',' << (u.localised() ? u.used : "none");
-		if (u.localised())
-			o << ',' << map.runs().at(u.kf_run) << ',' << u.kf_frame << ',' << u.kf_id << ',' << std::setprecision(6)
-			  << u.kf_stamp;
-		else
-			o << ",,,,";
-		o << ',' << inlOf("mono") << ',' << inlOf("invariant") << ',';
-		if (u.localised())
-			poseFields(o, u.T_kf_live);
-		else
-			o << ",,,,,,";
-		for (const auto& e : extra) o << ',' << okOf(e) << ',' << inlOf(e);
-		for (const auto& c : perChannel)
-		{
-			const auto* r = u.result(c);
-			o << ',' << (r ? toString(r->status) : std::string()) << ',' << (r ? std::to_string(r->matches) : std::string())
-			  << ',';
-			if (r) o << std::setprecision(1) << r->gate.median_axis_px;
-			o << ',';
-			if (r && r->solved) o << std::setprecision(4) << r->sigma_m;
-			if (r && r->accepted())
-			{
-				o << ',' << r->kf_id << ',';
-				poseFields(o, r->T_kf_live);
-			}
-			else
-				o << ",,,,,,,,";
-		}
-		o << ',' << int(u.global_search) << ',';
-		if (u.global_search)
-			o << u.place.inliers << ',' << u.place.runner_up_inliers;
-		else
-			o << ',';
-		o << ',' << u.frames_since_fix << ',' << u.motion_from;
-		if (gt)
-		{
-			o << ',' << std::setprecision(3) << f.distance_m << ','
-			  << (f.used == FixTruth::None ? std::string() : std::to_string(int(f.used))) << ',';
-			if (f.used_err_m >= 0)
-				o << std::setprecision(4) << f.used_err_m << ',' << f.used_err_deg;
-			else
-				o << ',';
-		}
-		if (oracle)
-			for (size_t c = 0; c < ups.front().localisers.size(); c++)
-				o << ',' << (c < u.oracle.size() && u.oracle[c] >= 0 ? std::to_string(int(u.oracle[c])) : std::string());
-		o << '\n';
-	}
+	const TFramesColumns cols(ups, ev);
+	io::CsvWriter csv(path, cols.header());
+	csv.out() << std::fixed;
+	for (size_t i = 0; i < ups.size(); i++) frameRow(csv.out(), ups[i], ev.frames[i], map, cols);
 	csv.commit();
 }
 

@@ -31,6 +31,9 @@
 
 namespace shadyloc::eval
 {
+/** A localised run: one update per live frame. */
+using Updates = std::vector<localisation::TLocalisationUpdate>;
+
 struct TEvalOptions
 {
 	double true_max_m = 0.5;  //!< a true fix is within this of the truth [m]
@@ -128,7 +131,7 @@ TBlindProbability blindProbability(const std::vector<double>& lengths, const TEv
  * truth. Throws std::runtime_error when ground truth is given but fewer than
  * min_associated of the frames associate with it. */
 TEvaluation evaluate(
-	const std::vector<localisation::TLocalisationUpdate>& updates, const CKeyframeMap& map, const io::Trajectory* gt,
+	const Updates& updates, const CKeyframeMap& map, const io::Trajectory* gt,
 	const TEvalOptions& o = {});
 
 }  // namespace shadyloc::eval

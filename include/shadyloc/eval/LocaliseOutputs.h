@@ -30,8 +30,6 @@ struct TLocaliseProvenance
 	int startKf = -1;
 };
 
-using Updates = std::vector<localisation::TLocalisationUpdate>;
-
 /** frames.csv: one row per live frame (docs/localisation.md). */
 void writeFramesCsv(const std::string& path, const Updates& ups, const TEvaluation& ev, const CKeyframeMap& map);
 /** solves.csv, the solve log: one row per localiser and frame with a solve,
