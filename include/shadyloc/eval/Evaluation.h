@@ -1,7 +1,8 @@
-/* ShadyLoc — evaluation of a localisation run (area eval: the metrics are
- * the evaluation's, the localisation library computes none of them): in-map frames, coverage, true
- * and false fixes against ground truth, blind episodes (McManus et al. 2014,
- * Section IV; definitions in docs/localisation.md):
+/* ShadyLoc — evaluation of a localisation run: in-map frames, coverage,
+ * true and false fixes against ground truth, blind episodes (McManus et al.
+ * 2014, Section IV; definitions in docs/localisation.md). The evaluation's
+ * area, not the localisation's: an application that localises links none
+ * of it.
  *
  *  - in_map: a map keyframe lies within in_map_m and in_map_deg (optical
  *    axes) of the live frame's pose: the ground-truth poses of both when the
