@@ -13,6 +13,7 @@ packages=(
   mrpt-apps                      # rawlog-edit, RawLogViewer (integration tests)
   libopencv-dev libeigen3-dev
   libzstd-dev                    # keyframe map compression
+  nlohmann-json3-dev             # the evaluation's JSON files (src/eval/Json.h)
   libgtest-dev libbenchmark-dev
   gnuplot-nox                    # calibrate-alpha and figures draw their plots with it
   libegl-mesa0 libgl1-mesa-dri   # headless offscreen rendering (EGL/Mesa)

@@ -2,9 +2,9 @@
  * output folders (docs/figures.md). */
 #include "Command.h"
 #include "CommandLine.h"
-#include "LocaliseOutput.h"
 
 #include <shadyloc/eval/Figures.h>
+#include <shadyloc/eval/LocaliseOutputs.h>
 #include <shadyloc/io/OutputTransaction.h>
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
@@ -44,8 +44,8 @@ std::vector<std::string> splitCommas(const std::string& s)
  * said, not refused (eval's run names need not be file names). */
 void warnUnmatchedNames(const TPairSpec& p, const std::string& spec)
 {
-	const std::string live = apps::localiseProvenance(p.baselineDir, "live"),
-					  map = apps::localiseProvenance(p.baselineDir, "map");
+	const std::string live = eval::localiseProvenance(p.baselineDir, "live"),
+					  map = eval::localiseProvenance(p.baselineDir, "map");
 	const auto names = [](const std::string& path, const std::string& name) {
 		const fs::path q(path);
 		return q.stem() == name || q.parent_path().filename() == name || q.parent_path().filename() == "map_" + name;
@@ -70,17 +70,17 @@ TPairSpec parsePair(const std::string& s)
 	// The two runs of one pair: the same live run against the same map.
 	for (const char* key : {"live", "map"})
 	{
-		const std::string b = apps::localiseProvenance(p.baselineDir, std::string(key) + "_fnv1a64"),
-						  c = apps::localiseProvenance(p.combinedDir, std::string(key) + "_fnv1a64");
+		const std::string b = eval::localiseProvenance(p.baselineDir, std::string(key) + "_fnv1a64"),
+						  c = eval::localiseProvenance(p.combinedDir, std::string(key) + "_fnv1a64");
 		if (!b.empty() && !c.empty() && b != c)
 			throw std::invalid_argument(
-				"--pair '" + s + "': the baseline run used " + key + " '" + apps::localiseProvenance(p.baselineDir, key) +
-				"', the combined run " + key + " '" + apps::localiseProvenance(p.combinedDir, key) +
+				"--pair '" + s + "': the baseline run used " + key + " '" + eval::localiseProvenance(p.baselineDir, key) +
+				"', the combined run " + key + " '" + eval::localiseProvenance(p.combinedDir, key) +
 				"' (their summary.json): not one pair");
 	}
 	warnUnmatchedNames(p, s);
-	p.liveHash = apps::localiseProvenance(p.baselineDir, "live_fnv1a64");
-	p.mapHash = apps::localiseProvenance(p.baselineDir, "map_fnv1a64");
+	p.liveHash = eval::localiseProvenance(p.baselineDir, "live_fnv1a64");
+	p.mapHash = eval::localiseProvenance(p.baselineDir, "map_fnv1a64");
 	return p;
 }
 

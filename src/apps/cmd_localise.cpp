@@ -5,6 +5,8 @@
 
 #include <shadyloc/core/ConfigLocation.h>
 #include <shadyloc/core/Settings.h>
+#include <shadyloc/eval/Evaluation.h>
+#include <shadyloc/eval/LocaliseOutputs.h>
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/io/Tum.h>
@@ -140,7 +142,6 @@ int run(int argc, char** argv)
 	if (gtArg.isSet()) outputs.addInput(gtArg.getValue(), "ground truth");
 	for (const auto& c : cfgArgs.getValue()) outputs.addInput(c, "config");
 	const fs::path dir = outputs.addDirectory(out.getValue(), "output folder", "shadyloc localise output");
-	const auto file = [&](const char* name) { return (dir / name).string(); };
 
 	CKeyframeMap::Ptr map;
 	try
@@ -187,13 +188,10 @@ int run(int argc, char** argv)
 	});
 
 	// ---- evaluation
-	const TEvaluation ev = evaluate(ups, *map, gt ? &*gt : nullptr);
+	const eval::TEvaluation ev = eval::evaluate(ups, *map, gt ? &*gt : nullptr);
 
 	// ---- outputs, all or nothing
-	writeFramesCsv(file("frames.csv"), ups, ev, *map);
-	writeSolvesCsv(file("solves.csv"), ups, ev);
-	writeTrajectory(file("trajectory.tum"), ups);
-	TLocaliseProvenance prov;
+	eval::TLocaliseProvenance prov;
 	prov.buildCommit = SHADYLOC_GIT_COMMIT;
 	prov.configWhat = cfgWhat;
 	prov.configText = cfgText;
@@ -201,8 +199,7 @@ int run(int argc, char** argv)
 	prov.livePath = livePath;
 	if (gt) prov.gtPath = gtArg.getValue();
 	prov.startKf = startKf.getValue();
-	writeTextFile(file("summary.json"), summaryJson(ups, ev, sys.options(), prov));
-	writeTextFile(file("timing.json"), timingJson(ups, sys.options().threads));
+	eval::writeLocaliseOutputs(dir.string(), ups, ev, *map, sys.options(), prov);
 	outputs.commit();
 
 	std::cout << std::fixed << std::setprecision(1) << "frames " << ups.size() << ", in map " << ev.in_map_frames

@@ -3,14 +3,14 @@
  * render command; `render-traj` is its old name. */
 #include "Command.h"
 #include "CommandLine.h"
-#include "LocaliseOutput.h"
 
 #include <shadyloc/eval/Figures.h>
+#include <shadyloc/eval/LocaliseOutputs.h>
 #include <shadyloc/eval/TrajectoryError.h>
+#include <shadyloc/io/FileHash.h>
 #include <shadyloc/io/ImageFile.h>
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Tum.h>
-#include <shadyloc/localisation/LocaliseRun.h>
 #include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/render/TrajectorySnapshot.h>
 
@@ -84,16 +84,16 @@ render::TrajectoryLayer localisedLayer(const std::string& dir, const std::string
  * shows a run against a map (or a truth) it never met, with nothing said. */
 void checkLocalisedInputs(const std::string& dir, const std::string& mapFile, const std::string& gtFile)
 {
-	const std::string mapHash = apps::localiseProvenance(dir, "map_fnv1a64");
-	if (!mapHash.empty() && mapHash != localisation::fnv1a64File(mapFile))
+	const std::string mapHash = eval::localiseProvenance(dir, "map_fnv1a64");
+	if (!mapHash.empty() && mapHash != io::fnv1a64File(mapFile))
 		throw std::invalid_argument(
-			"--localised '" + dir + "' was localised against map '" + apps::localiseProvenance(dir, "map") +
+			"--localised '" + dir + "' was localised against map '" + eval::localiseProvenance(dir, "map") +
 			"' (its summary.json), not against -m '" + mapFile + "' (another file): give the run's own map first");
 	if (gtFile.empty()) return;
-	const std::string gtHash = apps::localiseProvenance(dir, "gt_fnv1a64");
-	if (!gtHash.empty() && gtHash != localisation::fnv1a64File(gtFile))
+	const std::string gtHash = eval::localiseProvenance(dir, "gt_fnv1a64");
+	if (!gtHash.empty() && gtHash != io::fnv1a64File(gtFile))
 		throw std::invalid_argument(
-			"--gt '" + gtFile + "' is not the ground truth '" + apps::localiseProvenance(dir, "gt") + "' that --localised '" + dir +
+			"--gt '" + gtFile + "' is not the ground truth '" + eval::localiseProvenance(dir, "gt") + "' that --localised '" + dir +
 			"' was localised with (its summary.json)");
 	// Without a recorded truth, its times must at least meet the run's.
 	auto gt = io::readTum(gtFile), live = io::readTum((std::filesystem::path(dir) / "trajectory.tum").string());

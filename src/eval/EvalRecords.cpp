@@ -1,7 +1,7 @@
 /* ShadyLoc — the job records of the leave-one-out evaluation. */
 #include "EvalRecords.h"
 
-#include <shadyloc/localisation/LocaliseRun.h>
+#include <shadyloc/io/AtomicFile.h>
 
 #include <algorithm>
 #include <charconv>
@@ -22,16 +22,6 @@ std::string g17(double v)
 	char b[40];
 	std::snprintf(b, sizeof b, "%.17g", v);
 	return b;
-}
-
-const char* kindName(localisation::TBlindEpisode::Kind k)
-{
-	switch (k)
-	{
-		case localisation::TBlindEpisode::Between: return "between";
-		case localisation::TBlindEpisode::AtEnd: return "at_end";
-		default: return "before_first_fix";
-	}
 }
 
 /** Lines "key<TAB>v1<TAB>v2..." after a header line; each key's handler. */
@@ -174,9 +164,8 @@ const TPairChannel* TPairRecord::channel(const std::string& name) const
 
 TPairRecord makePairRecord(
 	const std::string& live, const std::string& map, EvalSystem system,
-	const std::vector<localisation::TLocalisationUpdate>& ups, const localisation::TEvaluation& ev)
+	const Updates& ups, const TEvaluation& ev)
 {
-	using localisation::FixTruth;
 	TPairRecord r;
 	r.live = live;
 	r.map = map;
@@ -222,7 +211,7 @@ TPairRecord makePairRecord(
 		for (size_t b = 0; b < kAccuracyBins.size(); b++)
 			r.bins[b] += f.used_err_m <= kAccuracyBins[b][0] && f.used_err_deg <= kAccuracyBins[b][1];
 	}
-	for (const auto& e : ev.episodes) r.episodes.push_back({kindName(e.kind), e.length_m});
+	for (const auto& e : ev.episodes) r.episodes.push_back({toString(e.kind), e.length_m});
 	return r;
 }
 
@@ -231,7 +220,7 @@ void writeMapRecord(const std::string& path, const TMapRecord& r)
 	std::ostringstream s;
 	s << kMapHeader << "\nrun\t" << r.run << "\nframes\t" << r.frames << "\nkeyframes\t" << r.keyframes
 	  << "\ngt_keyframes\t" << r.gt_keyframes << "\nbreaks\t" << r.breaks << "\npath_m\t" << g17(r.path_m) << "\n";
-	localisation::writeTextFile(path, s.str());
+	io::writeTextFile(path, s.str());
 }
 
 TMapRecord readMapRecord(const std::string& path)
@@ -267,7 +256,7 @@ void writePairRecord(const std::string& path, const TPairRecord& r)
 	for (const auto& e : r.fix_errors) s << "fix_error\t" << g17(e[0]) << '\t' << g17(e[1]) << "\n";
 	for (const auto& e : r.episodes) s << "episode\t" << e.first << '\t' << g17(e.second) << "\n";
 	s << "end\n";  // a record cut short lacks it
-	localisation::writeTextFile(path, s.str());
+	io::writeTextFile(path, s.str());
 }
 
 TPairRecord readPairRecord(const std::string& path)

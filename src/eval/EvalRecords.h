@@ -5,7 +5,7 @@
 #pragma once
 
 #include <shadyloc/eval/LeaveOneOut.h>
-#include <shadyloc/localisation/Evaluation.h>
+#include <shadyloc/eval/Evaluation.h>
 
 #include <array>
 #include <string>
@@ -51,7 +51,7 @@ struct TPairRecord
 
 TPairRecord makePairRecord(
 	const std::string& live, const std::string& map, EvalSystem system,
-	const std::vector<localisation::TLocalisationUpdate>& ups, const localisation::TEvaluation& ev);
+	const Updates& ups, const TEvaluation& ev);
 
 void writeMapRecord(const std::string& path, const TMapRecord& r);
 TMapRecord readMapRecord(const std::string& path);

@@ -4,6 +4,9 @@
 #include <shadyloc/core/Settings.h>
 #include <shadyloc/eval/LeaveOneOut.h>
 #include <shadyloc/filters/ChannelFrameSource.h>
+#include <shadyloc/eval/LocaliseOutputs.h>
+#include <shadyloc/io/AtomicFile.h>
+#include <shadyloc/io/FileHash.h>
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/localisation/LocaliseRun.h>
@@ -11,6 +14,7 @@
 #include <shadyloc/survey/SurveyRun.h>
 
 #include "EvalRecords.h"
+#include "Json.h"
 
 #include <algorithm>
 #include <chrono>
@@ -27,8 +31,8 @@
 namespace shadyloc::eval
 {
 namespace fs = std::filesystem;
-using localisation::fnv1a64;
-using localisation::fnv1a64File;
+using io::fnv1a64;
+using io::fnv1a64File;
 
 const char* toString(EvalSystem s) { return s == EvalSystem::Baseline ? "baseline" : "combined"; }
 
@@ -105,12 +109,11 @@ std::string jobCommand(const TEvalInputs& in, const std::string& outDir, size_t 
 	return cmd + " --job " + std::to_string(k);
 }
 
+/** job_timing.json: the job's wall time, one line (the merge gathers them into timing.json). */
 void writeJobTime(const std::string& dir, double wall_s)
 {
-	std::ostringstream s;
-	s << "{\"format\": \"shadyloc eval job timing\", \"version\": 1, \"wall_s\": " << localisation::jsonNumber(wall_s, 3)
-	  << "}\n";
-	localisation::writeTextFile((fs::path(dir) / "job_timing.json").string(), s.str());
+	const Json doc = {{"format", "shadyloc eval job timing"}, {"version", 1}, {"wall_s", fixedNumber(wall_s, 3)}};
+	io::writeTextFile((fs::path(dir) / "job_timing.json").string(), writeJson(doc, {}));
 }
 
 double runMapJob(const std::string& outDir, const TEvalInputs& in, const TEvalJob& job, const TJobOptions& o)
@@ -158,72 +161,70 @@ double runMapJob(const std::string& outDir, const TEvalInputs& in, const TEvalJo
 	return wall;
 }
 
-double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJob& job, const TJobOptions& o)
+/** The map a pair job localises against, or an error naming the map job to run (again). */
+CKeyframeMap::Ptr loadPairMap(const std::string& outDir, const TEvalInputs& in, const TEvalJob& job, const std::string& mapFile)
 {
-	const auto t0 = std::chrono::steady_clock::now();
-	const TRun& live = in.runs[job.run];
-	const TRun& mapRun = in.runs[job.map];
-	const std::string mapRel = "jobs/map_" + mapRun.name + "/map.kfmap";
-	const std::string mapFile = (fs::path(outDir) / mapRel).string();
-	const std::string what = jobWhat(in.runs, job);
-	const std::string redo = jobCommand(in, outDir, job.map);
+	const std::string& name = in.runs[job.map].name;
+	const std::string what = jobWhat(in.runs, job), redo = jobCommand(in, outDir, job.map);
 	if (!fs::exists(mapFile))
 		throw std::runtime_error(
-			what + ": the map of run '" + mapRun.name + "' is missing ('" + mapFile + "'): run map job " +
+			what + ": the map of run '" + name + "' is missing ('" + mapFile + "'): run map job " +
 			std::to_string(job.map) + " first (" + redo + ")");
-	CKeyframeMap::Ptr map;
 	try
 	{
-		map = CKeyframeMap::LoadFromFile(mapFile);
+		return CKeyframeMap::LoadFromFile(mapFile);
 	}
 	catch (const std::exception& e)
 	{
 		throw std::runtime_error(
-			what + ": the map of run '" + mapRun.name + "' ('" + mapFile + "', from map job " + std::to_string(job.map) +
+			what + ": the map of run '" + name + "' ('" + mapFile + "', from map job " + std::to_string(job.map) +
 			") fails to load: " + e.what() + "; run map job " + std::to_string(job.map) + " again (" + redo + ")");
 	}
-	// Ground truth only where both runs have it: the map's keyframes carry
-	// the survey's, the live frames the live run's.
-	std::optional<io::Trajectory> gt;
-	if (live.hasGt() && mapRun.hasGt()) gt = io::readTum(live.gtPath);
+}
 
+/** A pair's localised run, evaluated. */
+struct TPairRun
+{
+	Updates ups;
+	TEvaluation ev;
+	localisation::TSystemOptions sys;
+};
+
+TPairRun localisePair(
+	const TEvalInputs& in, const TEvalJob& job, CKeyframeMap::Ptr map, const std::string& mapRel,
+	const std::optional<io::Trajectory>& gt, const TJobOptions& o)
+{
 	localisation::TLocaliseRunOptions ro;
 	ro.localisers = localisersOf(job.system);
 	ro.threads = o.threads;
 	ro.configWhat = in.configWhat;
-	std::vector<localisation::TLocalisationUpdate> ups;
-	localisation::TEvaluation ev;
-	localisation::TSystemOptions sysOpts;
+	TPairRun r;
 	try
 	{
-		localisation::CLocaliseRun lr(in.config(), map, mapRel, live.rawlogPath, ro);
+		localisation::CLocaliseRun lr(in.config(), map, mapRel, in.runs[job.run].rawlogPath, ro);
 		lr.system().setMinLoggingLevel(o.verbosity);
 		if (gt) lr.enableOracle(*gt);
-		ups = lr.run();
-		sysOpts = lr.system().options();
-		ev = localisation::evaluate(ups, *map, gt ? &*gt : nullptr);
+		r.ups = lr.run();
+		r.sys = lr.system().options();
+		r.ev = evaluate(r.ups, *map, gt ? &*gt : nullptr);
 	}
 	catch (const std::exception& e)
 	{
-		throw std::runtime_error(what + ": " + e.what());
+		throw std::runtime_error(jobWhat(in.runs, job) + ": " + e.what());
 	}
+	return r;
+}
 
-	io::OutputTransaction tx;
-	tx.setMinLoggingLevel(mrpt::system::LVL_ERROR);
-	tx.addInput(live.rawlogPath, "rawlog of run '" + live.name + "'");
-	tx.addInput(mapFile, "map of run '" + mapRun.name + "'");
-	const std::string dir = tx.addDirectory(jobDir(outDir, job), "output of " + what, "shadyloc eval job output");
-	const auto file = [&](const char* n) { return (fs::path(dir) / n).string(); };
-	localisation::writeFramesCsv(file("frames.csv"), ups, ev, *map);
-	localisation::writeSolvesCsv(file("solves.csv"), ups, ev);
-	localisation::writeTrajectory(file("trajectory.tum"), ups);
-	localisation::TLocaliseProvenance prov;
+/** summary.json's provenance of a pair: paths as the run list writes them
+ * and the map relative to OUTDIR, so the summary does not depend on where
+ * the evaluation ran. */
+TLocaliseProvenance pairProvenance(const TEvalInputs& in, const TRun& live, const std::string& mapRel, const std::string& mapFile, bool gt)
+{
+	TLocaliseProvenance prov;
 	prov.program = "shadyloc eval";
 	prov.buildCommit = in.buildCommit;
 	prov.configWhat = in.configWhat;
 	prov.configText = in.configText;
-	// Paths as the run list writes them and the map relative to OUTDIR: the
-	// summary does not depend on where the evaluation ran.
 	prov.mapPath = mapRel;
 	prov.mapHash = fnv1a64File(mapFile);
 	prov.livePath = live.rawlog;
@@ -233,9 +234,31 @@ double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJ
 		prov.gtPath = live.gt;
 		prov.gtHash = fnv1a64File(live.gtPath);
 	}
-	localisation::writeTextFile(file("summary.json"), localisation::summaryJson(ups, ev, sysOpts, prov));
-	localisation::writeTextFile(file("timing.json"), localisation::timingJson(ups, sysOpts.threads));
-	writePairRecord(file("pair.tsv"), makePairRecord(live.name, mapRun.name, job.system, ups, ev));
+	return prov;
+}
+
+double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJob& job, const TJobOptions& o)
+{
+	const auto t0 = std::chrono::steady_clock::now();
+	const TRun& live = in.runs[job.run];
+	const TRun& mapRun = in.runs[job.map];
+	const std::string mapRel = "jobs/map_" + mapRun.name + "/map.kfmap";
+	const std::string mapFile = (fs::path(outDir) / mapRel).string();
+	const CKeyframeMap::Ptr map = loadPairMap(outDir, in, job, mapFile);
+	// Ground truth only where both runs have it: the map's keyframes carry
+	// the survey's, the live frames the live run's.
+	std::optional<io::Trajectory> gt;
+	if (live.hasGt() && mapRun.hasGt()) gt = io::readTum(live.gtPath);
+	const TPairRun r = localisePair(in, job, map, mapRel, gt, o);
+
+	io::OutputTransaction tx;
+	tx.setMinLoggingLevel(mrpt::system::LVL_ERROR);
+	tx.addInput(live.rawlogPath, "rawlog of run '" + live.name + "'");
+	tx.addInput(mapFile, "map of run '" + mapRun.name + "'");
+	const std::string dir =
+		tx.addDirectory(jobDir(outDir, job), "output of " + jobWhat(in.runs, job), "shadyloc eval job output");
+	writeLocaliseOutputs(dir, r.ups, r.ev, *map, r.sys, pairProvenance(in, live, mapRel, mapFile, gt.has_value()));
+	writePairRecord((fs::path(dir) / "pair.tsv").string(), makePairRecord(live.name, mapRun.name, job.system, r.ups, r.ev));
 	const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 	writeJobTime(dir, wall);
 	tx.commit();
@@ -352,7 +375,7 @@ void writePlan(const std::string& outDir, const TEvalInputs& in, const std::vect
 		s << j.index << '\t' << (j.isMap ? "map" : "pair") << '\t' << in.runs[j.run].name << '\t'
 		  << (j.isMap ? "-" : in.runs[j.map].name) << '\t' << (j.isMap ? "-" : toString(j.system)) << '\t' << j.name
 		  << '\n';
-	localisation::writeTextFile((fs::path(outDir) / "plan.tsv").string(), s.str());
+	io::writeTextFile((fs::path(outDir) / "plan.tsv").string(), s.str());
 }
 
 std::vector<TEvalJob> readPlan(const std::string& outDir, const TEvalInputs& in)

@@ -31,7 +31,9 @@ TEST(ArchitectureAreaGraph, OnlyAllowedIncludes)
 		{"vo", {"features", "geometry"}},
 		// Joins the VO and the map (and the channels' filters that the map records).
 		{"survey", {"features", "filters", "geometry", "io", "map", "vo"}},
-		// The leave-one-out evaluation surveys maps and runs the localisation.
+		// The leave-one-out evaluation surveys maps and runs the localisation;
+		// a localised run's metrics and output files are eval's as well, so
+		// localisation (below) needs nothing from it.
 		// ... and reads the runs' cameras through the channels' frame source.
 		{"eval", {"filters", "geometry", "io", "localisation", "map", "survey"}},
 		{"sim", {"geometry", "io"}},

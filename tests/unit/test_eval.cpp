@@ -4,9 +4,9 @@
  * process per job then --merge). */
 #include "../support/TestSupport.h"
 
+#include <shadyloc/eval/Evaluation.h>
 #include <shadyloc/eval/LeaveOneOut.h>
 #include <shadyloc/eval/RunList.h>
-#include <shadyloc/localisation/Evaluation.h>
 
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/serialization/CArchive.h>
@@ -149,16 +149,16 @@ TEST(EvalPlan, MapsFirstThenPairsInTheDocumentedOrder)
 TEST(EvalPlan, PooledBlindProbabilityIsTheRunsOwn)
 {
 	// The merge pools episodes through the same function evaluate() uses.
-	localisation::TEvalOptions o;
-	const auto p = localisation::blindProbability({10, 120, 30, 100, 5}, o);
+	eval::TEvalOptions o;
+	const auto p = eval::blindProbability({10, 120, 30, 100, 5}, o);
 	EXPECT_EQ(p.episodes, 5u);
 	EXPECT_EQ(p.reaching, 2u);	// 120 and exactly 100
 	EXPECT_DOUBLE_EQ(p.p, 0.4);
 	EXPECT_LE(p.lo, p.p);
 	EXPECT_GE(p.hi, p.p);
 	EXPECT_GT(p.hi, p.lo);	// five episodes: a wide interval
-	EXPECT_EQ(localisation::blindProbability({}, o).episodes, 0u);
-	EXPECT_EQ(localisation::blindProbability({}, o).p, 0.0);
+	EXPECT_EQ(eval::blindProbability({}, o).episodes, 0u);
+	EXPECT_EQ(eval::blindProbability({}, o).p, 0.0);
 }
 
 // ---------------------------------------------------------------- exact interval
@@ -192,17 +192,17 @@ TEST(LocalisationEvaluation, ClopperPearsonMatchesReferenceValues)
 	};
 	for (const auto& c : cases)
 	{
-		const auto r = localisation::clopperPearson(c.k, c.n);
+		const auto r = eval::clopperPearson(c.k, c.n);
 		EXPECT_NEAR(r.lo, c.lo, 1e-9) << c.k << " of " << c.n;
 		EXPECT_NEAR(r.hi, c.hi, 1e-9) << c.k << " of " << c.n;
 	}
 	// No trial: no information.
-	EXPECT_EQ(localisation::clopperPearson(0, 0).lo, 0.0);
-	EXPECT_EQ(localisation::clopperPearson(0, 0).hi, 1.0);
+	EXPECT_EQ(eval::clopperPearson(0, 0).lo, 0.0);
+	EXPECT_EQ(eval::clopperPearson(0, 0).hi, 1.0);
 	// Another confidence: k = 0 gives 1 - ((1 - c) / 2)^(1/n) in closed form.
-	EXPECT_NEAR(localisation::clopperPearson(0, 30, 0.90).hi, 1 - std::pow(0.05, 1.0 / 30), 1e-15);
-	EXPECT_THROW(localisation::clopperPearson(3, 2), std::invalid_argument);
-	EXPECT_THROW(localisation::clopperPearson(1, 2, 1.0), std::invalid_argument);
+	EXPECT_NEAR(eval::clopperPearson(0, 30, 0.90).hi, 1 - std::pow(0.05, 1.0 / 30), 1e-15);
+	EXPECT_THROW(eval::clopperPearson(3, 2), std::invalid_argument);
+	EXPECT_THROW(eval::clopperPearson(1, 2, 1.0), std::invalid_argument);
 }
 
 TEST(LocalisationEvaluation, ClopperPearsonBoundsSolveTheBinomialTails)
@@ -213,21 +213,21 @@ TEST(LocalisationEvaluation, ClopperPearsonBoundsSolveTheBinomialTails)
 		for (const size_t k : {size_t(0), size_t(1), n / 3, n - 1, n})
 		{
 			if (k > n) continue;
-			const auto r = localisation::clopperPearson(k, n);
+			const auto r = eval::clopperPearson(k, n);
 			ASSERT_LE(r.lo, r.hi);
-			if (k < n) { EXPECT_NEAR(localisation::binomialCdf(k, n, r.hi), 0.025, 1e-9) << k << " of " << n; }
-			if (k > 0) { EXPECT_NEAR(1 - localisation::binomialCdf(k - 1, n, r.lo), 0.025, 1e-9) << k << " of " << n; }
+			if (k < n) { EXPECT_NEAR(eval::binomialCdf(k, n, r.hi), 0.025, 1e-9) << k << " of " << n; }
+			if (k > 0) { EXPECT_NEAR(1 - eval::binomialCdf(k - 1, n, r.lo), 0.025, 1e-9) << k << " of " << n; }
 			const double p = static_cast<double>(k) / static_cast<double>(n);
 			EXPECT_LE(r.lo, p);
 			EXPECT_GE(r.hi, p);
 		}
 	// The CDF against exact sums (mpmath, 50 digits).
-	EXPECT_NEAR(localisation::binomialCdf(30, 100, 0.3), 0.54912360076879, 1e-12);
-	EXPECT_NEAR(localisation::binomialCdf(10, 2000, 0.01), 0.010522510740822, 1e-12);
-	EXPECT_EQ(localisation::binomialCdf(5, 5, 0.5), 1.0);
-	EXPECT_EQ(localisation::binomialCdf(0, 5, 0.0), 1.0);
-	EXPECT_EQ(localisation::binomialCdf(4, 5, 1.0), 0.0);
-	EXPECT_THROW(localisation::binomialCdf(1, 5, 1.5), std::invalid_argument);
+	EXPECT_NEAR(eval::binomialCdf(30, 100, 0.3), 0.54912360076879, 1e-12);
+	EXPECT_NEAR(eval::binomialCdf(10, 2000, 0.01), 0.010522510740822, 1e-12);
+	EXPECT_EQ(eval::binomialCdf(5, 5, 0.5), 1.0);
+	EXPECT_EQ(eval::binomialCdf(0, 5, 0.0), 1.0);
+	EXPECT_EQ(eval::binomialCdf(4, 5, 1.0), 0.0);
+	EXPECT_THROW(eval::binomialCdf(1, 5, 1.5), std::invalid_argument);
 }
 
 TEST(LocalisationEvaluation, NoLongEpisodeStillHasAnUpperBound)
@@ -235,7 +235,7 @@ TEST(LocalisationEvaluation, NoLongEpisodeStillHasAnUpperBound)
 	// 40 short episodes: the bootstrap interval is [0, 0]; the exact one
 	// keeps the doubt a finite count leaves, 1 - 0.025^(1/40) = 8.8 %.
 	const std::vector<double> lengths(40, 12.0);
-	const auto p = localisation::blindProbability(lengths);
+	const auto p = eval::blindProbability(lengths);
 	EXPECT_EQ(p.reaching, 0u);
 	EXPECT_EQ(p.p, 0.0);
 	EXPECT_EQ(p.hi, 0.0);
@@ -244,11 +244,11 @@ TEST(LocalisationEvaluation, NoLongEpisodeStillHasAnUpperBound)
 	EXPECT_NEAR(p.exact_hi, 0.0880, 1e-4);
 	// With episodes reaching the distance the exact interval is the pooled
 	// count's, here 2 of 5 (mpmath: 0.0527449505 - 0.8533672004).
-	const auto q = localisation::blindProbability({10, 120, 30, 100, 5});
+	const auto q = eval::blindProbability({10, 120, 30, 100, 5});
 	EXPECT_NEAR(q.exact_lo, 0.0527449505, 1e-8);
 	EXPECT_NEAR(q.exact_hi, 0.8533672004, 1e-8);
 	// No episode at all: nothing known.
-	const auto e = localisation::blindProbability({});
+	const auto e = eval::blindProbability({});
 	EXPECT_EQ(e.exact_lo, 0.0);
 	EXPECT_EQ(e.exact_hi, 1.0);
 }

@@ -183,7 +183,7 @@ TEST(FiguresCsv, BadInputNamesFileLineAndColumn)
 }
 
 // The episode lengths of a frames.csv follow the one definition
-// (eval::blindEpisodes, also localisation::evaluate's): from the fix before
+// (eval::blindEpisodes, also eval::evaluate's): from the fix before
 // to the fix after, on the ground-truth distance when the file has it; the
 // stretches before the first fix and after the last are not "between".
 TEST(FiguresCsv, BlindEpisodesFromFramesCsv)

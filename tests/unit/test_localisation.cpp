@@ -2,8 +2,8 @@
  * corridor (sim::SyntheticCorridor): a map surveyed along one path, a live
  * run along a path offset by a known amount; injected faults; a map of
  * another world; determinism across thread counts; the evaluation. */
+#include <shadyloc/eval/Evaluation.h>
 #include <shadyloc/filters/Channel.h>
-#include <shadyloc/localisation/Evaluation.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/sim/SyntheticCorridor.h>
 
@@ -19,6 +19,8 @@ namespace
 {
 using namespace shadyloc;
 using namespace shadyloc::localisation;
+using eval::evaluate;
+using eval::TBlindEpisode;
 
 constexpr double kDeg = M_PI / 180.0;
 constexpr double kSpacing = 1.0;  // map keyframes every metre

@@ -11,9 +11,9 @@
  * message when it is absent. Slow: about 10 s on two cores. */
 #include "../support/TestSupport.h"
 
+#include <shadyloc/eval/Evaluation.h>
 #include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/io/Tum.h>
-#include <shadyloc/localisation/Evaluation.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 
 #include <mrpt/config/CConfigFileMemory.h>
@@ -27,6 +27,8 @@ namespace
 {
 using namespace shadyloc;
 using namespace shadyloc::localisation;
+using eval::evaluate;
+using eval::TEvaluation;
 namespace fs = std::filesystem;
 
 

@@ -13,7 +13,7 @@
  *    invariant localiser of the combined run);
  *  - Figure 9: P(an episode without a fix reaches a distance d) against d,
  *    baseline versus combined, over blind episodes between two fixes
- *    (localisation/BlindEpisodes.h), with the episode counts.
+ *    (eval/BlindEpisodes.h), with the episode counts.
  *
  * Every function writes its PNG atomically (nothing is left at the path on
  * an error) and throws std::runtime_error naming the file (and line) at
@@ -21,15 +21,13 @@
  */
 #pragma once
 
-#include <shadyloc/localisation/BlindEpisodes.h>
+#include <shadyloc/eval/BlindEpisodes.h>
 
 #include <string>
 #include <vector>
 
 namespace shadyloc::eval
 {
-using localisation::blindEpisodes;
-using localisation::TBlindEpisode;
 
 /** One row of a frames.csv: the columns the figures read. */
 struct TLocalisedFrame

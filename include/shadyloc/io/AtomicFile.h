@@ -13,6 +13,9 @@ namespace shadyloc::io
  * inputs an output must not replace, uses an io::OutputTransaction. */
 void writeAtomically(const std::string& path, const std::function<void(const std::string&)>& write);
 
+/** Writes `text` to `path` atomically (writeAtomically), throwing naming the file. */
+void writeTextFile(const std::string& path, const std::string& text);
+
 /** Temporary sibling of `path` keeping its extension: "dir/.stem.tmp-<pid>.ext". */
 std::string temporarySibling(const std::string& path);
 

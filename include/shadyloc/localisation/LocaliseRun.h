@@ -1,15 +1,15 @@
-/* ShadyLoc — one localisation run as a library call, and its output files:
- * a live rawlog against a keyframe map with the combined system (or the
- * baseline alone), evaluated, written as frames.csv, trajectory.tum,
- * summary.json and timing.json (docs/localisation.md, "Outputs"). What
+/* ShadyLoc — one localisation run as a library call: a live rawlog against
+ * a keyframe map with the combined system (or the baseline alone). What
  * `shadyloc localise` does between its options and its output directory,
  * shared with the leave-one-out evaluation (`shadyloc eval`), which runs it
- * for every (live, map, system) pair.
+ * for every (live, map, system) pair; the evaluation and the output files
+ * (frames.csv, summary.json, ...) are the eval area's
+ * (eval/Evaluation.h, eval/LocaliseOutputs.h).
  */
 #pragma once
 
 #include <shadyloc/filters/ChannelFrameSource.h>
-#include <shadyloc/localisation/Evaluation.h>
+#include <shadyloc/io/Trajectory.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 
 #include <mrpt/config/CConfigFileBase.h>
@@ -22,9 +22,6 @@
 
 namespace shadyloc::localisation
 {
-/** summary.json's format version (docs/localisation.md). */
-constexpr int kSummaryVersion = 1;
-
 /** Sections a localise config may hold: the VO config's ([vo], [features],
  * their per-channel overrides, [map], [filters], the channels' filter
  * sections), [localise], [localiser], [localiser.<channel>]. Throws
@@ -94,42 +91,5 @@ class CLocaliseRun
 /** Throws naming the rawlog if channel `ch` is read from derived images
  * that no filter record describes, or that another filter than `ch`'s made. */
 void checkRecordedFilter(const filters::TChannelInput& in, const filters::TChannel& ch, const std::string& rawlog);
-
-/** Where a run's inputs came from, for summary.json's provenance. */
-struct TLocaliseProvenance
-{
-	std::string program = "shadyloc localise";
-	std::string buildCommit = "unknown";  //!< the program's commit (written at build time; "-dirty" when built from modified sources)
-	std::string configWhat, configText;	 //!< config names, their concatenated text (hashed)
-	std::string mapPath, livePath, gtPath;	//!< as given; gtPath "" without ground truth
-	std::string mapHash, liveHash, gtHash;	//!< fnv1a64File of each ("" = computed from the path)
-	int startKf = -1;
-};
-
-/** frames.csv: one row per live frame (docs/localisation.md). */
-void writeFramesCsv(
-	const std::string& path, const std::vector<TLocalisationUpdate>& ups, const TEvaluation& ev, const CKeyframeMap& map);
-/** solves.csv, the solve log: one row per localiser and frame with a solve,
- * accepted or not, with what the accept stage saw and, with ground truth,
- * its error and NEES (docs/localisation.md, "The solve log"). */
-void writeSolvesCsv(const std::string& path, const std::vector<TLocalisationUpdate>& ups, const TEvaluation& ev);
-/** trajectory.tum: the live left camera in the map frame where a place is known. */
-void writeTrajectory(const std::string& path, const std::vector<TLocalisationUpdate>& ups);
-/** summary.json's text (versioned; no times: it compares byte for byte). */
-std::string summaryJson(
-	const std::vector<TLocalisationUpdate>& ups, const TEvaluation& ev, const TSystemOptions& sys,
-	const TLocaliseProvenance& prov);
-/** timing.json's text: per-frame times, median and 95th percentile. */
-std::string timingJson(const std::vector<TLocalisationUpdate>& ups, int threads);
-
-/** FNV-1a, 64 bit, as 16 hex digits: of a file's bytes (throws naming an
- * unreadable file), of a text. The provenance's input hashes. */
-std::string fnv1a64File(const std::string& path);
-std::string fnv1a64(const std::string& text);
-/** A JSON string literal; a number with `prec` decimals ("null" if not finite). */
-std::string jsonString(const std::string& s);
-std::string jsonNumber(double v, int prec = 6);
-/** Writes text to path atomically (io::writeAtomically), throwing naming it. */
-void writeTextFile(const std::string& path, const std::string& text);
 
 }  // namespace shadyloc::localisation

@@ -1,6 +1,8 @@
-/* ShadyLoc — evaluation of a localisation run: in-map frames, coverage, true
- * and false fixes against ground truth, blind episodes (McManus et al. 2014,
- * Section IV; definitions in docs/localisation.md):
+/* ShadyLoc — evaluation of a localisation run: in-map frames, coverage,
+ * true and false fixes against ground truth, blind episodes (McManus et al.
+ * 2014, Section IV; definitions in docs/localisation.md). The evaluation's
+ * area, not the localisation's: an application that localises links none
+ * of it.
  *
  *  - in_map: a map keyframe lies within in_map_m and in_map_deg (optical
  *    axes) of the live frame's pose: the ground-truth poses of both when the
@@ -19,7 +21,8 @@
  */
 #pragma once
 
-#include <shadyloc/localisation/BlindEpisodes.h>
+#include <shadyloc/eval/BlindEpisodes.h>
+#include <shadyloc/eval/Proportion.h>
 #include <shadyloc/io/Trajectory.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 
@@ -27,8 +30,11 @@
 #include <string>
 #include <vector>
 
-namespace shadyloc::localisation
+namespace shadyloc::eval
 {
+/** A localised run: one update per live frame. */
+using Updates = std::vector<localisation::TLocalisationUpdate>;
+
 struct TEvalOptions
 {
 	double true_max_m = 0.5;  //!< a true fix is within this of the truth [m]
@@ -103,26 +109,6 @@ struct TEvaluation
 	double oracle_any_coverage = 0;
 };
 
-/** The exact (Clopper-Pearson) two-sided interval of a binomial proportion:
- * k successes in n trials, confidence `confidence` (0.95: 95 %). The bounds
- * solve P(X >= k | p_lo) = alpha/2 and P(X <= k | p_hi) = alpha/2 with
- * alpha = 1 - confidence (C. J. Clopper, E. S. Pearson, "The use of confidence
- * or fiducial limits illustrated in the case of the binomial", Biometrika 26,
- * 1934); for k = 0 the lower bound is 0 and the upper 1 - (alpha/2)^(1/n), for
- * k = n the reverse. The interval covers the true p at least `confidence` of
- * the time for every p (conservative), and unlike a bootstrap it does not
- * collapse to [0, 0] when no trial succeeds. n = 0 gives [0, 1]. Throws
- * std::invalid_argument when k > n or confidence is not in (0, 1). */
-struct TProportionInterval
-{
-	double lo = 0, hi = 1;	//!< [0..1]
-};
-TProportionInterval clopperPearson(size_t k, size_t n, double confidence = 0.95);
-
-/** P(X <= k) for X ~ Binomial(n, p), summed in log space over the shorter
- * tail (accurate to ~1e-15 absolute; p in [0, 1]). */
-double binomialCdf(size_t k, size_t n, double p);
-
 /** P(a blind episode reaches o.blind_long_m) over episode lengths [m]: the
  * count, the exact 95 % (Clopper-Pearson) interval of the proportion (the
  * headline), and a 95 % percentile-bootstrap interval beside it
@@ -146,7 +132,7 @@ TBlindProbability blindProbability(const std::vector<double>& lengths, const TEv
  * truth. Throws std::runtime_error when ground truth is given but fewer than
  * min_associated of the frames associate with it. */
 TEvaluation evaluate(
-	const std::vector<TLocalisationUpdate>& updates, const CKeyframeMap& map, const io::Trajectory* gt,
+	const Updates& updates, const CKeyframeMap& map, const io::Trajectory* gt,
 	const TEvalOptions& o = {});
 
-}  // namespace shadyloc::localisation
+}  // namespace shadyloc::eval

@@ -1,11 +1,21 @@
 /* ShadyLoc — blind episodes (docs/localisation.md, Definitions). */
-#include <shadyloc/localisation/BlindEpisodes.h>
+#include <shadyloc/eval/BlindEpisodes.h>
 
 #include <stdexcept>
 #include <string>
 
-namespace shadyloc::localisation
+namespace shadyloc::eval
 {
+const char* toString(TBlindEpisode::Kind k)
+{
+	switch (k)
+	{
+		case TBlindEpisode::Between: return "between";
+		case TBlindEpisode::AtEnd: return "at_end";
+		default: return "before_first_fix";
+	}
+}
+
 std::vector<TBlindEpisode> blindEpisodes(const std::vector<bool>& fix, const std::vector<double>& dist)
 {
 	if (fix.size() != dist.size())
@@ -36,4 +46,4 @@ std::vector<TBlindEpisode> blindEpisodes(const std::vector<bool>& fix, const std
 	return episodes;
 }
 
-}  // namespace shadyloc::localisation
+}  // namespace shadyloc::eval

@@ -1,13 +1,13 @@
 /* ShadyLoc — blind episodes of a localisation run (McManus et al. 2014,
  * Section IV and Figure 9; definition in docs/localisation.md): the one
- * definition, used by localisation::evaluate on a run in memory and by the
+ * definition, used by eval::evaluate on a run in memory and by the
  * figures on a run's frames.csv (eval/Figures.h). */
 #pragma once
 
 #include <cstddef>
 #include <vector>
 
-namespace shadyloc::localisation
+namespace shadyloc::eval
 {
 /** A maximal run of frames without a fix. */
 struct TBlindEpisode
@@ -22,6 +22,9 @@ struct TBlindEpisode
 	} kind = Between;
 };
 
+/** A kind as the outputs name it: "between", "before_first_fix", "at_end". */
+const char* toString(TBlindEpisode::Kind k);
+
 /** The blind episodes of a run: `fix[i]` tells whether frame i has a fix,
  * `distance_m[i]` is the distance travelled up to frame i [m] (ground
  * truth's where given, else VO's). An episode's length runs from the fix
@@ -30,4 +33,4 @@ struct TBlindEpisode
  * Throws std::invalid_argument if the two vectors differ in size. */
 std::vector<TBlindEpisode> blindEpisodes(const std::vector<bool>& fix, const std::vector<double>& distance_m);
 
-}  // namespace shadyloc::localisation
+}  // namespace shadyloc::eval
