@@ -12,8 +12,10 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <ostream>
 #include <stdexcept>
+#include <vector>
 
 #ifdef __SSE2__
 #include <emmintrin.h>
@@ -870,11 +872,32 @@ void StereoFeatureExtractor::process(
 }
 
 
-float patchZncc(const std::array<uint8_t, kPatchSize * kPatchSize>& p, const cv::Mat& img, int x, int y)
+namespace
+{
+/** A template's own sums, the same at every position it is scored. */
+struct TTemplateSums
+{
+	int s = 0;
+	int64_t ss = 0;
+};
+
+TTemplateSums templateSums(const std::array<uint8_t, kPatchSize * kPatchSize>& p)
+{
+	TTemplateSums t;
+	for (const uint8_t a : p)
+	{
+		t.s += a;
+		t.ss += a * a;
+	}
+	return t;
+}
+
+float patchZncc(
+	const std::array<uint8_t, kPatchSize * kPatchSize>& p, const TTemplateSums& t, const cv::Mat& img, int x, int y)
 {
 	constexpr int N = kPatchSize, h = N / 2;
-	int sa = 0, sb = 0;
-	int64_t saa = 0, sbb = 0, sab = 0;
+	int sb = 0;
+	int64_t sbb = 0, sab = 0;
 	for (int dy = 0; dy < N; dy++)
 	{
 		const uint8_t* row = img.ptr<uint8_t>(y - h + dy) + x - h;
@@ -882,17 +905,21 @@ float patchZncc(const std::array<uint8_t, kPatchSize * kPatchSize>& p, const cv:
 		for (int dx = 0; dx < N; dx++)
 		{
 			const int a = pr[dx], b = row[dx];
-			sa += a;
 			sb += b;
-			saa += a * a;
 			sbb += b * b;
 			sab += a * b;
 		}
 	}
 	const double n = N * N;
-	const double va = saa - double(sa) * sa / n, vb = sbb - double(sb) * sb / n;
+	const double va = t.ss - double(t.s) * t.s / n, vb = sbb - double(sb) * sb / n;
 	if (va < 1e-6 || vb < 1e-6) return -1.f;
-	return static_cast<float>((sab - double(sa) * sb / n) / std::sqrt(va * vb));
+	return static_cast<float>((sab - double(t.s) * sb / n) / std::sqrt(va * vb));
+}
+}  // namespace
+
+float patchZncc(const std::array<uint8_t, kPatchSize * kPatchSize>& p, const cv::Mat& img, int x, int y)
+{
+	return patchZncc(p, templateSums(p), img, x, y);
 }
 
 bool locatePatch(
@@ -906,12 +933,23 @@ bool locatePatch(
 	int x = x0, y = y0;
 	float c[3][3];
 	bool peak = false;
+	// The climb stays within radius_px + 1 of the start: each position is
+	// scored once (neighbouring steps share up to six of their nine).
+	const TTemplateSums sums = templateSums(patch);
+	const int side = 2 * radius_px + 3;
+	thread_local std::vector<float> scored;
+	scored.assign(size_t(side) * side, std::numeric_limits<float>::quiet_NaN());
+	const auto score = [&](int px, int py) {
+		float& v = scored[size_t(py - y0 + radius_px + 1) * side + size_t(px - x0 + radius_px + 1)];
+		if (std::isnan(v)) v = patchZncc(patch, sums, img, px, py);
+		return v;
+	};
 	for (int step = 0; step <= radius_px && inside(x, y); step++)
 	{
 		// All nine scores first, then the arg-max: comparing against the
 		// centre before it is computed read an uninitialised value.
 		for (int dy = -1; dy <= 1; dy++)
-			for (int dx = -1; dx <= 1; dx++) c[dy + 1][dx + 1] = patchZncc(patch, img, x + dx, y + dy);
+			for (int dx = -1; dx <= 1; dx++) c[dy + 1][dx + 1] = score(x + dx, y + dy);
 		int bx = 0, by = 0;
 		for (int dy = -1; dy <= 1; dy++)
 			for (int dx = -1; dx <= 1; dx++)
