@@ -96,6 +96,7 @@ void TSystemOptions::load(const mrpt::config::CConfigFileBase& c, const std::str
 	r.read("relocalise_at_dead_reckoning", track.relocalise_at_dead_reckoning);
 	r.read("fuse_prediction", track.fuse_prediction);
 	r.read("cross_check_fixes", track.cross_check_fixes);
+	r.read("confirmed_track_outranks_places", track.confirmed_track_outranks_places);
 	r.read("global_search_after_frames", track.global_search_after_frames);
 	r.read("seed_with_unconfirmed", track.seed_with_unconfirmed);
 	r.read("global_sigma_m", track.global_sigma_m);
@@ -134,6 +135,9 @@ void TSystemOptions::dump(std::ostream& out) const
 	w.value("relocalise_at_dead_reckoning", track.relocalise_at_dead_reckoning, "... first matching each candidate where dead reckoning projects it, warped");
 	w.value("fuse_prediction", track.fuse_prediction, "while the track is confirmed, a fix is the solve fused with the prediction");
 	w.value("cross_check_fixes", track.cross_check_fixes, "where the localisers' fixes of a frame disagree, the most certain is used");
+	w.value(
+		"confirmed_track_outranks_places", track.confirmed_track_outranks_places,
+		"a place that is no fix replaces a confirmed track only when the more certain");
 	w.value("global_search_after_frames", track.global_search_after_frames, "... and the whole map after this [frames]");
 	w.value("seed_with_unconfirmed", track.seed_with_unconfirmed,
 			"a consistent but unconfirmed solve narrows the next search (never a fix, never validates)");
@@ -564,15 +568,21 @@ void CLocalisationSystem::searchPlace(
 			const auto& L = *m_pipes[i].localiser;
 			const KeyframeLink link = [&L](uint32_t a, uint32_t b) { return L.between(a, b); };
 			const auto& lo = L.options();
-			const bool agrees = placeAgrees(places[i].pose, m_track.estimate(), link, lo.prediction_chi2);
-			if (m_track.placeFound(places[i].pose, agrees, places[i].certain, lo.consistent_frames))
-				u.used = m_pipes[i].setup.channel.label;
-			// The verified place is each localiser's first consistent frame.
-			for (const size_t j : order) m_pipes[j].localiser->startFrom(u.frame, m_track.estimate());
+			const TKeyframePose& place = places[i].pose;
+			const PlaceTest agreesWith = [&](const TKeyframePose& pred) {
+				return placeAgrees(place, pred, link, lo.prediction_chi2);
+			};
+			const PlaceOutcome outcome = m_track.placeFound(place, agreesWith, places[i].certain, lo.consistent_frames);
+			if (outcome == PlaceOutcome::Fix) u.used = m_pipes[i].setup.channel.label;
+			// The verified place is each localiser's first consistent frame
+			// (unless the track outranked it).
+			if (outcome != PlaceOutcome::Outranked)
+				for (const size_t j : order) m_pipes[j].localiser->startFrom(u.frame, m_track.estimate());
 			m_searchAmong.clear();
 			MRPT_LOG_DEBUG_FMT(
-				"frame %zu: place found by %s at keyframe %u (%d inliers)", u.frame, m_pipes[i].setup.channel.label.c_str(),
-				places[i].pose.kf, places[i].inliers);
+				"frame %zu: place found by %s at keyframe %u (%d inliers)%s", u.frame,
+				m_pipes[i].setup.channel.label.c_str(), places[i].pose.kf, places[i].inliers,
+				outcome == PlaceOutcome::Outranked ? ", outranked by the confirmed track" : "");
 			return;
 		}
 }

@@ -54,6 +54,11 @@ TKeyframePose CTrack::predict(const TMotion& motion)
 	const Matrix6d drift = driftCovariance(m_distSinceFix, step, m_opts.drift_m_per_m, m_opts.drift_deg_per_m);
 	m_distSinceFix += step;
 	m_pred = propagate(m_est, motion, drift);
+	if (m_rival.valid)
+	{
+		m_rival = propagate(m_rival, motion, driftCovariance(m_rivalDist, step, m_opts.drift_m_per_m, m_opts.drift_deg_per_m));
+		m_rivalDist += step;
+	}
 	m_seedPred = TKeyframePose();
 	if (m_seed.valid && m_pred.valid)
 	{
@@ -74,6 +79,7 @@ void CTrack::fix(const TKeyframePose& f)
 	m_est = f;
 	m_est.valid = true;
 	m_seed = TKeyframePose();
+	m_rival = TKeyframePose();
 	m_confirmed = true;
 	m_places = 0;
 	m_framesSinceFix = 0;
@@ -99,32 +105,58 @@ SearchScope CTrack::searchNeeded(bool allLost) const
 	return SearchScope::None;
 }
 
+Matrix6d CTrack::withPlaceSigma(const Matrix6d& cov) const
+{
+	const double sr = m_opts.global_sigma_deg * kDeg;
+	Matrix6d c = Matrix6d::Zero();
+	c.diagonal() << Eigen::Vector3d::Constant(m_opts.global_sigma_m * m_opts.global_sigma_m), Eigen::Vector3d::Constant(sr * sr);
+	return cov + c;	 // one frame's solve, unconfirmed
+}
+
 void CTrack::adoptPlace(const TKeyframePose& place)
 {
 	m_est = place;
 	m_est.valid = true;
-	const double sr = m_opts.global_sigma_deg * kDeg;
-	Matrix6d c = Matrix6d::Zero();
-	c.diagonal() << Eigen::Vector3d::Constant(m_opts.global_sigma_m * m_opts.global_sigma_m), Eigen::Vector3d::Constant(sr * sr);
-	m_est.cov += c;  // one frame's solve, unconfirmed
+	m_est.cov = withPlaceSigma(place.cov);
 	m_seed = TKeyframePose();
+	m_rival = TKeyframePose();
 	m_confirmed = false;
 	m_framesSinceFix = 0;
 	m_distSinceFix = 0;
 }
 
-bool CTrack::placeFound(const TKeyframePose& place, bool agrees, bool certain, int K)
+PlaceOutcome CTrack::placeFound(const TKeyframePose& place, const PlaceTest& agreesWith, bool certain, int K)
 {
 	const bool confirmedTrack = confirmed();
+	const bool agrees = agreesWith(m_est);
 	if (agrees && certain && (confirmedTrack || m_places + 1 >= K))
 	{
 		fix(place);
-		return true;
+		return PlaceOutcome::Fix;
 	}
-	const int places = agrees && !confirmedTrack ? m_places + 1 : 1;
+	int places = agrees && !confirmedTrack ? m_places + 1 : 1;
+	if (confirmedTrack && m_opts.confirmed_track_outranks_places &&
+		largestSigma(withPlaceSigma(place.cov)) >= largestSigma(m_pred.cov))
+	{
+		if (agrees) return PlaceOutcome::Outranked;  // it supports the track: nothing to change
+		if (!(m_rival.valid && agreesWith(m_rival)))
+		{
+			m_rival = place;
+			m_rival.cov = withPlaceSigma(place.cov);
+			m_rivalDist = 0;
+			return PlaceOutcome::Outranked;
+		}
+		// Two places that agree with each other against the track.
+		places = 2;
+		if (certain && places >= K)
+		{
+			fix(place);
+			return PlaceOutcome::Fix;
+		}
+	}
 	adoptPlace(place);
 	m_places = places;
-	return false;
+	return PlaceOutcome::Hypothesis;
 }
 
 bool placeAgrees(const TKeyframePose& place, const TKeyframePose& pred, const KeyframeLink& link, double chi2)

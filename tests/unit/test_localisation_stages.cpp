@@ -61,6 +61,12 @@ TMotion step(double dz, double sm = 0.005, double sdeg = 0.05)
 // One keyframe: every link is the identity.
 geometry::TPoseWithCov identityLink(uint32_t, uint32_t) { return {}; }
 
+// The system's test of a verified place against a prediction.
+PlaceTest judged(const TKeyframePose& place)
+{
+	return [place](const TKeyframePose& pred) { return placeAgrees(place, pred, identityLink, 16.81); };
+}
+
 TSolve solveAt(size_t frame, double z, double sm = 0.02)
 {
 	TSolve s;
@@ -278,7 +284,7 @@ TEST(LocalisationStages, AgreeingPlacesConfirmAHypothesisAsConsistentFramesDo)
 	constexpr int K = 2;
 	CTrack t(o);
 	const TKeyframePose first = poseAt(0.0, 0.03);
-	EXPECT_FALSE(t.placeFound(first, placeAgrees(first, t.estimate(), identityLink, 16.81), true, K));
+	EXPECT_EQ(t.placeFound(first, judged(first), true, K), PlaceOutcome::Hypothesis);
 	EXPECT_EQ(t.hypothesisPlaces(), 1);
 	EXPECT_FALSE(t.confirmed());
 	// Two frames on (0.8 m each, no fix), a place where VO says the camera is.
@@ -288,37 +294,104 @@ TEST(LocalisationStages, AgreeingPlacesConfirmAHypothesisAsConsistentFramesDo)
 		t.noFix({});
 	}
 	const TKeyframePose second = poseAt(1.62, 0.03);
-	const bool agrees = placeAgrees(second, t.estimate(), identityLink, 16.81);
-	EXPECT_TRUE(agrees);
+	EXPECT_TRUE(placeAgrees(second, t.estimate(), identityLink, 16.81));
 	// Uncertain (beyond the fix bounds): it continues the hypothesis, no fix.
 	{
 		CTrack u = t;
-		EXPECT_FALSE(u.placeFound(second, agrees, false, K));
+		EXPECT_EQ(u.placeFound(second, judged(second), false, K), PlaceOutcome::Hypothesis);
 		EXPECT_EQ(u.hypothesisPlaces(), 2);
 	}
-	EXPECT_TRUE(t.placeFound(second, agrees, true, K));
+	EXPECT_EQ(t.placeFound(second, judged(second), true, K), PlaceOutcome::Fix);
 	EXPECT_EQ(t.hypothesisPlaces(), 0);
 	t.predict(step(0.8));
 	EXPECT_TRUE(t.confirmed());
-	// A place 3 m from where the confirmed track is: a new hypothesis.
+	// A place 3 m from where the confirmed track is: a new hypothesis
+	// (without the track's rank; see the next test).
 	t.noFix({});
 	const TKeyframePose far = poseAt(2.42 + 3.0, 0.03);
 	EXPECT_FALSE(placeAgrees(far, t.estimate(), identityLink, 16.81));
-	CTrack v = t;
-	EXPECT_FALSE(v.placeFound(far, false, true, K));
+	TTrackOptions unranked = o;
+	unranked.confirmed_track_outranks_places = false;
+	CTrack v(unranked);
+	v.fix(poseAt(1.62, 0.03));
+	v.predict(step(0.8));
+	v.noFix({});
+	EXPECT_EQ(v.placeFound(far, judged(far), true, K), PlaceOutcome::Hypothesis);
 	EXPECT_EQ(v.hypothesisPlaces(), 1);
 	EXPECT_FALSE(v.confirmed());
 	// One that agrees with the confirmed track: a fix at once.
 	const TKeyframePose near = poseAt(2.45, 0.03);
-	EXPECT_TRUE(t.placeFound(near, placeAgrees(near, t.estimate(), identityLink, 16.81), true, K));
+	EXPECT_EQ(t.placeFound(near, judged(near), true, K), PlaceOutcome::Fix);
 	// With K = 3 the second agreeing place is not yet a fix.
 	CTrack w(o);
-	w.placeFound(first, false, true, 3);
+	w.placeFound(first, judged(first), true, 3);
 	w.predict(step(0.8));
 	w.noFix({});
 	const TKeyframePose next = poseAt(0.8, 0.03);
-	EXPECT_FALSE(w.placeFound(next, placeAgrees(next, w.estimate(), identityLink, 16.81), true, 3));
+	EXPECT_EQ(w.placeFound(next, judged(next), true, 3), PlaceOutcome::Hypothesis);
 	EXPECT_EQ(w.hypothesisPlaces(), 2);
+}
+
+// A place that contradicts a confirmed track replaces it only when it is the
+// more certain of the two. One frame after a fix the track (a few cm) keeps
+// its place against a lone verified place (its solve plus global_sigma_m): on
+// the 301 m set such places were the start of wrong fixes (a wrong solve of
+// the next frame agreed with the place and confirmed it, and the correct,
+// tighter solve after it was refused as inconsistent). After metres of dead
+// reckoning the track's drift outgrows the place and the place wins, so a
+// wrong track is still left.
+TEST(LocalisationStages, AConfirmedTrackOutranksALessCertainPlace)
+{
+	TTrackOptions o;
+	constexpr int K = 2;
+	CTrack t(o);
+	t.fix(poseAt(0, 0.02));
+	t.predict(step(0.8));
+	t.noFix({});
+	ASSERT_TRUE(t.confirmed());
+	const TKeyframePose before = t.estimate();
+	const TKeyframePose far = poseAt(0.8 + 0.6, 0.03);
+	EXPECT_FALSE(placeAgrees(far, t.estimate(), identityLink, 16.81));
+	EXPECT_EQ(t.placeFound(far, judged(far), true, K), PlaceOutcome::Outranked);
+	EXPECT_TRUE(t.confirmed());
+	EXPECT_EQ(t.hypothesisPlaces(), 0);
+	EXPECT_TRUE(t.estimate().T_kf_live.isApprox(before.T_kf_live));
+	// An uncertain place that agrees changes nothing either.
+	const TKeyframePose vague = poseAt(0.8, 0.3);
+	EXPECT_EQ(t.placeFound(vague, judged(vague), false, K), PlaceOutcome::Outranked);
+	EXPECT_TRUE(t.confirmed());
+	// A second place that agrees with the first outranked one through VO
+	// (one frame on) overturns the track: two places against one track.
+	{
+		CTrack u = t;
+		u.fix(poseAt(0.8, 0.02));
+		u.predict(step(0.8));
+		u.noFix({});
+		const TKeyframePose p1 = poseAt(1.6 + 0.6, 0.03);
+		EXPECT_EQ(u.placeFound(p1, judged(p1), true, K), PlaceOutcome::Outranked);
+		u.predict(step(0.8));
+		u.noFix({});
+		const TKeyframePose elsewhere = poseAt(2.4 - 0.7, 0.03);
+		EXPECT_EQ(u.placeFound(elsewhere, judged(elsewhere), true, K), PlaceOutcome::Outranked) << "agrees with neither";
+		u.predict(step(0.8));
+		u.noFix({});
+		const TKeyframePose p2 = poseAt(3.2 - 0.7, 0.03);
+		EXPECT_EQ(u.placeFound(p2, judged(p2), true, K), PlaceOutcome::Fix) << "agrees with the last rival";
+		EXPECT_TRUE(u.estimate().T_kf_live.isApprox(p2.T_kf_live));
+	}
+	// 8 m of dead reckoning later (sigma ~0.16 m at 2 %/m) the place is the
+	// more certain, and starts a hypothesis.
+	for (int i = 0; i < 10; i++)
+	{
+		t.predict(step(0.8));
+		t.noFix({});
+	}
+	ASSERT_TRUE(t.confirmed());
+	const TKeyframePose later = poseAt(8.8 + 1.2, 0.03);
+	EXPECT_FALSE(placeAgrees(later, t.estimate(), identityLink, 16.81));
+	EXPECT_EQ(t.placeFound(later, judged(later), true, K), PlaceOutcome::Hypothesis);
+	EXPECT_FALSE(t.confirmed());
+	EXPECT_EQ(t.hypothesisPlaces(), 1);
 }
 
 // A place found in another segment of the map than the track (the survey's

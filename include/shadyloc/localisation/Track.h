@@ -24,6 +24,7 @@
 #include <shadyloc/localisation/FixAcceptance.h>
 
 
+#include <functional>
 #include <vector>
 
 namespace shadyloc::localisation
@@ -56,7 +57,27 @@ struct TTrackOptions
 	/** When the localisers' fixes of one frame disagree, the most certain
 	 * is used, not the first in policy order (chooseFix). */
 	bool cross_check_fixes = true;
+	/** A verified place that is no fix replaces a confirmed track only when
+	 * it is the more certain of the two (largest translational sigma, the
+	 * place's with global_sigma_m added), or when a second place agrees with
+	 * it through VO; else the track is kept. One frame after a fix, a lone
+	 * place that contradicts the track was more often the wrong one; places
+	 * that keep agreeing with each other against it are evidence that the
+	 * track is wrong (docs/localisation.md). */
+	bool confirmed_track_outranks_places = true;
 };
+
+/** What a verified place of the relocalisation did to the track. */
+enum class PlaceOutcome
+{
+	Fix,  //!< a fix: the track restarts from it, confirmed
+	Hypothesis,	 //!< it starts or continues an unconfirmed hypothesis
+	Outranked  //!< a more certain confirmed track was kept; the place is its rival
+};
+
+/** Whether a verified place agrees with a prediction for its frame
+ * (placeAgrees with the place, its link and chi^2 bound in). */
+using PlaceTest = std::function<bool(const TKeyframePose& pred)>;
 
 /** Covariance added by a dead-reckoned step of `step` metres after `before`
  * metres without a fix: the variance of drift k * d grows from
@@ -108,14 +129,17 @@ class CTrack
 	SearchScope searchNeeded(bool allLost) const;
 	/** A verified place becomes the track: a new, unconfirmed hypothesis. */
 	void adoptPlace(const TKeyframePose& place);
-	/** A verified place of the relocalisation. `agrees`: with this frame's
-	 * prediction (placeAgrees); `certain`: within the fix bounds. A fix when
-	 * it agrees with a confirmed track, or is the K-th agreeing place of the
-	 * unconfirmed hypothesis (two verified places that agree through VO
-	 * confirm as K consistent frames do; replacing the hypothesis instead
-	 * restarted it on every search). Otherwise it continues the hypothesis
-	 * it agrees with, or starts a new one. Returns whether it is a fix. */
-	bool placeFound(const TKeyframePose& place, bool agrees, bool certain, int K);
+	/** A verified place of the relocalisation. `agreesWith`: the place
+	 * against a prediction for its frame (placeAgrees); `certain`: within the
+	 * fix bounds. A fix when it agrees with a confirmed track, or is the K-th
+	 * agreeing place of the unconfirmed hypothesis (two verified places that
+	 * agree through VO confirm as K consistent frames do; replacing the
+	 * hypothesis instead restarted it on every search). Otherwise it
+	 * continues the hypothesis it agrees with, or starts a new one, unless a
+	 * confirmed track is the more certain (confirmed_track_outranks_places):
+	 * then the place is the track's rival, and the next place that agrees
+	 * with the rival overturns the track. */
+	PlaceOutcome placeFound(const TKeyframePose& place, const PlaceTest& agreesWith, bool certain, int K);
 	/** Verified places that agree in the current unconfirmed hypothesis
 	 * (0: none, or the track is a fix's). */
 	int hypothesisPlaces() const { return m_places; }
@@ -126,10 +150,15 @@ class CTrack
 	void reset() { *this = CTrack(m_opts); }
 
    private:
+	/** A place's covariance as the track would hold it (global_sigma added). */
+	geometry::Matrix6d withPlaceSigma(const geometry::Matrix6d& cov) const;
+
 	TTrackOptions m_opts;
 	TKeyframePose m_est;  //!< the track after the last frame
 	TKeyframePose m_pred, m_seedPred;  //!< this frame's prediction and seed
 	TKeyframePose m_seed;  //!< an unconfirmed solve of the last frame
+	TKeyframePose m_rival;	//!< a place outranked by the confirmed track, propagated by VO
+	double m_rivalDist = 0;	 //!< metres dead-reckoned since the rival was found
 	bool m_confirmed = false;
 	int m_places = 0;
 	int m_framesSinceFix = 0;
