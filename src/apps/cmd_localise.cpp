@@ -5,6 +5,7 @@
 
 #include <shadyloc/core/ConfigLocation.h>
 #include <shadyloc/core/Settings.h>
+#include <shadyloc/datasets/LiveCapture.h>
 #include <shadyloc/eval/Evaluation.h>
 #include <shadyloc/eval/LocaliseOutputs.h>
 #include <shadyloc/io/OutputTransaction.h>
@@ -61,16 +62,38 @@ bool sameCamera(const geometry::TStereoCalib& a, const geometry::TStereoCalib& b
 /** The live run's camera (its first frame) must be the map's: landmarks
  * projected with another calibration find nothing, and the run would end
  * with no fix and exit 0 (eval refuses such pairs too). */
-void checkLiveCamera(const CKeyframeMap& map, const std::string& mapPath, const std::string& livePath, const CLocaliseRun& run)
+void checkLiveCamera(const CKeyframeMap& map, const std::string& mapPath, const std::string& liveWhat, const CLocaliseRun& run)
 {
 	const auto& f = run.firstFrame();
 	if (sameCamera(f.calib, map.calibration()) && f.size.width == map.imageWidth() && f.size.height == map.imageHeight())
 		return;
 	throw std::runtime_error(
-		"live rawlog '" + livePath + "' (camera '" + f.camera + "': " + describeCamera(f.calib, f.size.width, f.size.height) +
+		liveWhat + " (camera '" + f.camera + "': " + describeCamera(f.calib, f.size.width, f.size.height) +
 		") is not of the camera of map '" + mapPath + "' (" +
 		describeCamera(map.calibration(), map.imageWidth(), map.imageHeight()) +
 		"): a map localises runs of the camera that surveyed it");
+}
+
+/** -i or --live, and --live's companions only with it. */
+void checkLiveArguments(bool rawlog, bool live, bool camera, bool liveOnly)
+{
+	if (rawlog == live) throw std::runtime_error("give the live run as -i RAWLOG or as --live SOURCE (one of the two)");
+	if (live && !camera) throw std::runtime_error("--live needs --camera CALIB.ini (the rectified stereo calibration)");
+	if (!live && (camera || liveOnly))
+		throw std::runtime_error("--camera, --live-right, --fps, --realtime and --queue go with --live only");
+}
+
+/** What an output must never replace for a live source: the file, or the
+ * folder of an image sequence ("dir/%06d.png"), or nothing for a device. */
+std::string liveInputPath(const std::string& source)
+{
+	if (datasets::isCameraDevice(source)) return std::string();
+	if (source.find('%') != std::string::npos)
+	{
+		const fs::path dir = fs::path(source).parent_path();
+		return dir.empty() ? "." : dir.string();
+	}
+	return source;
 }
 
 int run(int argc, char** argv)
@@ -83,7 +106,23 @@ int run(int argc, char** argv)
 		"trajectory.tum, summary.json and timing.json (docs/localisation.md).");
 	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> mapArg("m", "map", "keyframe map (.kfmap)", true, "", "map.kfmap", cmd);
-	TCLAP::ValueArg<std::string> in("i", "input", "live rawlog (colour stereo, or filtered by shadyloc filter: its channels are read)", true, "", "live.rawlog", cmd);
+	TCLAP::ValueArg<std::string> in("i", "input", "live rawlog (colour stereo, or filtered by shadyloc filter: its channels are read); or --live", false, "", "live.rawlog", cmd);
+	TCLAP::ValueArg<std::string> liveArg(
+		"", "live",
+		"frames as they arrive from what OpenCV's VideoCapture opens: a camera device number, a video file, or an "
+		"image sequence such as 'dir/%06d.png'; side by side (left | right) unless --live-right; needs --camera",
+		false, "", "SOURCE", cmd);
+	TCLAP::ValueArg<std::string> liveRight("", "live-right", "with --live: the right camera's source", false, "", "SOURCE", cmd);
+	TCLAP::ValueArg<std::string> cameraArg(
+		"", "camera", "with --live: rectified calibration .ini ([left], [right], [stereo]; as `import folder`)", false, "",
+		"calib.ini", cmd);
+	shadyloc::apps::NumberArg<double> fpsArg(
+		cli, "", "fps", "with --live: frame rate of a file or sequence (timestamps i / fps, and --realtime) [Hz]", 10.0,
+		"Hz", 1e-3, 1000.0);
+	TCLAP::SwitchArg realtime(
+		"", "realtime", "with --live: play a file or sequence at --fps as a camera would, dropping frames when behind", cmd);
+	shadyloc::apps::NumberArg<int> queueArg(
+		cli, "", "queue", "with --live: frames read ahead at most (a camera drops the oldest beyond)", 2, "N", 1, 1000);
 	TCLAP::ValueArg<std::string> out(
 		"o", "output",
 		"output directory (replaced as a whole if it is empty or an earlier localise output; any other folder is "
@@ -112,9 +151,11 @@ int run(int argc, char** argv)
 	const bool talk = !quiet.getValue();
 
 	// ---- inputs, checked before any work
-	const std::string mapPath = mapArg.getValue(), livePath = in.getValue();
+	const std::string mapPath = mapArg.getValue(), livePath = in.isSet() ? in.getValue() : liveArg.getValue();
+	const bool live = liveArg.isSet();
+	checkLiveArguments(in.isSet(), live, cameraArg.isSet(), liveRight.isSet() || fpsArg.isSet() || realtime.isSet() || queueArg.isSet());
 	if (!fs::exists(mapPath)) throw std::runtime_error("map '" + mapPath + "' does not exist");
-	if (!fs::exists(livePath)) throw std::runtime_error("live rawlog '" + livePath + "' does not exist");
+	if (!live && !fs::exists(livePath)) throw std::runtime_error("live rawlog '" + livePath + "' does not exist");
 	std::string cfgText, cfgWhat;
 	cfgText = core::layeredConfigText(cfgArgs.getValue());
 	for (const auto& c : cfgArgs.getValue()) cfgWhat += (cfgWhat.empty() ? "" : " + ") + c;
@@ -137,8 +178,17 @@ int run(int argc, char** argv)
 	// replaces only an earlier localise output.
 	io::OutputTransaction outputs;
 	outputs.addInput(mapPath, "map");
-	outputs.addInput(livePath, "live rawlog");
-	outputs.addInput(io::imagesDirFor(livePath), "live rawlog's images folder");
+	if (live)
+	{
+		for (const auto& src : {liveArg.getValue(), liveRight.getValue()})
+			if (const std::string p = src.empty() ? "" : liveInputPath(src); !p.empty()) outputs.addInput(p, "live source");
+		outputs.addInput(cameraArg.getValue(), "camera calibration");
+	}
+	else
+	{
+		outputs.addInput(livePath, "live rawlog");
+		outputs.addInput(io::imagesDirFor(livePath), "live rawlog's images folder");
+	}
 	if (gtArg.isSet()) outputs.addInput(gtArg.getValue(), "ground truth");
 	for (const auto& c : cfgArgs.getValue()) outputs.addInput(c, "config");
 	const fs::path dir = outputs.addDirectory(out.getValue(), "output folder", "shadyloc localise output");
@@ -168,8 +218,25 @@ int run(int argc, char** argv)
 			"--start-kf " + std::to_string(startKf.getValue()) + ": the map has keyframes 0.." +
 			std::to_string(map->keyframeCount() - 1));
 	ro.startKf = startKf.isSet() ? startKf.getValue() : -1;
-	CLocaliseRun lrun(cfg, map, mapPath, livePath, ro);
-	checkLiveCamera(*map, mapPath, livePath, lrun);
+	std::unique_ptr<datasets::LiveCapture> capture;
+	std::unique_ptr<CLocaliseRun> run;
+	if (live)
+	{
+		datasets::TLiveCaptureOptions lo;
+		lo.source = liveArg.getValue();
+		lo.rightSource = liveRight.getValue();
+		lo.calibIni = cameraArg.getValue();
+		lo.fps = fpsArg.getValue();
+		lo.realtime = realtime.getValue();
+		lo.queue = static_cast<size_t>(queueArg.getValue());
+		capture = std::make_unique<datasets::LiveCapture>(lo);
+		filters::TObjectFeed feed{[c = capture.get()]() -> mrpt::serialization::CSerializable::Ptr { return c->next(); }, capture->name()};
+		run = std::make_unique<CLocaliseRun>(cfg, map, mapPath, std::move(feed), ro);
+	}
+	else
+		run = std::make_unique<CLocaliseRun>(cfg, map, mapPath, livePath, ro);
+	CLocaliseRun& lrun = *run;
+	checkLiveCamera(*map, mapPath, live ? "live source " + capture->name() : "live rawlog '" + livePath + "'", lrun);
 	auto& sys = lrun.system();
 	if (debug.getValue()) sys.setMinLoggingLevel(mrpt::system::LVL_DEBUG);
 	if (talk)
@@ -182,9 +249,16 @@ int run(int argc, char** argv)
 		std::cout << "[localise]\n";
 		sys.options().dump(std::cout);
 	}
+	size_t droppedShown = 0;
 	const auto& ups = lrun.run([&](const TLocalisationUpdate& u) {
-		if (talk && (u.frame % 50 == 0))
-			std::cout << "frame " << u.frame << ": " << (u.localised() ? u.used : std::string("none")) << std::endl;
+		if (!talk || u.frame % 50 != 0) return;
+		std::cout << "frame " << u.frame << ": " << (u.localised() ? u.used : std::string("none"));
+		if (capture && capture->dropped() > droppedShown)
+		{
+			droppedShown = capture->dropped();
+			std::cout << " (behind the camera: " << droppedShown << " frames dropped so far)";
+		}
+		std::cout << std::endl;
 	});
 
 	// ---- evaluation
@@ -199,6 +273,14 @@ int run(int argc, char** argv)
 	prov.livePath = livePath;
 	if (gt) prov.gtPath = gtArg.getValue();
 	prov.startKf = startKf.getValue();
+	if (capture)
+	{
+		prov.liveHash = "not hashed (live source)";
+		prov.live = true;
+		prov.liveFramesRead = capture->grabbed();
+		prov.liveFramesDropped = capture->dropped();
+		prov.liveDropsWhenBehind = capture->dropsWhenBehind();
+	}
 	eval::writeLocaliseOutputs(dir.string(), ups, ev, *map, sys.options(), prov);
 	outputs.commit();
 
@@ -211,6 +293,9 @@ int run(int argc, char** argv)
 		std::cout << "ground truth: true coverage " << 100 * ev.true_coverage_in_map << " % (self-reported "
 				  << 100 * ev.coverage_in_map << " %), false fixes " << ev.false_fixes << " (" << std::setprecision(2)
 				  << 100 * ev.false_fix_share << " %)\n";
+	if (capture)
+		std::cout << "live: " << capture->grabbed() << " frames read from " << capture->name() << ", "
+				  << capture->dropped() << " dropped (the localiser was behind)\n";
 	std::cout << std::setprecision(1) << "blind: " << ev.blind_m << " m of " << ev.total_m << " m, first fix at frame "
 			  << ev.first_fix_frame << "; -> " << out.getValue() << "\n";
 	return 0;

@@ -297,6 +297,11 @@ Json provenanceJson(const localisation::TSystemOptions& sys, const TLocaliseProv
 		p["gt"] = prov.gtPath;
 		p["gt_fnv1a64"] = hashOf(prov.gtHash, prov.gtPath);
 	}
+	if (prov.live)
+		p["live_capture"] = {
+			{"frames_read", prov.liveFramesRead},
+			{"frames_dropped", prov.liveFramesDropped},
+			{"drops_when_behind", prov.liveDropsWhenBehind}};
 	return p;
 }
 

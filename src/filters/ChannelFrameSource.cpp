@@ -214,8 +214,41 @@ TChannelPlan planChannels(const std::string& rawlog, const std::vector<TChannel>
 // ---- the rawlog source ------------------------------------------------------------------------
 ChannelFrameSource::ChannelFrameSource(
 	const std::string& rawlog, const std::vector<TChannel>& channels, const TChannelFrameSourceOptions& o)
-	: m_reader(rawlog), m_assembler(planChannels(rawlog, channels, o.camera), o.makeChannels)
+	: m_reader(std::make_unique<io::RawlogReader>(rawlog)),
+	  m_assembler(planChannels(rawlog, channels, o.camera), o.makeChannels)
 {
+}
+
+namespace
+{
+/** Every channel made from the feed's colour camera. */
+TChannelPlan colourPlan(const std::string& name, const std::vector<TChannel>& channels, const std::string& camera)
+{
+	TChannelPlan p;
+	p.channels = channels;
+	p.camera = camera;
+	TChannelInput in;
+	in.rawlog = name;
+	in.sensorLabel = camera;
+	p.inputs.assign(channels.size(), in);
+	p.acceptCamera = [](const std::string&) { return true; };
+	return p;
+}
+}  // namespace
+
+ChannelFrameSource::ChannelFrameSource(
+	TObjectFeed feed, const std::vector<TChannel>& channels, const TChannelFrameSourceOptions& o)
+	: m_feed(std::move(feed)), m_assembler(colourPlan(m_feed.name, channels, o.camera), o.makeChannels)
+{
+	if (!m_feed.next) throw std::invalid_argument("ChannelFrameSource: a feed without a next()");
+}
+
+mrpt::serialization::CSerializable::Ptr ChannelFrameSource::nextObject()
+{
+	if (m_reader) return m_reader->next();
+	auto obj = m_feed.next();
+	if (obj) m_objects++;
+	return obj;
 }
 
 bool ChannelFrameSource::next(TChannelFrame& f)
@@ -226,7 +259,7 @@ bool ChannelFrameSource::next(TChannelFrame& f)
 	{
 		if (m_pending.empty())
 		{
-			const auto obj = m_reader.next();
+			const auto obj = nextObject();
 			if (!obj)
 			{
 				m_ended = true;
@@ -240,8 +273,8 @@ bool ChannelFrameSource::next(TChannelFrame& f)
 		const auto o = m_pending.back();
 		m_pending.pop_back();
 		const auto st = std::dynamic_pointer_cast<CObservationStereoImages>(o);
-		const std::string where = "'" + path() + "': object #" + std::to_string(m_reader.index());
-		if (st && m_assembler.add(st, m_reader.index(), where, f)) return true;
+		const std::string where = "'" + path() + "': object #" + std::to_string(objectIndex());
+		if (st && m_assembler.add(st, objectIndex(), where, f)) return true;
 		const auto& ls = m_assembler.labels();
 		if (!o->sensorLabel.empty() && std::find(ls.begin(), ls.end(), o->sensorLabel) == ls.end())
 			m_otherLabels.insert(o->sensorLabel);

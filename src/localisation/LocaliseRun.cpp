@@ -38,6 +38,23 @@ CLocaliseRun::CLocaliseRun(
 	const std::string& livePath, const TLocaliseRunOptions& o)
 	: m_livePath(livePath)
 {
+	makeSystem(cfg, std::move(map), mapPath, o);
+	openLive(o.sensorLabel, nullptr);
+}
+
+CLocaliseRun::CLocaliseRun(
+	const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::string& mapPath,
+	filters::TObjectFeed feed, const TLocaliseRunOptions& o)
+	: m_livePath(feed.name)
+{
+	makeSystem(cfg, std::move(map), mapPath, o);
+	openLive(o.sensorLabel, &feed);
+}
+
+void CLocaliseRun::makeSystem(
+	const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::string& mapPath,
+	const TLocaliseRunOptions& o)
+{
 	if (map->isEmpty()) throw std::runtime_error("map '" + mapPath + "' has no keyframes: nothing to localise against");
 	const size_t nKf = map->keyframeCount();
 	// frames.csv writes run names unquoted (kf_run): maps surveyed before
@@ -67,11 +84,9 @@ CLocaliseRun::CLocaliseRun(
 				"--start-kf " + std::to_string(o.startKf) + ": the map has keyframes 0.." + std::to_string(nKf - 1));
 		m_sys->setStartKeyframe(static_cast<uint32_t>(o.startKf));
 	}
-
-	openLive(o.sensorLabel);
 }
 
-void CLocaliseRun::openLive(const std::string& camera)
+void CLocaliseRun::openLive(const std::string& camera, filters::TObjectFeed* feed)
 {
 	// Each channel read from a filtered rawlog, or made from the colour pair
 	// on the system's threads (as processFrame would).
@@ -80,7 +95,8 @@ void CLocaliseRun::openLive(const std::string& camera)
 	filters::TChannelFrameSourceOptions so;
 	so.camera = camera;
 	so.makeChannels = false;
-	m_source = std::make_unique<filters::ChannelFrameSource>(m_livePath, chans, so);
+	m_source = feed ? std::make_unique<filters::ChannelFrameSource>(std::move(*feed), chans, so)
+					: std::make_unique<filters::ChannelFrameSource>(m_livePath, chans, so);
 	for (size_t i = 0; i < chans.size(); i++) checkRecordedFilter(m_source->input(i), chans[i], m_livePath);
 	m_first.emplace();
 	if (!m_source->next(*m_first)) throw std::runtime_error(m_source->noFramesMessage());

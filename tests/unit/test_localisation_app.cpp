@@ -9,7 +9,9 @@
  *    exit, nothing partial, an earlier OUTDIR untouched); a live run through
  *    another world (another scene seed): zero fixes;
  *  - a rawlog made by `shadyloc filter` (with or without its colour pairs)
- *    localises exactly as its colour original. */
+ *    localises exactly as its colour original;
+ *  - `--live`: the same frames as an image sequence through OpenCV's
+ *    VideoCapture localise exactly as the rawlog does; bad live input. */
 #include "../support/Sequences.h"
 #include "../support/TestSupport.h"
 
@@ -17,6 +19,8 @@
 #include <shadyloc/map/CKeyframeMap.h>
 
 #include <mrpt/obs/CObservationStereoImages.h>
+
+#include <opencv2/imgcodecs.hpp>
 
 #include <filesystem>
 #include <fstream>
@@ -365,7 +369,106 @@ TEST(LocalisationApp, FilteredRawlogLocalisesAsItsColourOriginal)
 	EXPECT_FALSE(fs::exists(refused));
 }
 
+/** The rows of a table's text without one column (by 0-based index). */
+std::string withoutColumn(const std::string& text, size_t column, char sep = ',')
+{
+	std::istringstream in(text);
+	std::string line, out;
+	while (std::getline(in, line))
+	{
+		std::vector<std::string> cells;
+		std::stringstream ls(line);
+		for (std::string c; std::getline(ls, c, sep);) cells.push_back(c);
+		if (column < cells.size()) cells.erase(cells.begin() + long(column));
+		for (size_t i = 0; i < cells.size(); i++) out += (i ? std::string(1, sep) : std::string()) + cells[i];
+		out += "\n";
+	}
+	return out;
+}
+
+/** The rawlog's colour frames as a side-by-side PNG sequence (left | right)
+ * and its calibration as `import folder`'s .ini. Returns the frame rate. */
+double writeSideBySide(const std::string& rawlog, const std::string& dir, const std::string& calibIni)
+{
+	fs::create_directories(dir);
+	io::RawlogReader r(rawlog);
+	std::vector<double> stamps;
+	while (const auto obj = r.next())
+		for (const auto& o : io::observationsIn(obj))
+		{
+			const auto st = std::dynamic_pointer_cast<mrpt::obs::CObservationStereoImages>(o);
+			if (!st || st->sensorLabel != "CAMERA") continue;
+			io::loadExternalImages(*st);
+			cv::Mat both;
+			cv::hconcat(st->imageLeft.asCvMatRef(), st->imageRight.asCvMatRef(), both);
+			char name[32];
+			std::snprintf(name, sizeof(name), "/%06zu.png", stamps.size());
+			if (!cv::imwrite(dir + name, both)) throw std::runtime_error("cannot write " + dir + name);
+			if (stamps.empty())
+			{
+				const auto& L = st->leftCamera;
+				const auto& R = st->rightCamera;
+				std::ostringstream ini;
+				ini.precision(17);
+				ini << "[left]\nfx_px = " << L.fx() << "\nfy_px = " << L.fy() << "\ncx_px = " << L.cx() << "\ncy_px = " << L.cy()
+					<< "\n[right]\nfx_px = " << R.fx() << "\nfy_px = " << R.fy() << "\ncx_px = " << R.cx() << "\ncy_px = " << R.cy()
+					<< "\n[stereo]\nbaseline_m = " << st->rightCameraPose.x() << "\nwidth_px = " << L.ncols
+					<< "\nheight_px = " << L.nrows << "\n";
+				writeText(calibIni, ini.str());
+			}
+			stamps.push_back(mrpt::Clock::toDouble(st->timestamp));
+		}
+	if (stamps.size() < 2) throw std::runtime_error(rawlog + ": fewer than two frames");
+	return double(stamps.size() - 1) / (stamps.back() - stamps.front());
+}
+
 }  // namespace
+
+// The live path: the overcast run's frames as an image sequence read by
+// OpenCV's VideoCapture (side by side, a calibration .ini) localise exactly as
+// the rawlog does, frame for frame (the timestamps are the sequence's own,
+// i / fps); every frame of a file is read, none dropped. Bad live input is
+// refused naming it, with nothing written.
+TEST(LocalisationApp, LiveImageSequenceLocalisesAsTheRawlog)
+{
+	const auto& d = dataset();
+	std::string out;
+	const std::string seq = d.dir + "/live_seq", calib = d.dir + "/live_calib.ini";
+	const double fps = writeSideBySide(d.overcast, seq, calib);
+	const std::string fromRawlog = d.dir + "/live_rawlog_out", fromLive = d.dir + "/live_out";
+	ASSERT_EQ(test::runCommand(localiseCmd(d.map, d.overcast, fromRawlog), &out), 0) << out;
+	const auto liveCmd = [&](const std::string& source, const std::string& calibIni) {
+		return test::appPath() + " localise -q -m " + d.map + " --live " + source + " --camera " + calibIni + " --fps " +
+			   std::to_string(fps) + " -c " + src("config/vo_sim.ini") + " -c " + src("config/localise_sim.ini");
+	};
+	ASSERT_EQ(test::runCommand(liveCmd(seq + "/%06d.png", calib) + " -o " + fromLive, &out), 0) << out;
+	const std::string a = test::fileContents(fromRawlog + "/frames.csv"), b = test::fileContents(fromLive + "/frames.csv");
+	ASSERT_GT(jsonInt(test::fileContents(fromRawlog + "/summary.json"), "fixes"), 20);
+	EXPECT_EQ(withoutColumn(b, 1), withoutColumn(a, 1)) << "frames.csv but the stamp column";
+	EXPECT_EQ(
+		withoutColumn(test::fileContents(fromLive + "/trajectory.tum"), 0, ' '),
+		withoutColumn(test::fileContents(fromRawlog + "/trajectory.tum"), 0, ' '));
+	const std::string summary = test::fileContents(fromLive + "/summary.json");
+	EXPECT_EQ(jsonInt(summary, "frames_read"), test::kSimFixtureFrames) << summary;
+	EXPECT_EQ(jsonInt(summary, "frames_dropped"), 0) << summary;
+
+	// Bad input: no calibration; a calibration of another image size (the
+	// frame is named); a source that does not open. Nothing is written.
+	const std::string bad = d.dir + "/live_bad_out";
+	EXPECT_NE(test::runCommand(test::appPath() + " localise -q -m " + d.map + " --live " + seq + "/%06d.png -o " + bad, &out), 0);
+	EXPECT_NE(out.find("--camera"), std::string::npos) << out;
+	std::string other = test::fileContents(calib);
+	const auto at = other.find("width_px = ");
+	ASSERT_NE(at, std::string::npos);
+	other.insert(at + std::string("width_px = ").size(), "1");	// another width
+	writeText(d.dir + "/live_calib_other.ini", other);
+	EXPECT_NE(test::runCommand(liveCmd(seq + "/%06d.png", d.dir + "/live_calib_other.ini") + " -o " + bad, &out), 0);
+	EXPECT_NE(out.find("frame 0"), std::string::npos) << out;
+	EXPECT_NE(out.find("side by side"), std::string::npos) << out;
+	EXPECT_NE(test::runCommand(liveCmd(d.dir + "/missing/%06d.png", calib) + " -o " + bad, &out), 0);
+	EXPECT_NE(out.find("cannot open"), std::string::npos) << out;
+	EXPECT_FALSE(fs::exists(bad));
+}
 
 // -o replaces a folder only if it is an earlier localise output (or empty):
 // a folder of the user's files, or one holding the run's own inputs, is

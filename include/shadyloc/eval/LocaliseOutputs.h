@@ -28,6 +28,11 @@ struct TLocaliseProvenance
 	std::string mapPath, livePath, gtPath;	//!< as given; gtPath "" without ground truth
 	std::string mapHash, liveHash, gtHash;	//!< io::fnv1a64File of each ("" = computed from the path)
 	int startKf = -1;
+	/** A live source (localise --live): frames read from it and dropped
+	 * because the localiser was behind; absent for a rawlog. */
+	bool live = false;
+	size_t liveFramesRead = 0, liveFramesDropped = 0;
+	bool liveDropsWhenBehind = false;  //!< a camera (or --realtime), not a file read at the localiser's pace
 };
 
 /** frames.csv: one row per live frame (docs/localisation.md). */

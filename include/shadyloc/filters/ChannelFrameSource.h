@@ -28,6 +28,7 @@
 #include <opencv2/core/mat.hpp>
 
 #include <functional>
+#include <memory>
 #include <set>
 #include <string>
 #include <vector>
@@ -131,10 +132,22 @@ struct TChannelFrameSourceOptions
 	bool makeChannels = true;  //!< see ChannelFrameAssembler
 };
 
-/** The frames of a rawlog's camera, its channels paired. */
+/** Objects as they arrive from elsewhere than a rawlog (a live camera):
+ * `next` gives one per call, nullptr at the end; `name` names it in
+ * messages. */
+struct TObjectFeed
+{
+	std::function<mrpt::serialization::CSerializable::Ptr()> next;
+	std::string name;
+};
+
+/** The frames of a rawlog's (or a feed's) camera, its channels paired. */
 class ChannelFrameSource
 {
    public:
+	/** A feed's colour frames, every channel made from them (a feed has
+	 * no filtered channels); camera "" = its first stereo label. */
+	ChannelFrameSource(TObjectFeed feed, const std::vector<TChannel>& channels, const TChannelFrameSourceOptions& o = {});
 	/** Opens the rawlog and finds where each channel comes from
 	 * (resolveChannelInput). Throws io::RawlogError naming the file if it
 	 * is missing, or if a channel must be made from colour and the rawlog
@@ -153,13 +166,21 @@ class ChannelFrameSource
 	/** "read from 'CAMERA_inv'" or "made from the colour camera 'CAMERA'". */
 	std::string describeInput(size_t i) const;
 	size_t frames() const { return m_assembler.frames(); }
-	double progress() const { return m_reader.progress(); }
-	const std::string& path() const { return m_reader.path(); }
+	/** Share of the rawlog read (0 for a feed). */
+	double progress() const { return m_reader ? m_reader->progress() : 0.0; }
+	/** The rawlog, or the feed's name. */
+	const std::string& path() const { return m_reader ? m_reader->path() : m_feed.name; }
 	/** "'<path>': no stereo observations labelled ... (other labels: ...)". */
 	std::string noFramesMessage() const;
 
    private:
-	io::RawlogReader m_reader;
+	/** The next object of the rawlog or feed; nullptr at the end. */
+	mrpt::serialization::CSerializable::Ptr nextObject();
+	size_t objectIndex() const { return m_reader ? m_reader->index() : m_objects - 1; }
+
+	std::unique_ptr<io::RawlogReader> m_reader;	 //!< null for a feed
+	TObjectFeed m_feed;
+	size_t m_objects = 0;  //!< objects taken from the feed
 	ChannelFrameAssembler m_assembler;
 	std::vector<mrpt::obs::CObservation::Ptr> m_pending;  //!< rest of the current sensory frame
 	std::set<std::string> m_otherLabels;

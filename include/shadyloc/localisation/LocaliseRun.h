@@ -59,6 +59,12 @@ class CLocaliseRun
 	CLocaliseRun(
 		const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::string& mapPath,
 		const std::string& livePath, const TLocaliseRunOptions& o);
+	/** The same with frames as they arrive (a live camera): colour stereo
+	 * observations from `feed`, channels made from them. Waits for the
+	 * first frame. */
+	CLocaliseRun(
+		const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::string& mapPath,
+		filters::TObjectFeed feed, const TLocaliseRunOptions& o);
 	~CLocaliseRun();
 
 	CLocalisationSystem& system() { return *m_sys; }
@@ -78,7 +84,11 @@ class CLocaliseRun
 	void enableOracle(const io::Trajectory& gt);
 
    private:
-	void openLive(const std::string& camera);
+	void makeSystem(
+		const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::string& mapPath,
+		const TLocaliseRunOptions& o);
+	/** From the rawlog m_livePath, or from `feed` when given. */
+	void openLive(const std::string& camera, filters::TObjectFeed* feed);
 
 	std::unique_ptr<CLocalisationSystem> m_sys;
 	std::unique_ptr<COracle> m_oracle;
