@@ -44,8 +44,9 @@ int run(int argc, char** argv)
 		"(mono) and with the combined system (mono,invariant), separately. Without --plan/--job/--merge it runs "
 		"every job on a worker pool (-j) and merges. For a cluster: --plan writes OUTDIR/plan.tsv and prints the "
 		"job ranges ('maps 0 <N-1>', 'pairs <N> <last>'), --job K runs one job (maps before pairs), --merge "
-		"combines them. Outputs: table1.md/.csv (Table I), summary.md, eval.json, timing.json, "
-		"figures_inputs.tsv, pairs/ (docs/evaluation.md).");
+		"combines them. With --control INI, a third system: the baseline run on its own maps with INI layered "
+		"over the configs (a budget-matched control, config/control_budget.ini). Outputs: table1.md/.csv (Table I), "
+		"summary.md, eval.json, timing.json, figures_inputs.tsv, pairs/ (docs/evaluation.md).");
 	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> runsArg(
 		"", "runs", "run list: one run a line, 'name rawlog [ground_truth.tum]' (docs/evaluation.md)", true, "",
@@ -56,6 +57,12 @@ int run(int argc, char** argv)
 		"options .ini, may be repeated (sections of all files together): the survey's ([vo], [features], [map], "
 		"channels) and the localisation's ([localise], [localiser], [localiser.<channel>])",
 		false, "ini", cmd);
+	TCLAP::ValueArg<std::string> controlArg(
+		"", "control",
+		"a third system, the control: the baseline (mono) with this .ini layered after the -c files, on maps of "
+		"its own surveyed with it (e.g. config/control_budget.ini: the combined system's feature budget spent on "
+		"monochrome). Give it again with --job and --merge",
+		false, "", "INI", cmd);
 	shadyloc::apps::NumberArg<int> jobsArg(
 		cli, "j", "workers", "worker threads of the in-process run (default: the number of cores)", 0, "N", 1, 1024);
 	TCLAP::SwitchArg planArg("", "plan", "write OUTDIR/plan.tsv and print the job ranges; run nothing", cmd);
@@ -72,7 +79,7 @@ int run(int argc, char** argv)
 	if (jobArg.isSet() || mergeArg.getValue())
 	{
 		// The plan's checks (configs, cameras) were made when it was written.
-		auto in = eval::TEvalInputs::Load(runsArg.getValue(), cfgArgs.getValue(), false);
+		auto in = eval::TEvalInputs::Load(runsArg.getValue(), cfgArgs.getValue(), false, controlArg.getValue());
 		in.buildCommit = SHADYLOC_GIT_COMMIT;
 		const auto jobs = eval::readPlan(outDir, in);
 		if (mergeArg.getValue())
@@ -94,11 +101,11 @@ int run(int argc, char** argv)
 		return 0;
 	}
 
-	auto in = eval::TEvalInputs::Load(runsArg.getValue(), cfgArgs.getValue());
+	auto in = eval::TEvalInputs::Load(runsArg.getValue(), cfgArgs.getValue(), true, controlArg.getValue());
 	in.buildCommit = SHADYLOC_GIT_COMMIT;
-	const auto jobs = eval::makePlan(in.runs);
+	const auto jobs = eval::makePlan(in.runs, in.hasControl());
 	eval::writePlan(outDir, in, jobs);
-	const size_t n = in.runs.size();
+	const size_t n = eval::mapJobCount(in.runs.size(), in.hasControl());
 	if (planArg.getValue())
 	{
 		std::cout << "maps 0 " << n - 1 << "\npairs " << n << " " << jobs.size() - 1 << "\n";
@@ -112,7 +119,7 @@ int run(int argc, char** argv)
 	if (workers > 1) jo.threads = 1;
 	const bool tty = ::isatty(STDERR_FILENO);
 	if (talk)
-		std::cerr << "eval: " << n << " runs -> " << n << " maps + " << jobs.size() - n << " pair jobs on " << workers
+		std::cerr << "eval: " << in.runs.size() << " runs -> " << n << " maps + " << jobs.size() - n << " pair jobs on " << workers
 				  << " worker" << (workers > 1 ? "s" : "") << " -> " << outDir << "\n";
 	const auto t0 = std::chrono::steady_clock::now();
 	eval::runAll(outDir, in, jobs, workers, jo, [&](size_t done, size_t total, double el, const eval::TEvalJob& j) {
@@ -136,7 +143,7 @@ int run(int argc, char** argv)
 
 shadyloc::apps::RegisterCommand reg(
 	"eval",
-	{"leave-one-out evaluation over N runs, Table I (--runs RUNS.txt -o OUTDIR [-c ini]... [-j N] [--plan | --job K "
-	 "| --merge])",
+	{"leave-one-out evaluation over N runs, Table I (--runs RUNS.txt -o OUTDIR [-c ini]... [--control ini] [-j N] "
+	 "[--plan | --job K | --merge])",
 	 run});
 }  // namespace

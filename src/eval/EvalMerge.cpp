@@ -47,7 +47,7 @@ void drawFigures(const TMerged& m, const fs::path& pairsTmp, const fs::path& fig
 		{
 			if (k == i) continue;
 			const auto csvOf = [&](EvalSystem s) {
-				return (pairsTmp / pairDirName(m.jobs[pairJobIndex(n, i, k, s)], runs) / "frames.csv").string();
+				return (pairsTmp / pairDirName(m.pairJob(i, k, s), runs) / "frames.csv").string();
 			};
 			maps.push_back({runs[k].name, csvOf(EvalSystem::Baseline), csvOf(EvalSystem::Combined)});
 			figure7(runs[i].name, runs[k].name, maps.back().baselineCsv, maps.back().combinedCsv,

@@ -34,12 +34,34 @@ namespace fs = std::filesystem;
 using io::fnv1a64;
 using io::fnv1a64File;
 
-const char* toString(EvalSystem s) { return s == EvalSystem::Baseline ? "baseline" : "combined"; }
+const char* toString(EvalSystem s)
+{
+	switch (s)
+	{
+		case EvalSystem::Baseline: return "baseline";
+		case EvalSystem::Combined: return "combined";
+		case EvalSystem::Control: return "control";
+	}
+	return "?";
+}
 
 std::vector<std::string> localisersOf(EvalSystem s)
 {
-	if (s == EvalSystem::Baseline) return {"mono"};
-	return {"mono", "invariant"};
+	// The control is the baseline's localiser; only its config differs.
+	if (s == EvalSystem::Combined) return {"mono", "invariant"};
+	return {"mono"};
+}
+
+std::vector<EvalSystem> systemsOf(bool control)
+{
+	if (control) return {EvalSystem::Baseline, EvalSystem::Combined, EvalSystem::Control};
+	return {EvalSystem::Baseline, EvalSystem::Combined};
+}
+
+std::string mapJobName(const std::string& run, EvalSystem s)
+{
+	// "control_" leads: no run name makes "map_..." collide with it.
+	return (s == EvalSystem::Control ? "control_map_" : "map_") + run;
 }
 
 namespace
@@ -97,7 +119,9 @@ std::string jobDir(const std::string& outDir, const TEvalJob& j) { return (fs::p
 /** "job 5 (live 'a' against the map of 'b', baseline)". */
 std::string jobWhat(const std::vector<TRun>& runs, const TEvalJob& j)
 {
-	if (j.isMap) return "job " + std::to_string(j.index) + " (map of run '" + runs[j.run].name + "')";
+	if (j.isMap)
+		return "job " + std::to_string(j.index) + " (" + (j.system == EvalSystem::Control ? "control's " : "") +
+			   "map of run '" + runs[j.run].name + "')";
 	return "job " + std::to_string(j.index) + " (live run '" + runs[j.run].name + "' against the map of '" +
 		   runs[j.map].name + "', " + toString(j.system) + ")";
 }
@@ -106,6 +130,7 @@ std::string jobCommand(const TEvalInputs& in, const std::string& outDir, size_t 
 {
 	std::string cmd = "shadyloc eval --runs " + in.runsPath + " -o " + outDir;
 	for (const auto& c : in.configPaths) cmd += " -c " + c;
+	if (in.hasControl()) cmd += " --control " + in.controlPath;
 	return cmd + " --job " + std::to_string(k);
 }
 
@@ -122,7 +147,7 @@ double runMapJob(const std::string& outDir, const TEvalInputs& in, const TEvalJo
 	const TRun& run = in.runs[job.run];
 	survey::TSurveyRunOptions so;
 	so.runName = run.name;
-	so.configName = in.configWhat;
+	so.configName = in.configWhatOf(job.system);
 	if (run.hasGt())
 	{
 		so.gt = io::readTum(run.gtPath);
@@ -132,7 +157,7 @@ double runMapJob(const std::string& outDir, const TEvalInputs& in, const TEvalJo
 	survey::TSurveyStats st;
 	try
 	{
-		survey::CSurveyRun sr(run.rawlogPath, in.config(), so);
+		survey::CSurveyRun sr(run.rawlogPath, in.configOf(job.system), so);
 		sr.setMinLoggingLevel(o.verbosity);
 		for (const auto& w : sr.warnings()) sr.logStr(mrpt::system::LVL_WARN, w);
 		map = sr.run();
@@ -165,11 +190,12 @@ double runMapJob(const std::string& outDir, const TEvalInputs& in, const TEvalJo
 CKeyframeMap::Ptr loadPairMap(const std::string& outDir, const TEvalInputs& in, const TEvalJob& job, const std::string& mapFile)
 {
 	const std::string& name = in.runs[job.map].name;
-	const std::string what = jobWhat(in.runs, job), redo = jobCommand(in, outDir, job.map);
+	const std::string what = jobWhat(in.runs, job), redo = jobCommand(in, outDir, job.mapJob);
+	const std::string mapJob = std::to_string(job.mapJob);
 	if (!fs::exists(mapFile))
 		throw std::runtime_error(
-			what + ": the map of run '" + name + "' is missing ('" + mapFile + "'): run map job " +
-			std::to_string(job.map) + " first (" + redo + ")");
+			what + ": the map of run '" + name + "' is missing ('" + mapFile + "'): run map job " + mapJob +
+			" first (" + redo + ")");
 	try
 	{
 		return CKeyframeMap::LoadFromFile(mapFile);
@@ -177,8 +203,8 @@ CKeyframeMap::Ptr loadPairMap(const std::string& outDir, const TEvalInputs& in, 
 	catch (const std::exception& e)
 	{
 		throw std::runtime_error(
-			what + ": the map of run '" + name + "' ('" + mapFile + "', from map job " + std::to_string(job.map) +
-			") fails to load: " + e.what() + "; run map job " + std::to_string(job.map) + " again (" + redo + ")");
+			what + ": the map of run '" + name + "' ('" + mapFile + "', from map job " + mapJob + ") fails to load: " +
+			e.what() + "; run map job " + mapJob + " again (" + redo + ")");
 	}
 }
 
@@ -197,11 +223,11 @@ TPairRun localisePair(
 	localisation::TLocaliseRunOptions ro;
 	ro.localisers = localisersOf(job.system);
 	ro.threads = o.threads;
-	ro.configWhat = in.configWhat;
+	ro.configWhat = in.configWhatOf(job.system);
 	TPairRun r;
 	try
 	{
-		localisation::CLocaliseRun lr(in.config(), map, mapRel, in.runs[job.run].rawlogPath, ro);
+		localisation::CLocaliseRun lr(in.configOf(job.system), map, mapRel, in.runs[job.run].rawlogPath, ro);
 		lr.system().setMinLoggingLevel(o.verbosity);
 		if (gt) lr.enableOracle(*gt);
 		r.ups = lr.run();
@@ -218,13 +244,15 @@ TPairRun localisePair(
 /** summary.json's provenance of a pair: paths as the run list writes them
  * and the map relative to OUTDIR, so the summary does not depend on where
  * the evaluation ran. */
-TLocaliseProvenance pairProvenance(const TEvalInputs& in, const TRun& live, const std::string& mapRel, const std::string& mapFile, bool gt)
+TLocaliseProvenance pairProvenance(
+	const TEvalInputs& in, const TEvalJob& job, const std::string& mapRel, const std::string& mapFile, bool gt)
 {
+	const TRun& live = in.runs[job.run];
 	TLocaliseProvenance prov;
 	prov.program = "shadyloc eval";
 	prov.buildCommit = in.buildCommit;
-	prov.configWhat = in.configWhat;
-	prov.configText = in.configText;
+	prov.configWhat = in.configWhatOf(job.system);
+	prov.configText = in.configTextOf(job.system);
 	prov.mapPath = mapRel;
 	prov.mapHash = fnv1a64File(mapFile);
 	prov.livePath = live.rawlog;
@@ -242,7 +270,7 @@ double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJ
 	const auto t0 = std::chrono::steady_clock::now();
 	const TRun& live = in.runs[job.run];
 	const TRun& mapRun = in.runs[job.map];
-	const std::string mapRel = "jobs/map_" + mapRun.name + "/map.kfmap";
+	const std::string mapRel = "jobs/" + mapJobName(mapRun.name, job.system) + "/map.kfmap";
 	const std::string mapFile = (fs::path(outDir) / mapRel).string();
 	const CKeyframeMap::Ptr map = loadPairMap(outDir, in, job, mapFile);
 	// Ground truth only where both runs have it: the map's keyframes carry
@@ -257,7 +285,7 @@ double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJ
 	tx.addInput(mapFile, "map of run '" + mapRun.name + "'");
 	const std::string dir =
 		tx.addDirectory(jobDir(outDir, job), "output of " + jobWhat(in.runs, job), "shadyloc eval job output");
-	writeLocaliseOutputs(dir, r.ups, r.ev, *map, r.sys, pairProvenance(in, live, mapRel, mapFile, gt.has_value()));
+	writeLocaliseOutputs(dir, r.ups, r.ev, *map, r.sys, pairProvenance(in, job, mapRel, mapFile, gt.has_value()));
 	writePairRecord((fs::path(dir) / "pair.tsv").string(), makePairRecord(live.name, mapRun.name, job.system, r.ups, r.ev));
 	const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 	writeJobTime(dir, wall);
@@ -268,7 +296,8 @@ double runPairJob(const std::string& outDir, const TEvalInputs& in, const TEvalJ
 
 // ---------------------------------------------------------------------------
 TEvalInputs TEvalInputs::Load(
-	const std::string& runsPath, const std::vector<std::string>& configPaths, bool checkCameras)
+	const std::string& runsPath, const std::vector<std::string>& configPaths, bool checkCameras,
+	const std::string& controlPath)
 {
 	TEvalInputs in;
 	in.runsPath = runsPath;
@@ -299,6 +328,7 @@ TEvalInputs TEvalInputs::Load(
 	{
 		throw std::runtime_error(core::configError(configPaths, cfgNames, e.what()));
 	}
+	if (!controlPath.empty()) in.loadControl(controlPath, cfgNames);
 	if (checkCameras)
 	{
 		// One camera for every run: a map refuses live data whose descriptor
@@ -321,32 +351,112 @@ TEvalInputs TEvalInputs::Load(
 	return in;
 }
 
+namespace
+{
+/** Keys the layer sets, counted over its sections. */
+size_t keysSet(const mrpt::config::CConfigFileBase& c)
+{
+	std::vector<std::string> sections, keys;
+	c.getAllSections(sections);
+	size_t n = 0;
+	for (const auto& sec : sections)
+	{
+		c.getAllKeys(sec, keys);
+		n += keys.size();
+	}
+	return n;
+}
+}  // namespace
+
+void TEvalInputs::loadControl(const std::string& path, const std::string& cfgNames)
+{
+	const std::string what = "--control '" + path + "'";
+	if (!fs::is_regular_file(path)) throw std::runtime_error(what + ": the control's config does not exist");
+	try
+	{
+		controlLayerText = core::layeredConfigText({path});
+	}
+	catch (const std::exception& e)
+	{
+		throw std::runtime_error(what + ": " + e.what());
+	}
+	if (keysSet(mrpt::config::CConfigFileMemory(controlLayerText)) == 0)
+		throw std::runtime_error(
+			what + ": sets no key, so the control would be the baseline; give the settings it changes (e.g. "
+				   "config/control_budget.ini)");
+	std::vector<std::string> files = configPaths;
+	files.push_back(path);
+	controlPath = path;
+	controlText = core::layeredConfigText(files);
+	controlWhat = configWhat == "(no config)" ? fs::path(path).filename().string()
+											  : configWhat + " + " + fs::path(path).filename().string();
+	m_controlCfg = std::make_shared<mrpt::config::CConfigFileMemory>(controlText);
+	// What the control's map and pair jobs read, strictly, before any job runs.
+	try
+	{
+		localisation::checkLocaliseConfig(*m_controlCfg, localisersOf(EvalSystem::Control), cfgNames + " + " + path);
+		TKeyframeMapOptions mo;
+		if (m_controlCfg->sectionExists("map")) mo.loadFromConfigFile(*m_controlCfg, "map");
+	}
+	catch (const std::exception& e)
+	{
+		throw std::runtime_error(what + ": " + core::configError(files, cfgNames + " + " + path, e.what()));
+	}
+}
+
+const mrpt::config::CConfigFileBase& TEvalInputs::configOf(EvalSystem s) const
+{
+	return s == EvalSystem::Control ? *m_controlCfg : *m_cfg;
+}
+const std::string& TEvalInputs::configTextOf(EvalSystem s) const
+{
+	return s == EvalSystem::Control ? controlText : configText;
+}
+const std::string& TEvalInputs::configWhatOf(EvalSystem s) const
+{
+	return s == EvalSystem::Control ? controlWhat : configWhat;
+}
+
 std::string TEvalInputs::runsHash() const { return fnv1a64File(runsPath); }
 std::string TEvalInputs::configHash() const { return fnv1a64(configText); }
+std::string TEvalInputs::controlHash() const { return fnv1a64(controlLayerText); }
 
-std::vector<TEvalJob> makePlan(const std::vector<TRun>& runs)
+namespace
+{
+/** The map job of run i: the shared map, or the control's own. */
+TEvalJob mapJob(const std::vector<TRun>& runs, size_t i, EvalSystem s, size_t index)
+{
+	TEvalJob j;
+	j.index = index;
+	j.isMap = true;
+	j.run = i;
+	j.system = s;
+	j.name = mapJobName(runs[i].name, s);
+	return j;
+}
+}  // namespace
+
+size_t mapJobCount(size_t n, bool control) { return control ? 2 * n : n; }
+
+std::vector<TEvalJob> makePlan(const std::vector<TRun>& runs, bool control)
 {
 	const size_t n = runs.size();
 	std::vector<TEvalJob> jobs;
-	for (size_t i = 0; i < n; i++)
-	{
-		TEvalJob j;
-		j.index = jobs.size();
-		j.isMap = true;
-		j.run = i;
-		j.name = "map_" + runs[i].name;
-		jobs.push_back(j);
-	}
+	for (size_t i = 0; i < n; i++) jobs.push_back(mapJob(runs, i, EvalSystem::Baseline, jobs.size()));
+	if (control)
+		for (size_t i = 0; i < n; i++) jobs.push_back(mapJob(runs, i, EvalSystem::Control, jobs.size()));
 	for (size_t i = 0; i < n; i++)
 		for (size_t m = 0; m < n; m++)
 		{
 			if (m == i) continue;
-			for (const EvalSystem s : {EvalSystem::Baseline, EvalSystem::Combined})
+			for (const EvalSystem s : systemsOf(control))
 			{
 				TEvalJob j;
 				j.index = jobs.size();
 				j.run = i;
 				j.map = m;
+				// The combined system localises on the baseline's map.
+				j.mapJob = s == EvalSystem::Control ? n + m : m;
 				j.system = s;
 				j.name = "pair_" + runs[i].name + "__" + runs[m].name + "__" + toString(s);
 				jobs.push_back(j);
@@ -355,10 +465,11 @@ std::vector<TEvalJob> makePlan(const std::vector<TRun>& runs)
 	return jobs;
 }
 
-size_t pairJobIndex(size_t n, size_t live, size_t map, EvalSystem s)
+size_t pairJobIndex(size_t n, size_t live, size_t map, EvalSystem s, bool control)
 {
 	const size_t other = map - (map > live ? 1 : 0);
-	return n + 2 * (live * (n - 1) + other) + (s == EvalSystem::Combined ? 1 : 0);
+	const size_t systems = control ? 3 : 2;
+	return mapJobCount(n, control) + systems * (live * (n - 1) + other) + static_cast<size_t>(s);
 }
 
 void writePlan(const std::string& outDir, const TEvalInputs& in, const std::vector<TEvalJob>& jobs)
@@ -367,16 +478,41 @@ void writePlan(const std::string& outDir, const TEvalInputs& in, const std::vect
 	fs::create_directories(jobsDir(outDir), ec);
 	if (ec || !fs::is_directory(jobsDir(outDir)))
 		throw std::runtime_error("output '" + outDir + "': cannot create '" + jobsDir(outDir) + "'");
+	const size_t maps = mapJobCount(in.runs.size(), in.hasControl());
 	std::ostringstream s;
 	s << "# shadyloc eval plan v" << kPlanVersion << "\n# runs_fnv1a64\t" << in.runsHash() << "\n# config_fnv1a64\t"
-	  << in.configHash() << "\n# maps\t0\t" << in.runs.size() - 1 << "\n# pairs\t" << in.runs.size() << "\t"
-	  << jobs.size() - 1 << "\njob\tkind\trun\tmap\tsystem\tname\n";
+	  << in.configHash() << "\n";
+	// Only with a control, so that a plan without one keeps its bytes.
+	if (in.hasControl()) s << "# control_fnv1a64\t" << in.controlHash() << "\n";
+	s << "# maps\t0\t" << maps - 1 << "\n# pairs\t" << maps << "\t" << jobs.size() - 1
+	  << "\njob\tkind\trun\tmap\tsystem\tname\n";
 	for (const auto& j : jobs)
+	{
+		// A map job's system column names the control's maps only.
+		const char* system = j.isMap ? (j.system == EvalSystem::Control ? "control" : "-") : toString(j.system);
 		s << j.index << '\t' << (j.isMap ? "map" : "pair") << '\t' << in.runs[j.run].name << '\t'
-		  << (j.isMap ? "-" : in.runs[j.map].name) << '\t' << (j.isMap ? "-" : toString(j.system)) << '\t' << j.name
-		  << '\n';
+		  << (j.isMap ? "-" : in.runs[j.map].name) << '\t' << system << '\t' << j.name << '\n';
+	}
 	io::writeTextFile((fs::path(outDir) / "plan.tsv").string(), s.str());
 }
+
+namespace
+{
+/** The plan's control (its layer's hash, "" without) must be the one given now. */
+void checkPlanControl(const std::string& path, const TEvalInputs& in, const std::string& planHash)
+{
+	if (planHash.empty() && in.hasControl())
+		throw std::runtime_error(
+			path + ": made without --control, given --control '" + in.controlPath +
+			"' now: make the plan again (--plan) with it, or leave it out");
+	if (!planHash.empty() && !in.hasControl())
+		throw std::runtime_error(path + ": made with --control: give the same --control file");
+	if (!planHash.empty() && planHash != in.controlHash())
+		throw std::runtime_error(
+			path + ": made with another control than '" + in.controlPath +
+			"' (contents differ): make the plan again (--plan), or give the same --control file");
+}
+}  // namespace
 
 std::vector<TEvalJob> readPlan(const std::string& outDir, const TEvalInputs& in)
 {
@@ -386,7 +522,7 @@ std::vector<TEvalJob> readPlan(const std::string& outDir, const TEvalInputs& in)
 			"'" + path + "' does not exist: make the plan first (shadyloc eval --runs " + in.runsPath + " -o " + outDir +
 			" ... --plan)");
 	std::ifstream f(path);
-	std::string line, runsHash, cfgHash;
+	std::string line, runsHash, cfgHash, controlHash;
 	std::vector<std::string> rows;
 	int n = 0;
 	while (std::getline(f, line))
@@ -397,6 +533,7 @@ std::vector<TEvalJob> readPlan(const std::string& outDir, const TEvalInputs& in)
 				path + ":1: not a shadyloc eval plan of version " + std::to_string(kPlanVersion) + " ('" + line + "')");
 		if (line.rfind("# runs_fnv1a64\t", 0) == 0) runsHash = line.substr(15);
 		if (line.rfind("# config_fnv1a64\t", 0) == 0) cfgHash = line.substr(17);
+		if (line.rfind("# control_fnv1a64\t", 0) == 0) controlHash = line.substr(18);
 		if (!line.empty() && line[0] != '#' && line.rfind("job\t", 0) != 0) rows.push_back(line);
 	}
 	if (n == 0) throw std::runtime_error(path + ": empty; make the plan again (--plan)");
@@ -407,7 +544,8 @@ std::vector<TEvalJob> readPlan(const std::string& outDir, const TEvalInputs& in)
 		throw std::runtime_error(
 			path + ": made with other configs than " + (in.configPaths.empty() ? std::string("none") : in.configWhat) +
 			" (contents differ): make the plan again (--plan), or give the same -c files");
-	const auto jobs = makePlan(in.runs);
+	checkPlanControl(path, in, controlHash);
+	const auto jobs = makePlan(in.runs, in.hasControl());
 	if (rows.size() != jobs.size())
 		throw std::runtime_error(
 			path + ": " + std::to_string(rows.size()) + " jobs, but the run list makes " + std::to_string(jobs.size()) +
@@ -453,7 +591,7 @@ std::vector<double> runAll(
 				// Maps come first in the plan; a pair waits for its map.
 				if (!jobs[k].isMap)
 				{
-					cv.wait(lock, [&] { return failed || done[jobs[k].map]; });
+					cv.wait(lock, [&] { return failed || done[jobs[k].mapJob]; });
 					if (failed) return;
 				}
 			}

@@ -55,7 +55,7 @@ void fixesSection(std::ostream& sm, const TMerged& m)
 	   << "| system | localiser | accepted | true | false | unverifiable | false share [%] | exact 95 % upper "
 		  "bound [%] |\n"
 	   << "|---|---|---|---|---|---|---|---|\n";
-	for (int s = 0; s < 2; s++)
+	for (int s = 0; s < m.systems(); s++)
 	{
 		const auto& P = m.pooled[s];
 		for (const auto& name : P.channelOrder)
@@ -73,7 +73,7 @@ void errorSection(std::ostream& sm, const TMerged& m)
 	sm << "\n## Error of the fixes used and accuracy bins\n\n"
 	   << "| system | fixes | median [m] | p95 [m] | max [m] | median [deg] | p95 [deg] | max [deg] | "
 		  "0.25 m, 2 deg [%] | 0.5 m, 5 deg [%] | 5 m, 10 deg [%] |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
-	for (int s = 0; s < 2; s++)
+	for (int s = 0; s < m.systems(); s++)
 	{
 		const auto& P = m.pooled[s];
 		sm << "| " << kSystemNames[s] << " | " << P.errM.size();
@@ -94,7 +94,7 @@ void blindTable(std::ostream& sm, const TMerged& m)
 	   << "| system | pairs | episodes | reaching " << d << " m | P(episode reaches " << d
 	   << " m) [%] | exact 95 % interval [%] | bootstrap 95 % interval [%] | blind m per km | before first fix | at end |\n"
 	   << "|---|---|---|---|---|---|---|---|---|---|\n";
-	for (int s = 0; s < 2; s++)
+	for (int s = 0; s < m.systems(); s++)
 	{
 		const auto& P = m.pooled[s];
 		const auto& b = P.blind;
@@ -109,7 +109,7 @@ void blindTable(std::ostream& sm, const TMerged& m)
 void blindLines(std::ostream& sm, const TMerged& m)
 {
 	sm << "\n";
-	for (int s = 0; s < 2; s++)
+	for (int s = 0; s < m.systems(); s++)
 	{
 		const auto& b = m.pooled[s].blind;
 		sm << "- " << kSystemNames[s] << ": P(" << fixedText(m.evo.blind_long_m, 0) << " m) = " << b.reaching << " of "
@@ -141,12 +141,32 @@ Json optionsJson(const TEvalOptions& o)
 
 Json provenanceJson(const TEvalInputs& in)
 {
-	return {{"program", "shadyloc eval"},
-			{"build_commit", in.buildCommit},
-			{"runs_file", fs::path(in.runsPath).filename().string()},
-			{"runs_fnv1a64", in.runsHash()},
-			{"config", in.configWhat},
-			{"config_fnv1a64", in.configHash()}};
+	Json p = {{"program", "shadyloc eval"},
+			  {"build_commit", in.buildCommit},
+			  {"runs_file", fs::path(in.runsPath).filename().string()},
+			  {"runs_fnv1a64", in.runsHash()},
+			  {"config", in.configWhat},
+			  {"config_fnv1a64", in.configHash()}};
+	if (in.hasControl())
+	{
+		// The layer alone (its name and hash); the control ran with the -c files under it.
+		p["control_config"] = fs::path(in.controlPath).filename().string();
+		p["control_fnv1a64"] = in.controlHash();
+	}
+	return p;
+}
+
+/** A map job's map: file, fingerprint, what its job counted. */
+Json mapJson(const TMerged& m, const std::string& jobName, const TMapRecord& rec)
+{
+	const std::string mapRel = "jobs/" + jobName + "/map.kfmap";
+	return {{"file", mapRel},
+			{"fnv1a64", io::fnv1a64File((fs::path(m.outDir) / mapRel).string())},
+			{"frames", rec.frames},
+			{"keyframes", rec.keyframes},
+			{"gt_keyframes", rec.gt_keyframes},
+			{"breaks", rec.breaks},
+			{"path_m", fixedNumber(rec.path_m, 3)}};
 }
 
 /** Each run's inputs and its map (file, fingerprint, what its job counted). */
@@ -156,22 +176,16 @@ Json runsJson(const TMerged& m)
 	for (size_t i = 0; i < m.runs().size(); i++)
 	{
 		const auto& r = m.runs()[i];
-		const auto& rec = m.maps[i];
-		const std::string mapRel = "jobs/map_" + r.name + "/map.kfmap";
-		const Json map = {{"file", mapRel},
-						  {"fnv1a64", io::fnv1a64File((fs::path(m.outDir) / mapRel).string())},
-						  {"frames", rec.frames},
-						  {"keyframes", rec.keyframes},
-						  {"gt_keyframes", rec.gt_keyframes},
-						  {"breaks", rec.breaks},
-						  {"path_m", fixedNumber(rec.path_m, 3)}};
-		runs.push_back({{"name", r.name},
-						{"line", r.line},
-						{"rawlog", r.rawlog},
-						{"rawlog_fnv1a64", io::fnv1a64File(r.rawlogPath)},
-						{"gt", r.hasGt() ? Json(r.gt) : Json()},
-						{"gt_fnv1a64", r.hasGt() ? Json(io::fnv1a64File(r.gtPath)) : Json()},
-						{"map", map}});
+		Json run = {{"name", r.name},
+					{"line", r.line},
+					{"rawlog", r.rawlog},
+					{"rawlog_fnv1a64", io::fnv1a64File(r.rawlogPath)},
+					{"gt", r.hasGt() ? Json(r.gt) : Json()},
+					{"gt_fnv1a64", r.hasGt() ? Json(io::fnv1a64File(r.gtPath)) : Json()},
+					{"map", mapJson(m, mapJobName(r.name, EvalSystem::Baseline), m.maps[i])}};
+		if (m.control())
+			run["control_map"] = mapJson(m, mapJobName(r.name, EvalSystem::Control), m.controlMaps[i]);
+		runs.push_back(run);
 	}
 	return runs;
 }
@@ -248,23 +262,29 @@ Json pairsJson(const TMerged& m)
 	return pairs;
 }
 
-Json rowJson(const TRow& r)
+Json rowJson(const TRow& r, bool control)
 {
-	return {{"live", r.live},
-			{"maps", r.maps},
-			{"baseline", fixedNumber(r.base)},
-			{"invariant_alone", fixedNumber(r.inv)},
-			{"combined", fixedNumber(r.comb)},
-			{"baseline_self", fixedNumber(r.baseSelf)},
-			{"invariant_alone_self", fixedNumber(r.invSelf)},
-			{"combined_self", fixedNumber(r.combSelf)}};
+	Json row = {{"live", r.live},
+				{"maps", r.maps},
+				{"baseline", fixedNumber(r.base)},
+				{"invariant_alone", fixedNumber(r.inv)},
+				{"combined", fixedNumber(r.comb)},
+				{"baseline_self", fixedNumber(r.baseSelf)},
+				{"invariant_alone_self", fixedNumber(r.invSelf)},
+				{"combined_self", fixedNumber(r.combSelf)}};
+	if (control)
+	{
+		row["control"] = fixedNumber(r.ctl);
+		row["control_self"] = fixedNumber(r.ctlSelf);
+	}
+	return row;
 }
 
 Json table1Json(const TMerged& m)
 {
 	Json rows = Json::array();
-	for (const auto& r : m.rows) rows.push_back(rowJson(r));
-	return {{"unit", "fraction of in-map frames"}, {"rows", rows}, {"mean", rowJson(m.mean)}};
+	for (const auto& r : m.rows) rows.push_back(rowJson(r, m.control()));
+	return {{"unit", "fraction of in-map frames"}, {"rows", rows}, {"mean", rowJson(m.mean, m.control())}};
 }
 
 /** True, false and unverifiable fixes, the false share and its exact upper bound. */
@@ -308,7 +328,9 @@ Json systemTruthJson(const TPooled& P)
 Json groundTruthJson(const TMerged& m)
 {
 	if (!m.anyGt()) return nullptr;
-	return {{kSystemNames[0], systemTruthJson(m.pooled[0])}, {kSystemNames[1], systemTruthJson(m.pooled[1])}};
+	Json g = Json::object();
+	for (int s = 0; s < m.systems(); s++) g[kSystemNames[s]] = systemTruthJson(m.pooled[s]);
+	return g;
 }
 
 /** A system's blind episodes pooled over its pairs. */
@@ -334,6 +356,24 @@ Json systemBlindJson(const TPooled& P)
 			{"lengths_m", lengths}};
 }
 
+/** Every system's blind episodes, by name. */
+Json blindJson(const TMerged& m)
+{
+	Json b = Json::object();
+	for (int s = 0; s < m.systems(); s++) b[kSystemNames[s]] = systemBlindJson(m.pooled[s]);
+	return b;
+}
+
+/** The Markdown table's header: the columns, control's after combined's when there is one. */
+std::string table1Header(bool control)
+{
+	if (!control)
+		return "| live run | maps | baseline | invariant alone | combined | self-reported: baseline | invariant alone | "
+			   "combined |\n|---|---|---|---|---|---|---|---|\n";
+	return "| live run | maps | baseline | invariant alone | combined | control | self-reported: baseline | "
+		   "invariant alone | combined | control |\n|---|---|---|---|---|---|---|---|---|---|\n";
+}
+
 /** A job's wall time from its job_timing.json; null if it has none. */
 Json jobWall(const std::string& path)
 {
@@ -350,13 +390,21 @@ std::string table1Markdown(const TMerged& m)
 	   << "Each live run localised against the map of every other run (" << m.runs().size() - 1
 	   << " maps), averaged over the maps: the share of in-map frames with a fix [%]. True coverage counts fixes "
 		  "within 0.5 m and 2 deg of the ground truth; self-reported counts every fix. Invariant alone is the "
-		  "combined run's invariant localiser (docs/evaluation.md).\n\n"
-	   << "| live run | maps | baseline | invariant alone | combined | self-reported: baseline | invariant alone | "
-		  "combined |\n|---|---|---|---|---|---|---|---|\n";
+		  "combined run's invariant localiser (docs/evaluation.md).";
+	if (m.control())
+		md << " Control is the baseline (monochrome alone) on maps of its own, maps and live runs both with "
+		   << fs::path(m.in.controlPath).filename().string()
+		   << " layered over the configs: the budget-matched control.";
+	md << "\n\n" << table1Header(m.control());
 	for (const auto* r : rowsAndMean(m))
+	{
 		md << "| " << (r == &m.mean ? "**mean**" : r->live) << " | " << r->maps << " | " << pct(r->base) << " | "
-		   << pct(r->inv) << " | " << pct(r->comb) << " | " << pct(r->baseSelf) << " | " << pct(r->invSelf) << " | "
-		   << pct(r->combSelf) << " |\n";
+		   << pct(r->inv) << " | " << pct(r->comb);
+		if (m.control()) md << " | " << pct(r->ctl);
+		md << " | " << pct(r->baseSelf) << " | " << pct(r->invSelf) << " | " << pct(r->combSelf);
+		if (m.control()) md << " | " << pct(r->ctlSelf);
+		md << " |\n";
+	}
 	if (!m.anyGt()) md << "\nNo run pair has ground truth on both sides: true coverage is n/a.\n";
 	return md.str();
 }
@@ -364,10 +412,16 @@ std::string table1Markdown(const TMerged& m)
 std::string table1Csv(const TMerged& m)
 {
 	std::ostringstream csv;
-	csv << "live,maps,baseline_pct,invariant_pct,combined_pct,baseline_self_pct,invariant_self_pct,combined_self_pct\n";
+	// The control's columns go last: the others keep their places for readers of the two-system table.
+	csv << "live,maps,baseline_pct,invariant_pct,combined_pct,baseline_self_pct,invariant_self_pct,combined_self_pct"
+		<< (m.control() ? ",control_pct,control_self_pct\n" : "\n");
 	for (const auto* r : rowsAndMean(m))
+	{
 		csv << r->live << ',' << r->maps << ',' << csvPct(r->base) << ',' << csvPct(r->inv) << ',' << csvPct(r->comb)
-			<< ',' << csvPct(r->baseSelf) << ',' << csvPct(r->invSelf) << ',' << csvPct(r->combSelf) << '\n';
+			<< ',' << csvPct(r->baseSelf) << ',' << csvPct(r->invSelf) << ',' << csvPct(r->combSelf);
+		if (m.control()) csv << ',' << csvPct(r->ctl) << ',' << csvPct(r->ctlSelf);
+		csv << '\n';
+	}
 	return csv.str();
 }
 
@@ -387,7 +441,7 @@ std::string summaryMarkdown(const TMerged& m)
 
 std::string evalJson(const TMerged& m)
 {
-	const size_t n = m.runs().size();
+	const size_t n = mapJobCount(m.runs().size(), m.control());
 	const Json doc = {{"format", "shadyloc eval"},
 					  {"version", kEvalVersion},
 					  {"definitions", "docs/evaluation.md"},
@@ -398,7 +452,7 @@ std::string evalJson(const TMerged& m)
 					  {"pairs", pairsJson(m)},
 					  {"table1", table1Json(m)},
 					  {"ground_truth", groundTruthJson(m)},
-					  {"blind", {{kSystemNames[0], systemBlindJson(m.pooled[0])}, {kSystemNames[1], systemBlindJson(m.pooled[1])}}}};
+					  {"blind", blindJson(m)}};
 	return writeJson(doc, {"", "/runs", "/pairs", "/table1/rows", "/ground_truth", "/blind"});
 }
 
@@ -426,8 +480,8 @@ std::string figuresInputs(const TMerged& m)
 		for (size_t k = 0; k < n; k++)
 		{
 			if (k == i) continue;
-			const auto& jb = m.jobs[pairJobIndex(n, i, k, EvalSystem::Baseline)];
-			const auto& jc = m.jobs[pairJobIndex(n, i, k, EvalSystem::Combined)];
+			const auto& jb = m.pairJob(i, k, EvalSystem::Baseline);
+			const auto& jc = m.pairJob(i, k, EvalSystem::Combined);
 			fig << runs[i].name << '\t' << runs[k].name << "\tpairs/" << pairDirName(jb, runs) << "/frames.csv\tpairs/"
 				<< pairDirName(jc, runs) << "/frames.csv\n";
 		}

@@ -43,8 +43,9 @@ std::string checkMapFile(const std::string& path, const TMapRecord& rec)
 std::string readMapJob(TMerged& m, const TEvalJob& j, const fs::path& dir)
 {
 	if (!fs::exists(dir / "map.kfmap")) return "no map.kfmap in '" + dir.string() + "'";
-	m.maps[j.run] = readMapRecord((dir / "map.tsv").string());
-	return checkMapFile((dir / "map.kfmap").string(), m.maps[j.run]);
+	auto& rec = (j.system == EvalSystem::Control ? m.controlMaps : m.maps)[j.run];
+	rec = readMapRecord((dir / "map.tsv").string());
+	return checkMapFile((dir / "map.kfmap").string(), rec);
 }
 
 /** A pair job's record into m.pairs; "" or why it is unusable. */
@@ -77,8 +78,25 @@ std::string readJob(TMerged& m, const TEvalJob& j)
 std::string jobWhat(const TMerged& m, const TEvalJob& j)
 {
 	const auto& runs = m.runs();
-	if (j.isMap) return "map of run '" + runs[j.run].name + "'";
+	if (j.isMap) return (j.system == EvalSystem::Control ? "control's map of run '" : "map of run '") + runs[j.run].name + "'";
 	return "live run '" + runs[j.run].name + "' against the map of '" + runs[j.map].name + "', " + toString(j.system);
+}
+
+/** The control's columns of live run i's row, averaged over the maps as the others. */
+void controlColumns(const TMerged& m, size_t i, TRow& row)
+{
+	std::vector<double> t, s;
+	bool truth = true;
+	for (size_t k = 0; k < m.runs().size(); k++)
+	{
+		if (k == i) continue;
+		const auto& p = m.pairs[m.pairJob(i, k, EvalSystem::Control).index];
+		truth &= p.ground_truth;
+		t.push_back(ratio(p.true_fixes_in_map, p.in_map_frames));
+		s.push_back(ratio(p.fixes_in_map, p.in_map_frames));
+	}
+	if (truth && row.truth) row.ctl = meanOf(t);
+	row.ctlSelf = meanOf(s);
 }
 
 /** One row of Table I: live run i against every other run's map. */
@@ -93,8 +111,8 @@ TRow tableRow(const TMerged& m, size_t i)
 	{
 		if (k == i) continue;
 		row.maps++;
-		const auto& pb = m.pairs[pairJobIndex(n, i, k, EvalSystem::Baseline)];
-		const auto& pc = m.pairs[pairJobIndex(n, i, k, EvalSystem::Combined)];
+		const auto& pb = m.pairs[m.pairJob(i, k, EvalSystem::Baseline).index];
+		const auto& pc = m.pairs[m.pairJob(i, k, EvalSystem::Combined).index];
 		row.truth &= pb.ground_truth && pc.ground_truth;
 		b.push_back(ratio(pb.true_fixes_in_map, pb.in_map_frames));
 		c.push_back(ratio(pc.true_fixes_in_map, pc.in_map_frames));
@@ -115,6 +133,7 @@ TRow tableRow(const TMerged& m, size_t i)
 	row.baseSelf = meanOf(bs);
 	row.invSelf = meanOf(vs);
 	row.combSelf = meanOf(cs);
+	if (m.control()) controlColumns(m, i, row);
 	return row;
 }
 
@@ -135,6 +154,8 @@ TRow meanRow(const std::vector<TRow>& rows, size_t maps)
 	mean.baseSelf = column(&TRow::baseSelf);
 	mean.invSelf = column(&TRow::invSelf);
 	mean.combSelf = column(&TRow::combSelf);
+	mean.ctl = column(&TRow::ctl);
+	mean.ctlSelf = column(&TRow::ctlSelf);
 	return mean;
 }
 
@@ -206,6 +227,7 @@ std::string pairDirName(const TEvalJob& j, const std::vector<TRun>& runs)
 void collectRecords(TMerged& m)
 {
 	m.maps.assign(m.runs().size(), {});
+	m.controlMaps.assign(m.control() ? m.runs().size() : 0, {});
 	m.pairs.assign(m.jobs.size(), {});
 	std::string missing;
 	size_t nMissing = 0;
@@ -230,7 +252,7 @@ void makeTables(TMerged& m)
 	for (size_t i = 0; i < n; i++) m.rows.push_back(tableRow(m, i));
 	m.mean = meanRow(m.rows, n - 1);
 	for (const auto& j : m.jobs)
-		if (!j.isMap) poolPair(m.pooled[j.system == EvalSystem::Combined], m.pairs[j.index]);
+		if (!j.isMap) poolPair(m.pooled[static_cast<int>(j.system)], m.pairs[j.index]);
 	for (auto& P : m.pooled) P.blind = blindProbability(P.between, m.evo);
 }
 

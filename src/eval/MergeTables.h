@@ -42,6 +42,7 @@ struct TRow
 	bool truth = false;	 //!< every pair of the row has ground truth
 	double base = kNaN, inv = kNaN, comb = kNaN;  //!< true coverage [0..1]
 	double baseSelf = kNaN, invSelf = kNaN, combSelf = kNaN;  //!< self-reported [0..1]
+	double ctl = kNaN, ctlSelf = kNaN;	//!< the control's, with --control [0..1]
 };
 
 /** A system's numbers pooled over its pairs. */
@@ -74,21 +75,30 @@ struct TMerged
 
 	// ---- collected
 	std::vector<TMapRecord> maps;  //!< by run
+	std::vector<TMapRecord> controlMaps;  //!< the control's, by run (with --control)
 	std::vector<TPairRecord> pairs;	 //!< by job index (empty for map jobs)
 
 	// ---- tables
 	TEvalOptions evo;  //!< the definitions the jobs evaluated with
 	std::vector<TRow> rows;
 	TRow mean;
-	TPooled pooled[2];	//!< baseline, combined
+	TPooled pooled[3];	//!< baseline, combined, control (by EvalSystem)
 
 	const std::vector<TRun>& runs() const { return in.runs; }
-	/** Some pair of either system had ground truth. */
-	bool anyGt() const { return pooled[0].gtPairs + pooled[1].gtPairs > 0; }
+	bool control() const { return in.hasControl(); }
+	/** The systems evaluated: 2, or 3 with the control (a prefix of kSystemNames). */
+	int systems() const { return control() ? 3 : 2; }
+	/** Some pair of any system had ground truth. */
+	bool anyGt() const { return pooled[0].gtPairs + pooled[1].gtPairs + pooled[2].gtPairs > 0; }
+	/** The pair job of (live, map, system) in this plan. */
+	const TEvalJob& pairJob(size_t live, size_t map, EvalSystem s) const
+	{
+		return jobs[pairJobIndex(runs().size(), live, map, s, control())];
+	}
 };
 
-/** The systems' names in output order (index into TMerged::pooled). */
-constexpr const char* kSystemNames[2] = {"baseline", "combined"};
+/** The systems' names in output order (index into TMerged::pooled, as EvalSystem). */
+constexpr const char* kSystemNames[3] = {"baseline", "combined", "control"};
 
 /** Collect: every job's record into m.maps and m.pairs. Missing or
  * unreadable outputs throw one error naming every such job and how to run

@@ -7,12 +7,15 @@
 #include <shadyloc/eval/Evaluation.h>
 #include <shadyloc/eval/LeaveOneOut.h>
 #include <shadyloc/eval/RunList.h>
+#include <shadyloc/map/CKeyframeMap.h>
 
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/serialization/CArchive.h>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -144,6 +147,43 @@ TEST(EvalPlan, MapsFirstThenPairsInTheDocumentedOrder)
 	}
 	EXPECT_EQ(eval::localisersOf(eval::EvalSystem::Baseline), std::vector<std::string>{"mono"});
 	EXPECT_EQ(eval::localisersOf(eval::EvalSystem::Combined), (std::vector<std::string>{"mono", "invariant"}));
+}
+
+TEST(EvalPlan, ControlMapsAfterTheMapsAndControlPairsThird)
+{
+	std::vector<eval::TRun> runs(3);
+	for (size_t i = 0; i < runs.size(); i++) runs[i].name = std::string(1, char('a' + i));
+	const auto jobs = eval::makePlan(runs, true);
+	ASSERT_EQ(jobs.size(), 2 * 3u + 3 * 3 * 2);  // 2N maps + 3 N (N-1) pairs
+	EXPECT_EQ(eval::mapJobCount(3, true), 6u);
+	for (size_t i = 0; i < 3; i++)
+	{
+		EXPECT_EQ(jobs[i].name, "map_" + runs[i].name);
+		EXPECT_EQ(jobs[i].system, eval::EvalSystem::Baseline);
+		EXPECT_EQ(jobs[3 + i].name, "control_map_" + runs[i].name);
+		EXPECT_TRUE(jobs[3 + i].isMap);
+		EXPECT_EQ(jobs[3 + i].system, eval::EvalSystem::Control);
+	}
+	EXPECT_EQ(jobs[6].name, "pair_a__b__baseline");
+	EXPECT_EQ(jobs[7].name, "pair_a__b__combined");
+	EXPECT_EQ(jobs[8].name, "pair_a__b__control");
+	EXPECT_EQ(jobs.back().name, "pair_c__b__control");
+	for (const auto& j : jobs)
+	{
+		EXPECT_EQ(jobs[j.index].index, j.index);
+		if (j.isMap) continue;
+		EXPECT_EQ(eval::pairJobIndex(3, j.run, j.map, j.system, true), j.index) << j.name;
+		// The control localises on its own map, the others share one.
+		const auto& m = jobs[j.mapJob];
+		EXPECT_TRUE(m.isMap) << j.name;
+		EXPECT_EQ(m.run, j.map) << j.name;
+		EXPECT_EQ(m.system == eval::EvalSystem::Control, j.system == eval::EvalSystem::Control) << j.name;
+	}
+	EXPECT_EQ(eval::localisersOf(eval::EvalSystem::Control), std::vector<std::string>{"mono"});
+	// Without the control the plan is the two-system one, job for job.
+	const auto two = eval::makePlan(runs, false), plain = eval::makePlan(runs);
+	ASSERT_EQ(two.size(), plain.size());
+	for (size_t k = 0; k < two.size(); k++) EXPECT_EQ(two[k].name, plain[k].name);
 }
 
 TEST(EvalPlan, PooledBlindProbabilityIsTheRunsOwn)
@@ -499,4 +539,170 @@ TEST(EvalApp, ResultsIdenticalAcrossWorkersAndJobs)
 	EXPECT_EQ(js.find(dir), std::string::npos) << "no absolute paths in the results";
 	EXPECT_NE(a.at("figures_inputs.tsv").find("noon\tovercast\tpairs/noon__overcast__baseline/frames.csv\tpairs/noon__overcast__combined/frames.csv\n"),
 			  std::string::npos);
+}
+
+// ---------------------------------------------------------------- the control (--control)
+namespace
+{
+/** The mean and largest landmark count per keyframe of a map's mono channel, and its stored budget. */
+struct TMapBudget
+{
+	double mean = 0;
+	size_t most = 0;
+	int budget = 0;
+};
+TMapBudget monoLandmarks(const std::string& path)
+{
+	const auto map = CKeyframeMap::LoadFromFile(path);
+	TMapBudget b;
+	b.budget = map->options.landmarks_per_keyframe;
+	for (uint32_t k = 0; k < map->keyframeCount(); k++)
+	{
+		const size_t n = map->measurements(k, "mono").size();
+		b.mean += static_cast<double>(n) / static_cast<double>(map->keyframeCount());
+		b.most = std::max(b.most, n);
+	}
+	return b;
+}
+}  // namespace
+
+TEST(EvalControl, BadLayerIsRefusedNamingItBeforeAnyJob)
+{
+	const std::string dir = test::tempDir("eval_control_bad");
+	writeRun(dir + "/a.rawlog", 2);
+	writeRun(dir + "/b.rawlog", 2);
+	writeText(dir + "/runs.txt", "a a.rawlog\nb b.rawlog\n");
+	writeText(dir + "/ok.ini", "[localise]\nthreads = 1\n");
+	std::string out;
+	const std::string base = app() + " --runs " + dir + "/runs.txt -c " + dir + "/ok.ini";
+	const auto refused = [&](const std::string& control, const std::string& o, const std::string& expect) {
+		EXPECT_EQ(test::runCommand(base + " -o " + dir + "/" + o + " --control " + control, &out), 1) << out;
+		EXPECT_NE(out.find(expect), std::string::npos) << expect << ": " << out;
+		EXPECT_FALSE(fs::exists(dir + "/" + o)) << o;  // nothing written, no job run
+	};
+	refused(dir + "/gone.ini", "o1", "--control '" + dir + "/gone.ini': the control's config does not exist");
+
+	// An unknown key: the control's file and line, though the -c files are fine.
+	writeText(dir + "/typo.ini", "[features]\nmax_per_cell = 60\nmax_per_cel_right = 240\n");
+	refused(dir + "/typo.ini", "o2", dir + "/typo.ini:3: [features] max_per_cel_right: unknown key");
+	// An unknown section.
+	writeText(dir + "/sect.ini", "[feature]\nmax_per_cell = 60\n");
+	refused(dir + "/sect.ini", "o3", dir + "/sect.ini:1: ");
+	EXPECT_NE(out.find("[feature]"), std::string::npos) << out;
+	// A value out of range.
+	writeText(dir + "/range.ini", "[map]\nlandmarks_per_keyframe = -4\n");
+	refused(dir + "/range.ini", "o4", dir + "/range.ini:");
+	EXPECT_NE(out.find("landmarks_per_keyframe must be >= 0"), std::string::npos) << out;
+	// A layer that sets nothing would make the control the baseline.
+	writeText(dir + "/empty.ini", "; nothing\n[features]\n");
+	refused(dir + "/empty.ini", "o5", "--control '" + dir + "/empty.ini': sets no key");
+	// The same file twice in one layer is refused by the layering.
+	writeText(dir + "/twice.ini", "[features]\nmax_per_cell = 60\nmax_per_cell = 70\n");
+	refused(dir + "/twice.ini", "o6", dir + "/twice.ini");
+
+	// A plan made with a control wants it again at --job and --merge; one made without refuses it.
+	writeText(dir + "/budget.ini", "[features]\nmax_per_cell = 60\n");
+	const std::string o7 = " -o " + dir + "/o7";
+	ASSERT_EQ(test::runCommand(base + o7 + " --control " + dir + "/budget.ini --plan", &out), 0) << out;
+	EXPECT_EQ(out, "maps 0 3\npairs 4 9\n");
+	const std::string plan = test::fileContents(dir + "/o7/plan.tsv");
+	EXPECT_NE(plan.find("\n# control_fnv1a64\t"), std::string::npos) << plan;
+	EXPECT_NE(plan.find("\n2\tmap\ta\t-\tcontrol\tcontrol_map_a\n"), std::string::npos) << plan;
+	EXPECT_NE(plan.find("\n9\tpair\tb\ta\tcontrol\tpair_b__a__control\n"), std::string::npos) << plan;
+	EXPECT_EQ(test::runCommand(base + o7 + " --job 0", &out), 1);
+	EXPECT_NE(out.find("made with --control: give the same --control file"), std::string::npos) << out;
+	writeText(dir + "/budget2.ini", "[features]\nmax_per_cell = 61\n");
+	EXPECT_EQ(test::runCommand(base + o7 + " --control " + dir + "/budget2.ini --merge", &out), 1);
+	EXPECT_NE(out.find("made with another control than '" + dir + "/budget2.ini'"), std::string::npos) << out;
+	EXPECT_EQ(test::runCommand(base + o7 + " --control " + dir + "/budget.ini --job 6", &out), 1);
+	EXPECT_NE(out.find("job 6 (live run 'a' against the map of 'b', control): the map of run 'b' is missing"),
+			  std::string::npos) << out;
+	EXPECT_NE(out.find("run map job 3 first ("), std::string::npos) << out;
+	EXPECT_NE(out.find("--control " + dir + "/budget.ini --job 3)"), std::string::npos) << out;
+	const std::string o8 = " -o " + dir + "/o8";
+	ASSERT_EQ(test::runCommand(base + o8 + " --plan", &out), 0) << out;
+	EXPECT_EQ(out, "maps 0 1\npairs 2 5\n");
+	EXPECT_EQ(test::runCommand(base + o8 + " --control " + dir + "/budget.ini --job 0", &out), 1);
+	EXPECT_NE(out.find("made without --control"), std::string::npos) << out;
+}
+
+TEST(EvalControl, ThirdSystemOnMapsOfItsOwnBudget)
+{
+	// The smallest data of the eval tests (ResultsIdenticalAcrossWorkersAndJobs):
+	// the simulator's traversals, 12 frames each, here two of them.
+	const std::string dir = test::tempDir("eval_control");
+	const std::string src = SHADYLOC_SOURCE_DIR;
+	std::string out;
+	ASSERT_EQ(
+		test::runCommand(
+			test::appPath() + " sim -q -c " + src + "/config/sim.ini -o " + dir + "/data --frames 12 --traversals noon,overcast",
+			&out),
+		0)
+		<< out;
+	writeText(dir + "/data/runs.txt", "noon noon.rawlog noon.tum\novercast overcast.rawlog overcast.tum\n");
+	const std::string base = app() + " -q --runs " + dir + "/data/runs.txt -c " + src + "/config/vo_sim.ini -c " + src +
+							 "/config/localise_sim.ini";
+	const std::string control = " --control " + src + "/config/control_budget.ini";
+	ASSERT_EQ(test::runCommand(base + " -j 1 -o " + dir + "/out" + control, &out), 0) << out;
+	const std::string o = dir + "/out";
+
+	// The control's maps were surveyed with the layer: its budget stored, and
+	// more monochrome landmarks kept per keyframe than the baseline's maps.
+	for (const char* run : {"noon", "overcast"})
+	{
+		const auto base = monoLandmarks(o + "/jobs/map_" + std::string(run) + "/map.kfmap");
+		const auto ctl = monoLandmarks(o + "/jobs/control_map_" + std::string(run) + "/map.kfmap");
+		EXPECT_EQ(base.budget, 300) << run;
+		EXPECT_EQ(ctl.budget, 600) << run;
+		EXPECT_LE(base.most, 300u) << run;
+		EXPECT_GT(ctl.most, 300u) << run;
+		EXPECT_GT(ctl.mean, 1.2 * base.mean) << run << ": " << ctl.mean << " against " << base.mean;
+	}
+
+	// Table I: the control's columns after the others, plausible numbers.
+	const std::string csv = test::fileContents(o + "/table1.csv");
+	EXPECT_EQ(csv.substr(0, csv.find('\n')),
+			  "live,maps,baseline_pct,invariant_pct,combined_pct,baseline_self_pct,invariant_self_pct,"
+			  "combined_self_pct,control_pct,control_self_pct");
+	const std::string md = test::fileContents(o + "/table1.md");
+	EXPECT_NE(md.find("| live run | maps | baseline | invariant alone | combined | control | self-reported"),
+			  std::string::npos) << md;
+	EXPECT_NE(md.find("with control_budget.ini layered over the configs"), std::string::npos) << md;
+	const auto js = nlohmann::json::parse(test::fileContents(o + "/eval.json"));
+	const auto& mean = js["table1"]["mean"];
+	for (const char* k : {"baseline", "combined", "control"})
+	{
+		ASSERT_TRUE(mean[k].is_number()) << k << ": " << mean.dump();
+		EXPECT_GT(mean[k].get<double>(), 0.3) << k;	 // every system localised
+		EXPECT_LE(mean[k].get<double>(), mean[std::string(k) + "_self"].get<double>() + 1e-9) << k;
+	}
+	// The same metrics as the baseline's: fixes against ground truth with the
+	// exact upper bound of the false share, blind episodes.
+	const auto& gt = js["ground_truth"]["control"];
+	EXPECT_EQ(gt["pairs"], 2);
+	EXPECT_GT(gt["fixes_used"]["true"].get<int>(), 0);
+	EXPECT_TRUE(gt["fixes_used"]["false_share_hi95"].is_number());
+	ASSERT_EQ(gt["channels"].size(), 1u);
+	EXPECT_EQ(gt["channels"][0]["channel"], "mono");
+	EXPECT_EQ(js["blind"]["control"]["pairs"], 2);
+	EXPECT_EQ(js["plan"]["maps"], 4);
+	EXPECT_EQ(js["plan"]["pairs"], 6);
+	EXPECT_EQ(js["provenance"]["control_config"], "control_budget.ini");
+	EXPECT_EQ(js["provenance"]["config"], "vo_sim.ini + localise_sim.ini");
+	EXPECT_EQ(js["runs"][0]["control_map"]["file"], "jobs/control_map_noon/map.kfmap");
+	const std::string sm = test::fileContents(o + "/summary.md");
+	EXPECT_NE(sm.find("| control | (used) |"), std::string::npos) << sm;
+	EXPECT_NE(sm.find("- control: P(100 m) = "), std::string::npos) << sm;
+	// Each control pair is the mono localiser with the layered config.
+	const auto pair = nlohmann::json::parse(test::fileContents(o + "/pairs/noon__overcast__control/summary.json"));
+	EXPECT_EQ(pair["provenance"]["config"], "vo_sim.ini + localise_sim.ini + control_budget.ini");
+	EXPECT_EQ(pair["provenance"]["localisers"], "mono");
+	EXPECT_EQ(pair["provenance"]["map"], "jobs/control_map_overcast/map.kfmap");
+
+	// The merge alone gives the same tables; without the control it refuses the plan.
+	const std::string table = test::fileContents(o + "/table1.md");
+	ASSERT_EQ(test::runCommand(base + " -o " + o + control + " --merge", &out), 0) << out;
+	EXPECT_EQ(test::fileContents(o + "/table1.md"), table);
+	EXPECT_EQ(test::runCommand(base + " -o " + o + " --merge", &out), 1);
+	EXPECT_NE(out.find("made with --control"), std::string::npos) << out;
 }

@@ -10,6 +10,12 @@
  *                        (list order), the baseline then the combined system:
  *                        job N + 2 (i (N-1) + j') + s, j' = j - (j > i),
  *                        s = 0 baseline, 1 combined.
+ * With a budget-matched control (--control INI: the baseline with INI
+ * layered over the configs, docs/evaluation.md) the control's own maps come
+ * after the maps, and each (live, map) has three pair jobs:
+ *   jobs 0 .. N-1        the map of run i;
+ *   jobs N .. 2N-1       the control's map of run i (INI layered);
+ *   jobs 2N ..           job 2N + 3 (i (N-1) + j') + s, s = 2 the control.
  * A job writes its outputs into OUTDIR/jobs/<job name>/ as a whole or not at
  * all; merge() combines them into Table I, the ground-truth summaries, the
  * pooled blind-distance distributions and one versioned eval.json. Results
@@ -39,11 +45,14 @@ constexpr int kEvalVersion = 1;
 enum class EvalSystem
 {
 	Baseline,  //!< --localisers mono
-	Combined  //!< --localisers mono,invariant
+	Combined,  //!< --localisers mono,invariant
+	Control	 //!< --localisers mono, on maps and frames made with the control's layered config
 };
-const char* toString(EvalSystem s);	 //!< "baseline", "combined"
+const char* toString(EvalSystem s);	 //!< "baseline", "combined", "control"
 /** The localisers of a system, in policy order. */
 std::vector<std::string> localisersOf(EvalSystem s);
+/** The systems of a plan, in job order: baseline, combined (, control). */
+std::vector<EvalSystem> systemsOf(bool control);
 
 struct TEvalJob
 {
@@ -51,9 +60,16 @@ struct TEvalJob
 	bool isMap = false;
 	size_t run = 0;	 //!< map job: the surveyed run; pair job: the live run (indices into the run list)
 	size_t map = 0;	 //!< pair job: the run whose map it uses
+	size_t mapJob = 0;	//!< pair job: the index of the map job that makes that map
+	/** Pair job: the system. Map job: Baseline for the map the baseline and
+	 * the combined system share, Control for the control's own. */
 	EvalSystem system = EvalSystem::Baseline;
-	std::string name;  //!< "map_<run>" or "pair_<live>__<map>__<system>": its folder in OUTDIR/jobs/
+	/** "map_<run>", "control_map_<run>" or "pair_<live>__<map>__<system>": its folder in OUTDIR/jobs/ */
+	std::string name;
 };
+
+/** The folder name of a map job: "map_<run>" (Baseline, Combined) or "control_map_<run>". */
+std::string mapJobName(const std::string& run, EvalSystem s);
 
 /** What an evaluation runs on: the run list, the config files (read
  * together, as `shadyloc localise -c ... -c ...` does), and the build. */
@@ -65,29 +81,48 @@ struct TEvalInputs
 	std::string configText;	 //!< the files' text, concatenated
 	std::string configWhat;	 //!< their names, " + "-joined ("(no config)")
 	std::string buildCommit = "unknown";
+	/** The budget-matched control's layer (--control; "" = no control): an
+	 * .ini applied over configPaths for the control system's maps and pairs. */
+	std::string controlPath;
+	std::string controlLayerText;  //!< that file's text
+	std::string controlText;  //!< configText with the layer after it: what the control runs with
+	std::string controlWhat;  //!< configWhat + " + " + the layer's file name
 
 	/** Reads the run list and the configs and checks everything a job will
 	 * need before any work: every config key and section (errors name the
 	 * file and line), every run's rawlog readable with a colour stereo
 	 * camera, one camera for all runs (calibration and image size; errors
-	 * name both runs and their lines). */
+	 * name both runs and their lines). With `controlPath`, the control's
+	 * layered config too (errors name the control file; a layer that sets
+	 * nothing is refused: its control would be the baseline). */
 	static TEvalInputs Load(
-		const std::string& runsPath, const std::vector<std::string>& configPaths, bool checkCameras = true);
+		const std::string& runsPath, const std::vector<std::string>& configPaths, bool checkCameras = true,
+		const std::string& controlPath = "");
 
+	bool hasControl() const { return !controlPath.empty(); }
 	/** The config as one settings object. */
 	const mrpt::config::CConfigFileBase& config() const { return *m_cfg; }
-	/** FNV-1a 64 of the run list and of the configs: what a plan was made from. */
+	/** The config a system's jobs run with: the control's layered one for
+	 * EvalSystem::Control, else config(); and its text and names. */
+	const mrpt::config::CConfigFileBase& configOf(EvalSystem s) const;
+	const std::string& configTextOf(EvalSystem s) const;
+	const std::string& configWhatOf(EvalSystem s) const;
+	/** FNV-1a 64 of the run list, of the configs and of the control's layer: what a plan was made from. */
 	std::string runsHash() const;
 	std::string configHash() const;
+	std::string controlHash() const;
 
    private:
-	std::shared_ptr<mrpt::config::CConfigFileMemory> m_cfg;
+	std::shared_ptr<mrpt::config::CConfigFileMemory> m_cfg, m_controlCfg;
+	void loadControl(const std::string& controlPath, const std::string& cfgNames);
 };
 
-/** The jobs for n runs, in the order above. */
-std::vector<TEvalJob> makePlan(const std::vector<TRun>& runs);
-/** Index of the map job of run i (= i), of pair (live, map, system). */
-size_t pairJobIndex(size_t nRuns, size_t live, size_t map, EvalSystem s);
+/** The jobs for n runs, in the order above (with the control's when `control`). */
+std::vector<TEvalJob> makePlan(const std::vector<TRun>& runs, bool control = false);
+/** Index of the map job of run i (= i; the control's: n + i), of pair (live, map, system). */
+size_t pairJobIndex(size_t nRuns, size_t live, size_t map, EvalSystem s, bool control = false);
+/** Map jobs of a plan: N, or 2N with the control. */
+size_t mapJobCount(size_t nRuns, bool control);
 
 /** Writes OUTDIR/plan.tsv (the jobs and what they were made from),
  * creating OUTDIR and OUTDIR/jobs. */
