@@ -12,6 +12,7 @@
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/localisation/LocaliseRun.h>
+#include <shadyloc/render/LocalisedView.h>
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/config/CConfigFileMemory.h>
@@ -72,6 +73,19 @@ void checkLiveCamera(const CKeyframeMap& map, const std::string& mapPath, const 
 		") is not of the camera of map '" + mapPath + "' (" +
 		describeCamera(map.calibration(), map.imageWidth(), map.imageHeight()) +
 		"): a map localises runs of the camera that surveyed it");
+}
+
+/** OUTDIR/view/frame_NNNNNN.png: the map and the live path so far. */
+void writeView(const CKeyframeMap::Ptr& map, const std::vector<TLocalisationUpdate>& ups, const fs::path& dir)
+{
+	const auto& u = ups.back();
+	render::SnapshotOptions o;
+	o.width = 800;
+	o.height = 600;
+	o.title = "frame " + std::to_string(u.frame) + ": " + (u.localised() ? u.used + " fix" : std::string("no fix"));
+	char name[32];
+	std::snprintf(name, sizeof(name), "frame_%06zu.png", u.frame);
+	render::renderLocalisedView(*map, ups, o, (dir / "view" / name).string());
 }
 
 /** -i or --live, and --live's companions only with it. */
@@ -143,6 +157,10 @@ int run(int argc, char** argv)
 	shadyloc::apps::NumberArg<int> startKf(
 		cli, "", "start-kf", "start at this map keyframe instead of by global search", -1, "id", -1, 1000000000);
 	TCLAP::ValueArg<std::string> label("", "label", "sensor label of the live colour stereo camera (of a filtered rawlog: the camera its channels' labels start with)", false, "", "label", cmd);
+	shadyloc::apps::NumberArg<int> viewArg(
+		cli, "", "view",
+		"every N frames, a top-down picture of the map and the live path so far (offscreen) in OUTDIR/view/", 0, "N", 0,
+		1000000);
 	TCLAP::SwitchArg quiet("q", "quiet", "no progress output", cmd);
 	TCLAP::SwitchArg debug(
 		"", "debug",
@@ -250,7 +268,10 @@ int run(int argc, char** argv)
 		sys.options().dump(std::cout);
 	}
 	size_t droppedShown = 0;
+	const int viewEvery = viewArg.getValue();
+	if (viewEvery > 0) fs::create_directories(dir / "view");
 	const auto& ups = lrun.run([&](const TLocalisationUpdate& u) {
+		if (viewEvery > 0 && u.frame % size_t(viewEvery) == 0) writeView(map, lrun.updates(), dir);
 		if (!talk || u.frame % 50 != 0) return;
 		std::cout << "frame " << u.frame << ": " << (u.localised() ? u.used : std::string("none"));
 		if (capture && capture->dropped() > droppedShown)

@@ -12,6 +12,7 @@
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/map/CKeyframeMap.h>
+#include <shadyloc/render/LocalisedView.h>
 #include <shadyloc/render/TrajectorySnapshot.h>
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
@@ -35,8 +36,10 @@ std::pair<std::string, std::string> fileAndName(const std::string& spec)
 	return {spec, std::filesystem::path(spec).stem().string()};
 }
 
-/** Colours of who held a frame (the same as docs/figures.md's figures). */
-constexpr mrpt::img::TColor kMonoColour{31, 98, 196}, kInvariantColour{230, 130, 14}, kNoneColour{214, 39, 40};
+// Colours of who held a frame (the same as docs/figures.md's figures).
+using render::kInvariantColour;
+using render::kMonoColour;
+using render::kNoneColour;
 
 /** The live trajectory of a `shadyloc localise` output folder, each segment
  * coloured by who held the frame it ends at (frames.csv's `used`). */
@@ -208,19 +211,7 @@ int run(int argc, char** argv)
 		if (m->keyframeCount() == 1) singleKeyframe += (singleKeyframe.empty() ? "" : ", ") + ("'" + file + "'");
 		if (localised.isSet())
 		{
-			// The map's own drawing is blue and orange, the colours of the
-			// localisers here: its keyframes in grey instead.
-			render::TrajectoryLayer k;
-			k.colour = {150, 150, 150};
-			k.widthPx = 16;
-			k.markerPx = 6;
-			k.markerColour = {90, 90, 90};
-			for (const auto& kf : m->keyframes()) k.points.push_back(toPoint(kf.T_map_kf.translation()));
-			std::ostringstream legend;
-			legend << "map " << name << ": " << m->keyframeCount() << " keyframes (squares), " << std::fixed
-				   << std::setprecision(0) << m->pathLength() << " m";
-			k.name = legend.str();
-			if (k.points.size() == 1) k.points.push_back(k.points.front());
+			render::TrajectoryLayer k = render::keyframesLayer(*m, name);
 			if (liveGt.isSet() && underneath.empty())
 			{
 				// T_map_world from the keyframes' own poses and their ground truth.

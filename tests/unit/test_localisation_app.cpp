@@ -441,7 +441,15 @@ TEST(LocalisationApp, LiveImageSequenceLocalisesAsTheRawlog)
 		return test::appPath() + " localise -q -m " + d.map + " --live " + source + " --camera " + calibIni + " --fps " +
 			   std::to_string(fps) + " -c " + src("config/vo_sim.ini") + " -c " + src("config/localise_sim.ini");
 	};
-	ASSERT_EQ(test::runCommand(liveCmd(seq + "/%06d.png", calib) + " -o " + fromLive, &out), 0) << out;
+	ASSERT_EQ(test::runCommand(liveCmd(seq + "/%06d.png", calib) + " --view 10 -o " + fromLive, &out), 0) << out;
+	// --view 10: a picture of the map and the path so far at frames 0, 10, 20.
+	for (const char* f : {"frame_000000.png", "frame_000010.png", "frame_000020.png"})
+	{
+		const cv::Mat png = cv::imread(fromLive + "/view/" + f);
+		EXPECT_EQ(png.cols, 800) << f;
+		EXPECT_EQ(png.rows, 600) << f;
+	}
+	EXPECT_FALSE(fs::exists(fromLive + "/view/frame_000001.png"));
 	const std::string a = test::fileContents(fromRawlog + "/frames.csv"), b = test::fileContents(fromLive + "/frames.csv");
 	ASSERT_GT(jsonInt(test::fileContents(fromRawlog + "/summary.json"), "fixes"), 20);
 	EXPECT_EQ(withoutColumn(b, 1), withoutColumn(a, 1)) << "frames.csv but the stamp column";

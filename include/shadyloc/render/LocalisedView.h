@@ -1,0 +1,38 @@
+/* ShadyLoc — a localisation run drawn over its map, offscreen: the map's
+ * keyframes and the live camera's
+ * path in the map frame so far, each stretch coloured by who held it (the
+ * monochrome localiser, the invariant one, or VO alone), with the latest
+ * pose's heading. `shadyloc localise --view N` writes one every N frames;
+ * `shadyloc render --localised` draws a finished run the same way. */
+#pragma once
+
+#include <shadyloc/localisation/LocalisationSystem.h>
+#include <shadyloc/map/CKeyframeMap.h>
+#include <shadyloc/render/TrajectorySnapshot.h>
+
+#include <mrpt/img/TColor.h>
+
+#include <string>
+#include <vector>
+
+namespace shadyloc::render
+{
+/** Who held a frame, as every figure colours it (docs/figures.md). */
+constexpr mrpt::img::TColor kMonoColour{31, 98, 196}, kInvariantColour{230, 130, 14}, kNoneColour{214, 39, 40};
+
+/** The colour of a frame held by `used` ("mono", "invariant", "" = none). */
+mrpt::img::TColor colourOfUsed(const std::string& used);
+
+/** The map's keyframes as a grey band with a square each (the map's own
+ * drawing is blue and orange, the localisers' colours here). */
+TrajectoryLayer keyframesLayer(const CKeyframeMap& map, const std::string& name);
+
+/** The live path of the updates so far where the place was known, and a
+ * short arrow of the last pose's heading. Throws std::runtime_error (via
+ * renderTrajectories) if there is nothing to draw; the PNG is written
+ * atomically. */
+void renderLocalisedView(
+	const CKeyframeMap& map, const std::vector<localisation::TLocalisationUpdate>& ups, const SnapshotOptions& opts,
+	const std::string& pngPath);
+
+}  // namespace shadyloc::render

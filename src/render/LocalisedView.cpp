@@ -1,0 +1,71 @@
+/* ShadyLoc — a localisation run over its map, offscreen (LocalisedView.h). */
+#include <shadyloc/render/LocalisedView.h>
+
+#include <iomanip>
+#include <sstream>
+
+namespace shadyloc::render
+{
+namespace
+{
+mrpt::math::TPoint3D toPoint(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
+}  // namespace
+
+mrpt::img::TColor colourOfUsed(const std::string& used)
+{
+	return used == "mono" ? kMonoColour : (used == "invariant" ? kInvariantColour : kNoneColour);
+}
+
+TrajectoryLayer keyframesLayer(const CKeyframeMap& map, const std::string& name)
+{
+	TrajectoryLayer k;
+	k.colour = {150, 150, 150};
+	k.widthPx = 16;
+	k.markerPx = 6;
+	k.markerColour = {90, 90, 90};
+	for (const auto& kf : map.keyframes()) k.points.push_back(toPoint(kf.T_map_kf.translation()));
+	std::ostringstream legend;
+	legend << "map " << name << ": " << map.keyframeCount() << " keyframes (squares), " << std::fixed
+		   << std::setprecision(0) << map.pathLength() << " m";
+	k.name = legend.str();
+	if (k.points.size() == 1) k.points.push_back(k.points.front());
+	return k;
+}
+
+void renderLocalisedView(
+	const CKeyframeMap& map, const std::vector<localisation::TLocalisationUpdate>& ups, const SnapshotOptions& opts,
+	const std::string& pngPath)
+{
+	TrajectoryLayer live;
+	live.name = "live";
+	live.widthPx = 6.0;
+	size_t counts[3] = {0, 0, 0};
+	for (const auto& u : ups)
+	{
+		if (!u.placeKnown) continue;
+		const int k = u.used == "mono" ? 0 : (u.used == "invariant" ? 1 : 2);
+		counts[k]++;
+		if (!live.points.empty()) live.segmentColours.push_back(colourOfUsed(u.used));
+		live.points.push_back(toPoint(u.T_map_live.translation()));
+	}
+	live.legend = {{"mono fix: " + std::to_string(counts[0]) + " frames", kMonoColour},
+				   {"invariant fix: " + std::to_string(counts[1]), kInvariantColour},
+				   {"no fix (VO): " + std::to_string(counts[2]), kNoneColour}};
+	std::vector<TrajectoryLayer> layers{keyframesLayer(map, map.runs().empty() ? "" : map.runs().front())};
+	if (live.points.size() >= 2) layers.push_back(live);
+	// The latest pose: 1.5 m along its optical axis (z of the camera).
+	for (auto it = ups.rbegin(); it != ups.rend(); ++it)
+		if (it->placeKnown)
+		{
+			TrajectoryLayer now;
+			now.name = "now (frame " + std::to_string(it->frame) + ")";
+			now.colour = {0, 0, 0};
+			now.widthPx = 9.0;
+			now.points = {toPoint(it->T_map_live.translation()), toPoint(it->T_map_live * Eigen::Vector3d(0, 0, 1.5))};
+			layers.push_back(now);
+			break;
+		}
+	renderTrajectories(layers, opts, pngPath);
+}
+
+}  // namespace shadyloc::render
