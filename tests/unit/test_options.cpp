@@ -5,6 +5,7 @@
  *
  * SHADYLOC_WRITE_DOCS=1 rewrites the docs' tables instead of comparing them. */
 #include <shadyloc/core/Options.h>
+#include <shadyloc/map/CKeyframeMap.h>
 
 #include <gtest/gtest.h>
 
@@ -341,6 +342,7 @@ void dumpGeneric(const T& o, std::ostream& out)
 const std::vector<TOptionsCase>& optionsCases()
 {
 	static const std::vector<TOptionsCase> cases = {
+		optionsCase<TKeyframeMapOptions>("map", "map", loadCL<TKeyframeMapOptions>, dumpCL<TKeyframeMapOptions>),
 	};
 
 	return cases;
