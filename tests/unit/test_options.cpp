@@ -5,6 +5,7 @@
  *
  * SHADYLOC_WRITE_DOCS=1 rewrites the docs' tables instead of comparing them. */
 #include <shadyloc/core/Options.h>
+#include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/map/CKeyframeMap.h>
 
 #include <gtest/gtest.h>
@@ -343,6 +344,8 @@ const std::vector<TOptionsCase>& optionsCases()
 {
 	static const std::vector<TOptionsCase> cases = {
 		optionsCase<TKeyframeMapOptions>("map", "map", loadCL<TKeyframeMapOptions>, dumpCL<TKeyframeMapOptions>),
+		optionsCase<features::TStereoFeatureOptions>(
+			"features", "features", loadCL<features::TStereoFeatureOptions>, dumpCL<features::TStereoFeatureOptions>),
 	};
 
 	return cases;
