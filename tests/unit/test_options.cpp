@@ -7,6 +7,7 @@
 #include <shadyloc/core/Options.h>
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/map/CKeyframeMap.h>
+#include <shadyloc/vo/StereoVO.h>
 
 #include <gtest/gtest.h>
 
@@ -346,6 +347,7 @@ const std::vector<TOptionsCase>& optionsCases()
 		optionsCase<TKeyframeMapOptions>("map", "map", loadCL<TKeyframeMapOptions>, dumpCL<TKeyframeMapOptions>),
 		optionsCase<features::TStereoFeatureOptions>(
 			"features", "features", loadCL<features::TStereoFeatureOptions>, dumpCL<features::TStereoFeatureOptions>),
+		optionsCase<vo::TStereoVOOptions>("vo", "vo", loadCL<vo::TStereoVOOptions>, dumpCL<vo::TStereoVOOptions>),
 	};
 
 	return cases;
