@@ -6,6 +6,7 @@
  * SHADYLOC_WRITE_DOCS=1 rewrites the docs' tables instead of comparing them. */
 #include <shadyloc/core/Options.h>
 #include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/localisation/StereoLocaliser.h>
 #include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/vo/StereoVO.h>
 
@@ -348,6 +349,9 @@ const std::vector<TOptionsCase>& optionsCases()
 		optionsCase<features::TStereoFeatureOptions>(
 			"features", "features", loadCL<features::TStereoFeatureOptions>, dumpCL<features::TStereoFeatureOptions>),
 		optionsCase<vo::TStereoVOOptions>("vo", "vo", loadCL<vo::TStereoVOOptions>, dumpCL<vo::TStereoVOOptions>),
+		optionsCase<localisation::TLocaliserOptions>(
+			"localiser", "localiser", loadPlain<localisation::TLocaliserOptions>,
+			dumpPlain<localisation::TLocaliserOptions>),
 	};
 
 	return cases;
