@@ -6,6 +6,7 @@
  * SHADYLOC_WRITE_DOCS=1 rewrites the docs' tables instead of comparing them. */
 #include <shadyloc/core/Options.h>
 #include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/localisation/MonoLocaliser.h>
 #include <shadyloc/localisation/StereoLocaliser.h>
 #include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/vo/StereoVO.h>
@@ -352,6 +353,9 @@ const std::vector<TOptionsCase>& optionsCases()
 		optionsCase<localisation::TLocaliserOptions>(
 			"localiser", "localiser", loadPlain<localisation::TLocaliserOptions>,
 			dumpPlain<localisation::TLocaliserOptions>),
+		optionsCase<localisation::TMonoLocaliserOptions>(
+			"localiser_2d", "localiser_2d", loadPlain<localisation::TMonoLocaliserOptions>,
+			dumpPlain<localisation::TMonoLocaliserOptions>),
 	};
 
 	return cases;
