@@ -6,6 +6,7 @@
  * SHADYLOC_WRITE_DOCS=1 rewrites the docs' tables instead of comparing them. */
 #include <shadyloc/core/Options.h>
 #include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/localisation/MonoLocaliser.h>
 #include <shadyloc/localisation/StereoLocaliser.h>
 #include <shadyloc/map/CKeyframeMap.h>
@@ -356,6 +357,8 @@ const std::vector<TOptionsCase>& optionsCases()
 		optionsCase<localisation::TMonoLocaliserOptions>(
 			"localiser_2d", "localiser_2d", loadPlain<localisation::TMonoLocaliserOptions>,
 			dumpPlain<localisation::TMonoLocaliserOptions>),
+		optionsCase<localisation::TSystemOptions>(
+			"localise", "localise", loadPlain<localisation::TSystemOptions>, dumpPlain<localisation::TSystemOptions>),
 	};
 
 	return cases;
