@@ -7,6 +7,8 @@
 #include <shadyloc/core/Options.h>
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
+#include <shadyloc/Localiser.h>
+#include <shadyloc/localisation/LocaliserAppKeys.h>
 #include <shadyloc/localisation/MonoLocaliser.h>
 #include <shadyloc/localisation/StereoLocaliser.h>
 #include <shadyloc/map/CKeyframeMap.h>
@@ -312,6 +314,14 @@ TOptionsCase optionsCase(
 			[=] { expectRoundTrips<T>(section, load, dump, make); }};
 }
 
+/** LocaliserOptions' own keys, owning its options. */
+struct TAppKeys
+{
+	LocaliserOptions o;
+	void keys(core::KeyVisitor& v) { localisation::TLocaliserAppKeys{o.sensor_label, o.start_keyframe}.keys(v); }
+	void validate() const { core::checkKeys(*this); }
+};
+
 template <typename T>
 void loadCL(T& o, const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
@@ -359,6 +369,7 @@ const std::vector<TOptionsCase>& optionsCases()
 			dumpPlain<localisation::TMonoLocaliserOptions>),
 		optionsCase<localisation::TSystemOptions>(
 			"localise", "localise", loadPlain<localisation::TSystemOptions>, dumpPlain<localisation::TSystemOptions>),
+		optionsCase<TAppKeys>("application", "application", loadGeneric<TAppKeys>, dumpGeneric<TAppKeys>),
 	};
 
 	return cases;
