@@ -6,6 +6,7 @@
  * SHADYLOC_WRITE_DOCS=1 rewrites the docs' tables instead of comparing them. */
 #include <shadyloc/core/Options.h>
 #include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/image/ColourTransforms.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/Localiser.h>
 #include <shadyloc/localisation/LocaliserAppKeys.h>
@@ -370,6 +371,8 @@ const std::vector<TOptionsCase>& optionsCases()
 		optionsCase<localisation::TSystemOptions>(
 			"localise", "localise", loadPlain<localisation::TSystemOptions>, dumpPlain<localisation::TSystemOptions>),
 		optionsCase<TAppKeys>("application", "application", loadGeneric<TAppKeys>, dumpGeneric<TAppKeys>),
+		optionsCase<image::InvariantParams>(
+			"invariant", "invariant", loadCL<image::InvariantParams>, dumpCL<image::InvariantParams>),
 	};
 
 	return cases;
