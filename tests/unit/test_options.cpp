@@ -5,6 +5,8 @@
  *
  * SHADYLOC_WRITE_DOCS=1 rewrites the docs' tables instead of comparing them. */
 #include <shadyloc/core/Options.h>
+#include <shadyloc/datasets/Common.h>
+#include <shadyloc/datasets/Kitti.h>
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/image/ColourTransforms.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
@@ -373,6 +375,11 @@ const std::vector<TOptionsCase>& optionsCases()
 		optionsCase<TAppKeys>("application", "application", loadGeneric<TAppKeys>, dumpGeneric<TAppKeys>),
 		optionsCase<image::InvariantParams>(
 			"invariant", "invariant", loadCL<image::InvariantParams>, dumpCL<image::InvariantParams>),
+		optionsCase<datasets::TImportOptions>(
+			"import", "import", loadCL<datasets::TImportOptions>, dumpCL<datasets::TImportOptions>),
+		optionsCase<datasets::KittiExporter::TOptions>(
+			"export_kitti", "export", loadCL<datasets::KittiExporter::TOptions>,
+			dumpCL<datasets::KittiExporter::TOptions>),
 	};
 
 	return cases;
