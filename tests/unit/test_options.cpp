@@ -15,6 +15,7 @@
 #include <shadyloc/localisation/MonoLocaliser.h>
 #include <shadyloc/localisation/StereoLocaliser.h>
 #include <shadyloc/map/CKeyframeMap.h>
+#include <shadyloc/sim/SimOptions.h>
 #include <shadyloc/vo/StereoVO.h>
 
 #include <gtest/gtest.h>
@@ -356,6 +357,24 @@ void dumpGeneric(const T& o, std::ostream& out)
 	core::dumpKeys(o, out);
 }
 
+/** TSimOptions as the round trip sees it: config/sim.ini. */
+struct TSimFile : sim::TSimOptions
+{
+	void validate() const {}  // each section's load validates it
+};
+TSimFile simFile()
+{
+	TSimFile f;
+	static_cast<sim::TSimOptions&>(f) = sim::TSimOptions::FromFile(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
+	return f;
+}
+
+TOptionsCase undocumented(TOptionsCase c)
+{
+	c.documented = false;
+	return c;
+}
+
 /** Every options struct of the library, by the name of its docs table. */
 const std::vector<TOptionsCase>& optionsCases()
 {
@@ -380,6 +399,22 @@ const std::vector<TOptionsCase>& optionsCases()
 		optionsCase<datasets::KittiExporter::TOptions>(
 			"export_kitti", "export", loadCL<datasets::KittiExporter::TOptions>,
 			dumpCL<datasets::KittiExporter::TOptions>),
+		optionsCase<sim::TSimCameraOptions>(
+			"sim.camera", "sim.camera", loadCL<sim::TSimCameraOptions>, dumpCL<sim::TSimCameraOptions>),
+		optionsCase<sim::TSimSceneOptions>(
+			"sim.scene", "sim.scene", loadCL<sim::TSimSceneOptions>, dumpCL<sim::TSimSceneOptions>),
+		optionsCase<sim::TTraversal>("traversal", "traversal.", loadCL<sim::TTraversal>, dumpCL<sim::TTraversal>),
+		// The other of a traversal's alternative keys: an end instead of a count (no table of its own).
+		undocumented(optionsCase<sim::TTraversal>(
+			"traversal_to_end", "traversal.", loadCL<sim::TTraversal>, dumpCL<sim::TTraversal>,
+			std::function<sim::TTraversal()>([] {
+				sim::TTraversal t;
+				t.frames = 0;
+				t.end_s_m = 120;
+				return t;
+			}))),
+		// The whole simulator file: [sim] names the traversals, each read from its section.
+		optionsCase<TSimFile>("sim", "sim", loadCL<TSimFile>, dumpCL<TSimFile>, std::function<TSimFile()>(simFile)),
 	};
 
 	return cases;
