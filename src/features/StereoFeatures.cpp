@@ -1,5 +1,6 @@
 /* ShadyLoc — FAST grid detection and stereo measurements. */
 #include <shadyloc/core/Options.h>
+#include <shadyloc/core/Units.h>
 #include <shadyloc/features/StereoFeatures.h>
 
 #include <mrpt/config/CConfigFileBase.h>
@@ -26,10 +27,7 @@ namespace shadyloc::features
 namespace
 {
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0)
-{
-	return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+using core::msSince;
 }  // namespace
 
 // ---- options ------------------------------------------------------------------

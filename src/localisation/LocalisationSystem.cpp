@@ -1,6 +1,7 @@
 /* ShadyLoc — the combined localisation system (VO prediction, parallel
  * localisers, switching policy, global search). */
 #include <shadyloc/core/Options.h>
+#include <shadyloc/core/Units.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/vo/ChannelOptions.h>
 
@@ -19,9 +20,9 @@ using geometry::TPoseWithCov;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180.0;
+using core::kDeg;
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+using core::msSince;
 
 Matrix6d diagCov(double sm, double sdeg)
 {

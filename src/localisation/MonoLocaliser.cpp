@@ -1,6 +1,7 @@
 /* ShadyLoc — the localiser's core for a single image (2D-3D) against a
  * stereo keyframe (include/shadyloc/localisation/MonoLocaliser.h). */
 #include <shadyloc/core/Options.h>
+#include <shadyloc/core/Units.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/localisation/MonoLocaliser.h>
 
@@ -27,7 +28,7 @@ using geometry::Vector6d;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180.0;
+using core::kDeg;
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v)
 {
