@@ -1,7 +1,7 @@
 /* ShadyLoc — shared importer code: options, image reading, the rawlog sink. */
 #include "Detail.h"
 
-#include <shadyloc/core/Settings.h>
+#include <shadyloc/core/Options.h>
 #include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/io/ImageFile.h>
 
@@ -23,29 +23,31 @@ namespace fs = std::filesystem;
 
 namespace shadyloc::datasets
 {
-void TImportOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
+void TImportOptions::keys(core::KeyVisitor& v)
 {
-	core::SettingsSection r(c, s);
-	r.renamed(
+	using core::Range;
+	v.renamed(
 		{{"sensorLabel", "sensor_label"},
 		 {"externalImages", "external_images"},
 		 {"maxFrames", "max_frames"},
 		 {"progressEvery", "progress_every"}});
-	r.read("sensor_label", sensorLabel);
-	r.read("external_images", externalImages);
-	r.read("max_frames", maxFrames);
-	r.read("progress_every", progressEvery);
-	r.finish();
-	if (sensorLabel.empty()) r.fail("sensor_label", "must not be empty");
+	v("sensor_label", sensorLabel, "", Range::any(), "label of the stereo observations");
+	v("external_images", externalImages, "", Range::any(), "PNG files in <stem>_Images/ instead of inline images");
+	v("max_frames", maxFrames, "", Range::any(), "0: all");
+	v("progress_every", progressEvery, "", Range::any(), "log progress every this many frames, 0: never");
 }
 
-void TImportOptions::dumpToTextStream(std::ostream& out) const
+void TImportOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	core::SettingsWriter w(out);
-	w.value("sensor_label", sensorLabel, "label of the stereo observations");
-	w.value("external_images", externalImages, "PNG files in <stem>_Images/ instead of inline images");
-	w.value("max_frames", maxFrames, "0: all");
-	w.value("progress_every", progressEvery, "log progress every this many frames, 0: never");
+	core::loadKeys(*this, c, s);
+}
+
+void TImportOptions::dumpToTextStream(std::ostream& out) const { core::dumpKeys(*this, out); }
+
+void TImportOptions::validate() const
+{
+	core::checkKeys(*this);
+	if (sensorLabel.empty()) throw std::invalid_argument("sensor_label: must not be empty");
 }
 
 std::string groundTruthPathFor(const std::string& rawlogPath)

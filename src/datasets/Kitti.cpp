@@ -7,7 +7,7 @@
 
 #include "Detail.h"
 
-#include <shadyloc/core/Settings.h>
+#include <shadyloc/core/Options.h>
 
 #include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/math/CQuaternion.h>
@@ -288,36 +288,31 @@ TImportResult KittiImporter::run(
 }
 
 // ---------------------------------------------------------------- export
-void KittiExporter::TOptions::loadFromConfigFile(
-	const mrpt::config::CConfigFileBase& c, const std::string& s)
+void KittiExporter::TOptions::keys(core::KeyVisitor& v)
 {
-	core::SettingsSection r(c, s);
-	r.renamed(
+	using core::Range;
+	v.renamed(
 		{{"sensorLabel", "sensor_label"},
 		 {"groundTruthTum", "ground_truth_tum"},
 		 {"gtTimeTolerance", "gt_time_tolerance_s"},
 		 {"absoluteTimes", "absolute_times"},
 		 {"progressEvery", "progress_every"}});
-	r.read("sequence", sequence);
-	r.read("sensor_label", sensorLabel);
-	r.read("ground_truth_tum", groundTruthTum);
-	r.read("gt_time_tolerance_s", gtTimeTolerance);
-	r.read("absolute_times", absoluteTimes);
-	r.read("progress_every", progressEvery);
-	r.finish();
-	if (!(gtTimeTolerance >= 0)) r.fail("gt_time_tolerance_s", "must be >= 0");
+	v("sequence", sequence, "", Range::any(), "NN");
+	v("sensor_label", sensorLabel, "", Range::any(), "which stereo observations to export");
+	v("ground_truth_tum", groundTruthTum, "", Range::any(), "TUM file for poses/NN.txt, empty: none");
+	v("gt_time_tolerance_s", gtTimeTolerance, "s", Range::atLeast(0), "max |t_frame - t_gt| to pair a pose");
+	v("absolute_times", absoluteTimes, "", Range::any(), "times.txt: absolute instead of since frame 0");
+	v("progress_every", progressEvery, "", Range::any(), "log progress every this many frames, 0: never");
 }
 
-void KittiExporter::TOptions::dumpToTextStream(std::ostream& out) const
+void KittiExporter::TOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	core::SettingsWriter w(out);
-	w.value("sequence", sequence, "NN");
-	w.value("sensor_label", sensorLabel, "which stereo observations to export");
-	w.value("ground_truth_tum", groundTruthTum, "TUM file for poses/NN.txt, empty: none");
-	w.value("gt_time_tolerance_s", gtTimeTolerance, "max |t_frame - t_gt| to pair a pose [s]");
-	w.value("absolute_times", absoluteTimes, "times.txt: absolute instead of since frame 0");
-	w.value("progress_every", progressEvery, "log progress every this many frames, 0: never");
+	core::loadKeys(*this, c, s);
 }
+
+void KittiExporter::TOptions::dumpToTextStream(std::ostream& out) const { core::dumpKeys(*this, out); }
+
+void KittiExporter::TOptions::validate() const { core::checkKeys(*this); }
 
 KittiExporter::KittiExporter() : mrpt::system::COutputLogger("shadyloc.export.kitti") {}
 

@@ -1,4 +1,5 @@
 /* ShadyLoc — evaluation of a localisation run (docs/localisation.md). */
+#include <shadyloc/core/Units.h>
 #include <shadyloc/eval/BlindEpisodes.h>
 #include <shadyloc/eval/Evaluation.h>
 #include <shadyloc/localisation/FixAcceptance.h>
@@ -17,7 +18,7 @@ using localisation::TLocaliserResult;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180.0;
+using core::kDeg;
 
 double axesAngleDeg(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B)
 {

@@ -1,5 +1,6 @@
 /* ShadyLoc — FAST grid detection and stereo measurements. */
-#include <shadyloc/core/Settings.h>
+#include <shadyloc/core/Options.h>
+#include <shadyloc/core/Units.h>
 #include <shadyloc/features/StereoFeatures.h>
 
 #include <mrpt/config/CConfigFileBase.h>
@@ -26,10 +27,7 @@ namespace shadyloc::features
 namespace
 {
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0)
-{
-	return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+using core::msSince;
 }  // namespace
 
 // ---- options ------------------------------------------------------------------
@@ -46,103 +44,54 @@ static const std::vector<core::TRenamedKey> kRenamedFeatureKeys = {
 	{"presmooth_sigma", "presmooth_sigma_px"},
 };
 
-void TStereoFeatureOptions::loadFromConfigFile(
-	const mrpt::config::CConfigFileBase& c, const std::string& s)
+void TStereoFeatureOptions::keys(core::KeyVisitor& v)
 {
-	core::SettingsSection r(c, s);
-	r.renamed(kRenamedFeatureKeys);
-	r.read("fast_threshold", fast_threshold);
-	r.read("grid_cols", grid_cols);
-	r.read("grid_rows", grid_rows);
-	r.read("max_per_cell", max_per_cell);
-	r.read("max_per_cell_right", max_per_cell_right);
-	r.read("min_disparity_px", min_disparity);
-	r.read("max_disparity_px", max_disparity);
-	r.read("row_tolerance_px", row_tolerance);
-	r.read("patch_radius_px", patch_radius);
-	r.read("min_zncc", min_zncc);
-	r.read("max_ambiguity", max_ambiguity);
-	r.read("lr_tolerance_px", lr_tolerance_px);
-	r.read("min_zncc_shifted", min_zncc_shifted);
-	r.read("brief_patch_size_px", brief_patch_size);
-	r.read("brief_seed", brief_seed);
-	r.read("sigma_px", sigma_px);
-	r.read("max_depth_m", max_depth);
-	r.read("presmooth_sigma_px", presmooth_sigma);
-	r.read("subpixel_iterations", subpixel_iterations);
-	r.read("dense_check", dense_check);
-	r.read("shifted_window_check", shifted_window_check);
-	r.read("shifted_window_margin", shifted_window_margin);
-	r.readChoice<DescriptorKind>("descriptor", descriptor, {{"brief", DescriptorKind::Brief}, {"orb", DescriptorKind::Orb}});
-	r.read("orb_levels", orb_levels);
-	r.read("orb_scale_factor", orb_scale_factor);
-	r.finish();
-	try
-	{
-		validate();
-	}
-	catch (const std::exception& e)
-	{
-		throw core::SettingsError(r.where() + " " + e.what());
-	}
+	using core::Range;
+	v.renamed(kRenamedFeatureKeys);
+	v("fast_threshold", fast_threshold, "grey levels", Range::closed(1, 254), "FAST threshold");
+	v("grid_cols", grid_cols, "", Range::atLeast(1), "buckets across");
+	v("grid_rows", grid_rows, "", Range::atLeast(1), "buckets down");
+	// 0 or less used to mean "no limit" without saying so.
+	v("max_per_cell", max_per_cell, "", Range::atLeast(1), "left corners kept per bucket");
+	v("max_per_cell_right", max_per_cell_right, "", Range::atLeast(1), "right corners kept per bucket");
+	v("min_disparity_px", min_disparity, "px", Range::above(0), "true disparity fx*b/Z");
+	v("max_disparity_px", max_disparity, "px", Range::any(), "true disparity fx*b/Z");
+	v("row_tolerance_px", row_tolerance, "px", Range::closed(0, 3), "candidate rows +-");
+	v("patch_radius_px", patch_radius, "px", Range::closed(1, 7), "ZNCC patch (2r+1)^2");
+	v("min_zncc", min_zncc, "", Range::open(-1, 1), "weakest stereo correlation");
+	v("max_ambiguity", max_ambiguity, "", Range::openClosed(0, 1), "(1-best)/(1-second) bound");
+	v("lr_tolerance_px", lr_tolerance_px, "px", Range::any(), "left-right check");
+	v("min_zncc_shifted", min_zncc_shifted, "", Range::any(), "silhouette check, -1 = off");
+	// The describer's own check would name neither the key nor the file.
+	v("brief_patch_size_px", brief_patch_size, "px", Range::closed(8, 250), "BRIEF patch side");
+	v("brief_seed", brief_seed, "", Range::any(), "BRIEF pattern seed");
+	v("sigma_px", sigma_px, "px", Range::above(0), "pixel noise for landmark covariance");
+	v("max_depth_m", max_depth, "m", Range::above(0), "farthest landmark kept");
+	v("presmooth_sigma_px", presmooth_sigma, "px", Range::closed(0, 5), "Gaussian pre-smoothing, 0 = off");
+	v("subpixel_iterations", subpixel_iterations, "", Range::closed(0, 20), "Gauss-Newton steps on uR, 0 = parabola only");
+	v("dense_check", dense_check, "", Range::any(), "verify the match against every shift of the range");
+	v("shifted_window_check", shifted_window_check, "", Range::any(),
+	  "four corner-holding windows must agree (needs dense_check)");
+	v("shifted_window_margin", shifted_window_margin, "", Range::closed(0, 2),
+	  "ZNCC a shifted window's other peak may exceed the match by");
+	v.choice("descriptor", descriptor, {{"brief", DescriptorKind::Brief}, {"orb", DescriptorKind::Orb}},
+			 "brief (single-scale FAST + BRIEF) or orb (OpenCV ORB: pyramid, orientation)");
+	v("orb_levels", orb_levels, "", Range::closed(1, 16), "ORB pyramid levels, 1 = single scale");
+	v("orb_scale_factor", orb_scale_factor, "", Range::openClosed(1, 2), "ORB size ratio of neighbouring levels");
 }
 
-void TStereoFeatureOptions::dumpToTextStream(std::ostream& o) const
+void TStereoFeatureOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	core::SettingsWriter w(o);
-	w.value("fast_threshold", fast_threshold, "FAST threshold [grey levels]");
-	w.value("grid_cols", grid_cols, "buckets across");
-	w.value("grid_rows", grid_rows, "buckets down");
-	w.value("max_per_cell", max_per_cell, "left corners kept per bucket");
-	w.value("max_per_cell_right", max_per_cell_right, "right corners kept per bucket");
-	w.value("min_disparity_px", min_disparity, "true disparity fx*b/Z [px]");
-	w.value("max_disparity_px", max_disparity, "true disparity fx*b/Z [px]");
-	w.value("row_tolerance_px", row_tolerance, "candidate rows +- [px]");
-	w.value("patch_radius_px", patch_radius, "ZNCC patch (2r+1)^2 [px]");
-	w.value("min_zncc", min_zncc, "weakest stereo correlation");
-	w.value("max_ambiguity", max_ambiguity, "(1-best)/(1-second) bound");
-	w.value("lr_tolerance_px", lr_tolerance_px, "left-right check [px]");
-	w.value("min_zncc_shifted", min_zncc_shifted, "silhouette check, -1 = off");
-	w.value("brief_patch_size_px", brief_patch_size, "BRIEF patch side [px]");
-	w.value("brief_seed", brief_seed, "BRIEF pattern seed");
-	w.value("sigma_px", sigma_px, "pixel noise for landmark covariance [px]");
-	w.value("max_depth_m", max_depth, "farthest landmark kept [m]");
-	w.value("presmooth_sigma_px", presmooth_sigma, "Gaussian pre-smoothing, 0 = off [px]");
-	w.value("subpixel_iterations", subpixel_iterations, "Gauss-Newton steps on uR, 0 = parabola only");
-	w.value("dense_check", dense_check, "verify the match against every shift of the range");
-	w.value("shifted_window_check", shifted_window_check,
-			"four corner-holding windows must agree (needs dense_check)");
-	w.value("shifted_window_margin", shifted_window_margin,
-			"ZNCC a shifted window's other peak may exceed the match by");
-	w.value("descriptor", toString(descriptor), "brief (single-scale FAST + BRIEF) or orb (OpenCV ORB: pyramid, orientation)");
-	w.value("orb_levels", orb_levels, "ORB pyramid levels, 1 = single scale");
-	w.value("orb_scale_factor", orb_scale_factor, "ORB size ratio of neighbouring levels");
+	core::loadKeys(*this, c, s);
 }
+
+void TStereoFeatureOptions::dumpToTextStream(std::ostream& o) const { core::dumpKeys(*this, o); }
 
 void TStereoFeatureOptions::validate() const
 {
-	auto bad = [](const std::string& what) { throw std::invalid_argument("option " + what); };
-	if (fast_threshold < 1 || fast_threshold > 254) bad("fast_threshold must be in [1,254]");
-	if (grid_cols < 1 || grid_rows < 1) bad("grid_cols/grid_rows must be >= 1");
-	// 0 or less used to mean "no limit" without saying so.
-	if (max_per_cell < 1) bad("max_per_cell must be >= 1 (corners kept per bucket)");
-	if (max_per_cell_right < 1) bad("max_per_cell_right must be >= 1 (corners kept per bucket)");
-	// The describer's own check would name neither the key nor the file.
-	if (brief_patch_size < 8 || brief_patch_size > 250 || brief_patch_size % 2)
-		bad("brief_patch_size_px must be even and in [8,250]");
-	if (!(min_disparity > 0) || !(max_disparity > min_disparity))
-		bad("min_disparity_px must be > 0 and < max_disparity_px");
-	if (row_tolerance < 0 || row_tolerance > 3) bad("row_tolerance_px must be in [0,3]");
-	if (patch_radius < 1 || patch_radius > 7) bad("patch_radius_px must be in [1,7]");
-	if (!(min_zncc > -1 && min_zncc < 1)) bad("min_zncc must be in (-1,1)");
-	if (!(max_ambiguity > 0 && max_ambiguity <= 1)) bad("max_ambiguity must be in (0,1]");
-	if (!(sigma_px > 0)) bad("sigma_px must be > 0");
-	if (!(max_depth > 0)) bad("max_depth_m must be > 0");
-	if (!(presmooth_sigma >= 0 && presmooth_sigma <= 5)) bad("presmooth_sigma_px must be in [0,5]");
-	if (subpixel_iterations < 0 || subpixel_iterations > 20) bad("subpixel_iterations must be in [0,20]");
-	if (!(shifted_window_margin >= 0 && shifted_window_margin <= 2)) bad("shifted_window_margin must be in [0,2]");
-	if (orb_levels < 1 || orb_levels > 16) bad("orb_levels must be in [1,16]");
-	if (!(orb_scale_factor > 1 && orb_scale_factor <= 2)) bad("orb_scale_factor must be in (1,2]");
+	core::checkKeys(*this);
+	if (brief_patch_size % 2) throw std::invalid_argument("brief_patch_size_px: must be even");
+	if (!(max_disparity > min_disparity)) throw std::invalid_argument("max_disparity_px: must exceed min_disparity_px");
 }
 
 // ---- FAST on a grid -----------------------------------------------------------

@@ -1,5 +1,6 @@
 /* ShadyLoc — the frames of one stereo camera as its channels see them. */
 #include <shadyloc/filters/ChannelFrameSource.h>
+#include <shadyloc/core/Units.h>
 
 #include <algorithm>
 #include <chrono>
@@ -15,10 +16,7 @@ std::string quotedList(const std::vector<std::string>& v)
 	return s;
 }
 
-double msSince(std::chrono::steady_clock::time_point t0)
-{
-	return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
+using core::msSince;
 }  // namespace
 
 bool TChannelPlan::needsColour() const

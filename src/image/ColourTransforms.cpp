@@ -1,6 +1,8 @@
 /* ShadyLoc — colour transforms (see header for the method and citations). */
 #include <shadyloc/image/ColourTransforms.h>
 
+#include <shadyloc/core/Options.h>
+
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
@@ -94,24 +96,10 @@ double InvariantParams::defaultOffset() const
 
 void InvariantParams::validate() const
 {
-	auto bad = [](const std::string& field, double v, const std::string& why) {
-		std::ostringstream s;
-		s << "invariant parameter '" << field << "' = " << v << ": " << why;
-		throw std::invalid_argument(s.str());
-	};
-	if (!std::isfinite(alpha) || alpha < 0 || alpha > 1) bad("alpha", alpha, "must be in [0,1]");
-	if (!std::isfinite(beta) || beta < 0 || beta > 1.5) bad("beta", beta, "must be in [0,1.5]");
-	// The upper bound keeps the fixed-point sums of InvariantTransform in 32 bits.
-	if (!std::isfinite(scale) || scale <= 0 || scale > 10000) bad("scale", scale, "must be in (0, 10000]");
-	// |I| stays under ~20 log units for 8-bit input; the bound keeps the sums in 32 bits too.
-	if (!std::isfinite(offset) || std::abs(offset) > 100) bad("offset", offset, "must be in [-100, 100]");
-	if (!std::isfinite(knee_low) || knee_low < 0 || knee_low > 255) bad("knee_low", knee_low, "must be in [0,255]");
-	if (!std::isfinite(knee_high) || knee_high < 0 || knee_high > 255 || knee_high <= knee_low)
-		bad("knee_high", knee_high, "must be in [0,255] and above knee_low");
-	if (!(tail_slope_low > 0 && tail_slope_low <= 1)) bad("tail_slope_low", tail_slope_low, "must be in (0,1]");
-	if (!(tail_slope_high > 0 && tail_slope_high <= 1)) bad("tail_slope_high", tail_slope_high, "must be in (0,1]");
+	core::checkKeys(*this);	 // the ranges, declared with the keys (InvariantParamsSettings.cpp)
+	if (!(knee_high > knee_low)) throw std::invalid_argument("knee_high: must be above knee_low");
 	if (linearisation == Linearisation::Gamma && !(gamma > 0 && gamma < 10))
-		bad("gamma", gamma, "must be in (0,10)");
+		throw std::invalid_argument("gamma: must be in (0, 10) with linearisation = gamma");
 }
 
 std::string InvariantParams::asString() const

@@ -1,7 +1,7 @@
 /* ShadyLoc — InvariantParams read from and written to settings. One parser
  * for every place that names an invariant transform: the CFilterInvariant
  * section of a filter config, the [invariant] section of a VO config. */
-#include <shadyloc/core/Settings.h>
+#include <shadyloc/core/Options.h>
 #include <shadyloc/image/ColourTransforms.h>
 
 #include <ostream>
@@ -41,21 +41,8 @@ void InvariantParams::readFrom(core::SettingsSection& s)
 			s.fail(wl[0], e.what());
 		}
 	}
-	else
-	{
-		s.read("alpha", p.alpha);
-		s.read("beta", p.beta);
-	}
-	s.readChoice("channel_order", p.order, kOrders);
-	s.readChoice("linearisation", p.linearisation, kLinearisations);
-	s.read("gamma", p.gamma);
-	s.read("scale", p.scale);
-	p.offset = p.defaultOffset();
-	s.read("offset", p.offset);
-	s.read("knee_low", p.knee_low);
-	s.read("knee_high", p.knee_high);
-	s.read("tail_slope_low", p.tail_slope_low);
-	s.read("tail_slope_high", p.tail_slope_high);
+	core::readKeys(s, p);
+	if (!s.has("offset")) p.offset = p.defaultOffset();  // the default for the new alpha, beta
 	try
 	{
 		p.validate();
@@ -67,23 +54,28 @@ void InvariantParams::readFrom(core::SettingsSection& s)
 	*this = p;
 }
 
-void InvariantParams::writeTo(core::SettingsWriter& w) const
+void InvariantParams::keys(core::KeyVisitor& v)
 {
-	w.value("alpha", alpha, "I = log(R2) - alpha log(R1) - beta log(R3): weights of log(blue) and log(red)");
-	w.value("beta", beta);
-	w.value("channel_order", toString(order), "memory order of the colour input: bgr | rgb");
-	w.value("linearisation", toString(linearisation), "none | srgb | gamma");
-	w.value("gamma", gamma, "exponent with linearisation = gamma");
-	w.value("scale", scale, "8-bit mapping clamp(round(scale (I + offset))): grey levels per unit log response");
-	w.value("offset", offset, "[log units]");
-	w.value(
-		"knee_low", knee_low,
-		"compressed tails: g = scale (I + offset) is kept between the knees [grey levels], beyond them it runs at "
-		"the tail slopes (1 = linear mapping)");
-	w.value("knee_high", knee_high);
-	w.value("tail_slope_low", tail_slope_low);
-	w.value("tail_slope_high", tail_slope_high);
+	using core::Range;
+	v("alpha", alpha, "", Range::closed(0, 1), "I = log(R2) - alpha log(R1) - beta log(R3): weights of log(blue) and log(red)");
+	v("beta", beta, "", Range::closed(0, 1.5), "");
+	v.choice("channel_order", order, kOrders, "memory order of the colour input: bgr | rgb");
+	v.choice("linearisation", linearisation, kLinearisations, "none | srgb | gamma");
+	v("gamma", gamma, "", Range::any(), "exponent with linearisation = gamma");
+	// The upper bound keeps the fixed-point sums of InvariantTransform in 32 bits.
+	v("scale", scale, "", Range::openClosed(0, 10000),
+	  "8-bit mapping clamp(round(scale (I + offset))): grey levels per unit log response");
+	// |I| stays under ~20 log units for 8-bit input; the bound keeps the sums in 32 bits too.
+	v("offset", offset, "log units", Range::closed(-100, 100), "");
+	v("knee_low", knee_low, "", Range::closed(0, 255),
+	  "compressed tails: g = scale (I + offset) is kept between the knees [grey levels], beyond them it runs at "
+	  "the tail slopes (1 = linear mapping)");
+	v("knee_high", knee_high, "", Range::closed(0, 255), "");
+	v("tail_slope_low", tail_slope_low, "", Range::openClosed(0, 1), "");
+	v("tail_slope_high", tail_slope_high, "", Range::openClosed(0, 1), "");
 }
+
+void InvariantParams::writeTo(core::SettingsWriter& w) const { core::writeKeys(w, *this); }
 
 void InvariantParams::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& section)
 {

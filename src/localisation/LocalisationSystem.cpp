@@ -1,6 +1,7 @@
 /* ShadyLoc — the combined localisation system (VO prediction, parallel
  * localisers, switching policy, global search). */
-#include <shadyloc/core/Settings.h>
+#include <shadyloc/core/Options.h>
+#include <shadyloc/core/Units.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/vo/ChannelOptions.h>
 
@@ -19,9 +20,9 @@ using geometry::TPoseWithCov;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180.0;
+using core::kDeg;
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+using core::msSince;
 
 Matrix6d diagCov(double sm, double sdeg)
 {
@@ -29,21 +30,6 @@ Matrix6d diagCov(double sm, double sdeg)
 	const double sr = sdeg * kDeg;
 	c.diagonal() << sm * sm, sm * sm, sm * sm, sr * sr, sr * sr, sr * sr;
 	return c;
-}
-
-std::vector<std::string> splitWords(const std::string& s)
-{
-	std::vector<std::string> out;
-	std::string w;
-	for (const char c : s + " ")
-		if (c == ' ' || c == ',' || c == '\t')
-		{
-			if (!w.empty()) out.push_back(w);
-			w.clear();
-		}
-		else
-			w += c;
-	return out;
 }
 
 /** Runs a() and b() on two threads when parallel, else one after the other
@@ -73,103 +59,62 @@ void both(bool parallel, A&& a, B&& b)
 }  // namespace
 
 // ---- options -----------------------------------------------------------------------
-void TSystemOptions::load(const mrpt::config::CConfigFileBase& c, const std::string& s)
+void TSystemOptions::keys(core::KeyVisitor& v)
 {
-	core::SettingsSection r(c, s);
-	if (r.has("localisers"))
-	{
-		localisers = splitWords(r.text("localisers"));
-		if (localisers.empty()) r.fail("localisers", "names no localiser (mono, invariant, ...)");
-	}
-	r.read("vo_channel", vo_channel);
-	r.read("vo_fallback_channel", vo_fallback_channel);
-	r.read("threads", threads);
-	r.read("vo_cov_scale", vo_cov_scale);
-	r.read("vo_lost_sigma_m", vo_lost_sigma_m);
-	r.read("vo_lost_sigma_deg", vo_lost_sigma_deg);
-	r.read("vo_sigma_m_per_m", track.drift_m_per_m);
-	r.read("vo_sigma_deg_per_m", track.drift_deg_per_m);
-	r.read("confirmed_max_sigma_m", track.confirmed_max_sigma_m);
-	r.read("relocalise_after_frames", track.relocalise_after_frames);
-	r.read("relocalise_window_m", track.relocalise_window_m);
-	r.read("relocalise_max_angle_deg", track.relocalise_max_angle_deg);
-	r.read("relocalise_at_dead_reckoning", track.relocalise_at_dead_reckoning);
-	r.read("fuse_prediction", track.fuse_prediction);
-	r.read("cross_check_fixes", track.cross_check_fixes);
-	r.read("confirmed_track_outranks_places", track.confirmed_track_outranks_places);
-	r.read("global_search_after_frames", track.global_search_after_frames);
-	r.read("seed_with_unconfirmed", track.seed_with_unconfirmed);
-	r.read("global_sigma_m", track.global_sigma_m);
-	r.read("global_sigma_deg", track.global_sigma_deg);
-	r.finish();
-	try
-	{
-		validate();
-	}
-	catch (const std::exception& e)
-	{
-		throw core::SettingsError(r.where() + " " + e.what());
-	}
+	using core::Range;
+	v("localisers", localisers, "", Range::any(), "policy order: the first with an accepted fix is used");
+	v("vo_channel", vo_channel, "", Range::any(), "the live VO that predicts for every localiser");
+	v("vo_fallback_channel", vo_fallback_channel, "", Range::any(),
+	  "a second live VO whose step is used where vo_channel's could not be measured (\"\" = none; runs only "
+	  "when the channel is a localiser)");
+	v("threads", threads, "", Range::atLeast(1), "");
+	v("vo_cov_scale", vo_cov_scale, "", Range::atLeast(1), "");
+	v("vo_lost_sigma_m", vo_lost_sigma_m, "m", Range::above(0), "");
+	v("vo_lost_sigma_deg", vo_lost_sigma_deg, "deg", Range::above(0), "");
+	v("vo_sigma_m_per_m", track.drift_m_per_m, "m/m", Range::atLeast(0), "drift: sigma per metre since the last fix");
+	v("vo_sigma_deg_per_m", track.drift_deg_per_m, "deg/m", Range::atLeast(0), "");
+	v("confirmed_max_sigma_m", track.confirmed_max_sigma_m, "m", Range::above(0),
+	  "the track is a confirmed place while sigma is below");
+	v("relocalise_after_frames", track.relocalise_after_frames, "frames", Range::atLeast(1),
+	  "without a fix this long, search around dead reckoning");
+	v("relocalise_window_m", track.relocalise_window_m, "m", Range::above(0),
+	  "... this far along the chain on both sides, and as near in the map frame");
+	v("relocalise_max_angle_deg", track.relocalise_max_angle_deg, "deg", Range::openClosed(0, 180),
+	  "... a keyframe of another segment facing within this");
+	v("relocalise_at_dead_reckoning", track.relocalise_at_dead_reckoning, "", Range::any(),
+	  "... first matching each candidate where dead reckoning projects it, warped");
+	v("fuse_prediction", track.fuse_prediction, "", Range::any(),
+	  "while the track is confirmed, a fix is the solve fused with the prediction");
+	v("cross_check_fixes", track.cross_check_fixes, "", Range::any(),
+	  "where the localisers' fixes of a frame disagree, the most certain is used");
+	v("confirmed_track_outranks_places", track.confirmed_track_outranks_places, "", Range::any(),
+	  "a place that is no fix replaces a confirmed track only when the more certain");
+	v("global_search_after_frames", track.global_search_after_frames, "frames", Range::any(),
+	  "... and the whole map after this");
+	v("seed_with_unconfirmed", track.seed_with_unconfirmed, "", Range::any(),
+	  "a consistent but unconfirmed solve narrows the next search (never a fix, never validates)");
+	v("global_sigma_m", track.global_sigma_m, "m", Range::atLeast(0), "");
+	v("global_sigma_deg", track.global_sigma_deg, "deg", Range::atLeast(0), "");
 }
 
-void TSystemOptions::dump(std::ostream& out) const
-{
-	core::SettingsWriter w(out);
-	std::string l;
-	for (const auto& x : localisers) l += (l.empty() ? "" : " ") + x;
-	w.value("localisers", l, "policy order: the first with an accepted fix is used");
-	w.value("vo_channel", vo_channel, "the live VO that predicts for every localiser");
-	w.value("vo_fallback_channel", vo_fallback_channel,
-			"a second live VO whose step is used where vo_channel's could not be measured (\"\" = none; runs only "
-			"when the channel is a localiser)");
-	w.value("threads", threads);
-	w.value("vo_cov_scale", vo_cov_scale);
-	w.value("vo_lost_sigma_m", vo_lost_sigma_m, "[m]");
-	w.value("vo_lost_sigma_deg", vo_lost_sigma_deg, "[deg]");
-	w.value("vo_sigma_m_per_m", track.drift_m_per_m, "drift: sigma per metre since the last fix [m/m]");
-	w.value("vo_sigma_deg_per_m", track.drift_deg_per_m, "[deg/m]");
-	w.value("confirmed_max_sigma_m", track.confirmed_max_sigma_m, "the track is a confirmed place while sigma is below [m]");
-	w.value("relocalise_after_frames", track.relocalise_after_frames, "without a fix this long, search around dead reckoning [frames]");
-	w.value("relocalise_window_m", track.relocalise_window_m, "... this far along the chain on both sides, and as near in the map frame [m]");
-	w.value("relocalise_max_angle_deg", track.relocalise_max_angle_deg, "... a keyframe of another segment facing within this [deg]");
-	w.value("relocalise_at_dead_reckoning", track.relocalise_at_dead_reckoning, "... first matching each candidate where dead reckoning projects it, warped");
-	w.value("fuse_prediction", track.fuse_prediction, "while the track is confirmed, a fix is the solve fused with the prediction");
-	w.value("cross_check_fixes", track.cross_check_fixes, "where the localisers' fixes of a frame disagree, the most certain is used");
-	w.value(
-		"confirmed_track_outranks_places", track.confirmed_track_outranks_places,
-		"a place that is no fix replaces a confirmed track only when the more certain");
-	w.value("global_search_after_frames", track.global_search_after_frames, "... and the whole map after this [frames]");
-	w.value("seed_with_unconfirmed", track.seed_with_unconfirmed,
-			"a consistent but unconfirmed solve narrows the next search (never a fix, never validates)");
-	w.value("global_sigma_m", track.global_sigma_m, "[m]");
-	w.value("global_sigma_deg", track.global_sigma_deg, "[deg]");
-}
+void TSystemOptions::load(const mrpt::config::CConfigFileBase& c, const std::string& s) { core::loadKeys(*this, c, s); }
+
+void TSystemOptions::dump(std::ostream& out) const { core::dumpKeys(*this, out); }
 
 void TSystemOptions::validate() const
 {
 	auto need = [](bool ok, const char* key, const char* what) {
 		if (!ok) throw std::invalid_argument(std::string(key) + ": " + what);
 	};
-	need(!localisers.empty(), "localisers", "at least one");
+	need(!localisers.empty(), "localisers", "names no localiser (mono, invariant, ...)");
 	for (size_t i = 0; i < localisers.size(); i++)
 		for (size_t j = i + 1; j < localisers.size(); j++)
 			need(localisers[i] != localisers[j], "localisers", "a localiser named twice");
 	need(!vo_channel.empty(), "vo_channel", "must name a channel");
 	need(vo_fallback_channel != vo_channel, "vo_fallback_channel", "must differ from vo_channel (or be empty)");
-	need(threads >= 1, "threads", "must be >= 1");
-	need(vo_cov_scale >= 1, "vo_cov_scale", "must be >= 1");
-	need(vo_lost_sigma_m > 0, "vo_lost_sigma_m", "must be > 0");
-	need(vo_lost_sigma_deg > 0, "vo_lost_sigma_deg", "must be > 0");
-	need(track.drift_m_per_m >= 0, "vo_sigma_m_per_m", "must be >= 0");
-	need(track.drift_deg_per_m >= 0, "vo_sigma_deg_per_m", "must be >= 0");
-	need(track.confirmed_max_sigma_m > 0, "confirmed_max_sigma_m", "must be > 0");
-	need(track.relocalise_after_frames >= 1, "relocalise_after_frames", "must be >= 1");
-	need(track.relocalise_window_m > 0, "relocalise_window_m", "must be > 0");
-	need(track.relocalise_max_angle_deg > 0 && track.relocalise_max_angle_deg <= 180, "relocalise_max_angle_deg", "must be in (0, 180] [deg]");
+	core::checkKeys(*this);
 	need(track.global_search_after_frames >= track.relocalise_after_frames, "global_search_after_frames",
 		 "must be >= relocalise_after_frames");
-	need(track.global_sigma_m >= 0, "global_sigma_m", "must be >= 0");
-	need(track.global_sigma_deg >= 0, "global_sigma_deg", "must be >= 0");
 }
 
 // ---- the update ------------------------------------------------------------------------

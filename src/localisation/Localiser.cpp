@@ -5,12 +5,13 @@
  * the system's per-frame record turned into a MOLA-shaped update. No
  * localisation logic here. */
 #include <shadyloc/Localiser.h>
-#include <shadyloc/core/Settings.h>
+#include <shadyloc/core/Options.h>
 #include <shadyloc/geometry/PoseCovariance.h>
 #include <shadyloc/filters/ChannelFrameSource.h>
 #include <shadyloc/io/StereoFrameSource.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/localisation/LocaliseRun.h>
+#include <shadyloc/localisation/LocaliserAppKeys.h>
 
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/obs/CObservationStereoImages.h>
@@ -70,16 +71,24 @@ std::string toString(LocalisationStatus s)
 }
 
 // ---- options ------------------------------------------------------------------------------
+void localisation::TLocaliserAppKeys::keys(core::KeyVisitor& v)
+{
+	using core::Range;
+	v("sensor_label", sensor_label, "", Range::any(),
+	  "the live camera (its colour label; its channels' observations are labelled `<sensor_label><suffix>`); "
+	  "\"\" = the first colour stereo observation not labelled as one of the system's channels, or the camera of "
+	  "the first channel observation");
+	v("start_keyframe", start_keyframe, "", Range::atLeast(-1),
+	  ">= 0: start near this map keyframe instead of by a search of the whole map (-1)");
+}
+
 void LocaliserOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& cfg, const std::string& section)
 {
 	source = nameOf(cfg);
 	if (!section.empty() && cfg.sectionExists(section))
 	{
-		core::SettingsSection r(cfg, section);
-		r.read("sensor_label", sensor_label);
-		r.read("start_keyframe", start_keyframe);
-		r.finish();
-		if (start_keyframe < -1) r.fail("start_keyframe", "must be a keyframe id >= 0, or -1 to search the whole map");
+		localisation::TLocaliserAppKeys app{sensor_label, start_keyframe};
+		core::loadKeys(app, cfg, section);
 	}
 	mrpt::config::CConfigFileMemory sys;
 	copySections(cfg, sys, section);
@@ -93,8 +102,10 @@ void LocaliserOptions::saveToConfigFile(mrpt::config::CConfigFileBase& cfg, cons
 {
 	if (!section.empty())
 	{
-		cfg.write(section, "sensor_label", sensor_label);
-		cfg.write(section, "start_keyframe", start_keyframe);
+		// The keys only read through it.
+		auto& self = const_cast<LocaliserOptions&>(*this);
+		for (const auto& [key, text] : core::keyTexts(localisation::TLocaliserAppKeys{self.sensor_label, self.start_keyframe}))
+			cfg.write(section, key, text);
 	}
 	copySections(mrpt::config::CConfigFileMemory(system_config), cfg, "");
 }

@@ -1,6 +1,7 @@
 /* ShadyLoc — the localiser's core for a single image (2D-3D) against a
  * stereo keyframe (include/shadyloc/localisation/MonoLocaliser.h). */
-#include <shadyloc/core/Settings.h>
+#include <shadyloc/core/Options.h>
+#include <shadyloc/core/Units.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/localisation/MonoLocaliser.h>
 
@@ -27,7 +28,7 @@ using geometry::Vector6d;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180.0;
+using core::kDeg;
 
 Eigen::Matrix3d skew(const Eigen::Vector3d& v)
 {
@@ -117,95 +118,42 @@ void extractImageFeatures(
 }
 
 // ---- options ---------------------------------------------------------------------------------------
-void TMonoLocaliserOptions::load(const mrpt::config::CConfigFileBase& c, const std::string& s)
+void TMonoLocaliserOptions::keys(core::KeyVisitor& v)
 {
-	core::SettingsSection r(c, s);
-	r.read("corners_per_cell", corners_per_cell);
-	r.read("max_hamming", max_hamming);
-	r.read("match_ratio", match_ratio);
-	r.read("mutual", mutual);
-	r.read("gate_chi2", gate_chi2);
-	r.read("gate_min_px", gate_min_px);
-	r.read("gate_max_px", gate_max_px);
-	r.read("max_overflow_fraction", max_overflow_fraction);
-	r.read("refine_min_zncc", refine_min_zncc);
-	r.read("refine_radius_px", refine_radius_px);
-	r.read("refine_iterations", refine_iterations);
-	r.read("ransac_threshold_px", ransac_threshold_px);
-	r.read("ransac_iterations", ransac_iterations);
-	r.read("ransac_confidence", ransac_confidence);
-	r.read("sigma_px", sigma_px);
-	r.read("huber_k", huber_k);
-	r.read("max_iterations", max_iterations);
-	r.read("cov_scale", cov_scale);
-	r.read("min_matches", min_matches);
-	r.read("min_inliers", min_inliers);
-	r.read("max_sigma_m", max_sigma_m);
-	r.read("max_sigma_deg", max_sigma_deg);
-	r.finish();
-	try
-	{
-		validate();
-	}
-	catch (const std::exception& e)
-	{
-		throw core::SettingsError(r.where() + " " + e.what());
-	}
+	using core::Range;
+	v("corners_per_cell", corners_per_cell, "", Range::closed(1, 10000), "FAST corners kept per grid bucket");
+	v("max_hamming", max_hamming, "bits of 256", Range::closed(0, 256), "");
+	v("match_ratio", match_ratio, "", Range::openClosed(0, 1), "best < ratio * second best");
+	v("mutual", mutual, "", Range::any(), "no prior: mutual best matches only");
+	v("gate_chi2", gate_chi2, "", Range::above(0), "with a prior: chi^2, 2 dof");
+	v("gate_min_px", gate_min_px, "px", Range::above(0), "");
+	v("gate_max_px", gate_max_px, "px", Range::atMost(10000), "ceiling: not searched beyond");
+	v("max_overflow_fraction", max_overflow_fraction, "", Range::closed(0, 1), "");
+	v("refine_min_zncc", refine_min_zncc, "", Range::closed(-1, 1), "");
+	v("refine_radius_px", refine_radius_px, "px", Range::closed(0, 20), "");
+	v("refine_iterations", refine_iterations, "", Range::closed(0, 50), "");
+	v("ransac_threshold_px", ransac_threshold_px, "px", Range::above(0), "PnP RANSAC inlier bound");
+	v("ransac_iterations", ransac_iterations, "", Range::closed(1, 1e6), "");
+	v("ransac_confidence", ransac_confidence, "", Range::open(0, 1), "");
+	v("sigma_px", sigma_px, "px", Range::above(0), "");
+	v("huber_k", huber_k, "sigmas", Range::above(0), "");
+	v("max_iterations", max_iterations, "", Range::closed(1, 1000), "Gauss-Newton iterations");
+	v("cov_scale", cov_scale, "", Range::above(0), "");
+	// PnP needs four points.
+	v("min_matches", min_matches, "", Range::atLeast(4), "");
+	v("min_inliers", min_inliers, "", Range::atLeast(4), "");
+	v("max_sigma_m", max_sigma_m, "m", Range::above(0), "");
+	v("max_sigma_deg", max_sigma_deg, "deg", Range::above(0), "");
 }
 
-void TMonoLocaliserOptions::dump(std::ostream& out) const
-{
-	core::SettingsWriter w(out);
-	w.value("corners_per_cell", corners_per_cell, "FAST corners kept per grid bucket");
-	w.value("max_hamming", max_hamming, "[bits of 256]");
-	w.value("match_ratio", match_ratio, "best < ratio * second best");
-	w.value("mutual", mutual, "no prior: mutual best matches only");
-	w.value("gate_chi2", gate_chi2, "with a prior: chi^2, 2 dof");
-	w.value("gate_min_px", gate_min_px, "[px]");
-	w.value("gate_max_px", gate_max_px, "ceiling: not searched beyond [px]");
-	w.value("max_overflow_fraction", max_overflow_fraction);
-	w.value("refine_min_zncc", refine_min_zncc);
-	w.value("refine_radius_px", refine_radius_px, "[px]");
-	w.value("refine_iterations", refine_iterations);
-	w.value("ransac_threshold_px", ransac_threshold_px, "PnP RANSAC inlier bound [px]");
-	w.value("ransac_iterations", ransac_iterations);
-	w.value("ransac_confidence", ransac_confidence);
-	w.value("sigma_px", sigma_px, "[px]");
-	w.value("huber_k", huber_k, "[sigmas]");
-	w.value("max_iterations", max_iterations, "Gauss-Newton iterations");
-	w.value("cov_scale", cov_scale);
-	w.value("min_matches", min_matches);
-	w.value("min_inliers", min_inliers);
-	w.value("max_sigma_m", max_sigma_m, "[m]");
-	w.value("max_sigma_deg", max_sigma_deg, "[deg]");
-}
+void TMonoLocaliserOptions::load(const mrpt::config::CConfigFileBase& c, const std::string& s) { core::loadKeys(*this, c, s); }
+
+void TMonoLocaliserOptions::dump(std::ostream& out) const { core::dumpKeys(*this, out); }
 
 void TMonoLocaliserOptions::validate() const
 {
-	const auto need = [](bool ok, const char* key, const char* what) {
-		if (!ok) throw std::invalid_argument(std::string(key) + ": " + what);
-	};
-	need(corners_per_cell >= 1 && corners_per_cell <= 10000, "corners_per_cell", "must be in [1, 10000]");
-	need(max_hamming >= 0 && max_hamming <= 256, "max_hamming", "must be in [0, 256]");
-	need(match_ratio > 0 && match_ratio <= 1, "match_ratio", "must be in (0, 1]");
-	need(gate_chi2 > 0, "gate_chi2", "must be > 0");
-	need(gate_min_px > 0 && gate_min_px <= gate_max_px, "gate_min_px", "must be > 0 and <= gate_max_px");
-	need(gate_max_px <= 10000, "gate_max_px", "must be <= 10000");
-	need(max_overflow_fraction >= 0 && max_overflow_fraction <= 1, "max_overflow_fraction", "must be in [0, 1]");
-	need(refine_min_zncc >= -1 && refine_min_zncc <= 1, "refine_min_zncc", "must be in [-1, 1]");
-	need(refine_radius_px >= 0 && refine_radius_px <= 20, "refine_radius_px", "must be in [0, 20]");
-	need(refine_iterations >= 0 && refine_iterations <= 50, "refine_iterations", "must be in [0, 50]");
-	need(ransac_threshold_px > 0, "ransac_threshold_px", "must be > 0");
-	need(ransac_iterations >= 1 && ransac_iterations <= 1000000, "ransac_iterations", "must be in [1, 1e6]");
-	need(ransac_confidence > 0 && ransac_confidence < 1, "ransac_confidence", "must be in (0, 1)");
-	need(sigma_px > 0, "sigma_px", "must be > 0");
-	need(huber_k > 0, "huber_k", "must be > 0");
-	need(max_iterations >= 1 && max_iterations <= 1000, "max_iterations", "must be in [1, 1000]");
-	need(cov_scale > 0, "cov_scale", "must be > 0");
-	need(min_matches >= 4, "min_matches", "must be >= 4 (PnP needs four points)");
-	need(min_inliers >= 4, "min_inliers", "must be >= 4");
-	need(max_sigma_m > 0, "max_sigma_m", "must be > 0");
-	need(max_sigma_deg > 0, "max_sigma_deg", "must be > 0");
+	core::checkKeys(*this);
+	if (!(gate_min_px <= gate_max_px)) throw std::invalid_argument("gate_min_px: must be <= gate_max_px");
 }
 
 TMonoLocaliserOptions monoLocaliserOptionsFor(

@@ -1,5 +1,6 @@
 /* ShadyLoc — the oracle bound of a localisation run (see Oracle.h). */
 #include <shadyloc/localisation/Oracle.h>
+#include <shadyloc/core/Units.h>
 
 #include <algorithm>
 #include <cmath>
@@ -9,7 +10,7 @@ namespace shadyloc::localisation
 {
 namespace
 {
-constexpr double kDeg = M_PI / 180.0;
+using core::kDeg;
 
 double axesAngleDeg(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B)
 {

@@ -1,5 +1,6 @@
 /* ShadyLoc — one localiser (active search, solve, failure test, global search). */
 #include <shadyloc/localisation/StereoLocaliser.h>
+#include <shadyloc/core/Units.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -19,12 +20,8 @@ using geometry::Vector6d;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180.0;
-
-double msSince(std::chrono::steady_clock::time_point t0)
-{
-	return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
+using core::kDeg;
+using core::msSince;
 
 double angleBetweenAxesDeg(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B)
 {

@@ -1,5 +1,6 @@
 /* ShadyLoc — the system's track and switching policy (see Track.h). */
 #include <shadyloc/localisation/Track.h>
+#include <shadyloc/core/Units.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -14,7 +15,7 @@ using geometry::TPoseWithCov;
 
 namespace
 {
-constexpr double kDeg = M_PI / 180.0;
+using core::kDeg;
 
 /** p composed with the step (its covariance plus `drift`). */
 TKeyframePose propagate(const TKeyframePose& p, const TMotion& m, const Matrix6d& drift)

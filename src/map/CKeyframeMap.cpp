@@ -2,7 +2,7 @@
 #include "ByteBuffer.h"
 
 #include <shadyloc/core/Errors.h>
-#include <shadyloc/core/Settings.h>
+#include <shadyloc/core/Options.h>
 #include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/map/CKeyframeMap.h>
 
@@ -306,89 +306,45 @@ TKeyframeMapOptions getOptions(ByteReader& r, uint8_t version)
 // ============================================================================
 // Options
 // ============================================================================
+void TKeyframeMapOptions::keys(core::KeyVisitor& v)
+{
+	using core::Range;
+	v("kf_spacing_m", kf_spacing_m, "m", Range::atLeast(0), "a new map keyframe after this path distance along the VO chain");
+	v("kf_spacing_deg", kf_spacing_deg, "deg", Range::openClosed(0, 180), "... or this change of heading");
+	v("landmarks_per_keyframe", landmarks_per_keyframe, "", Range::atLeast(0),
+	  "kept per keyframe and channel, the best (landmark_selection) per image bucket first; 0 = all");
+	v.choice("landmark_selection", landmark_selection,
+			 {{"strongest", LandmarkSelection::Strongest}, {"reobserved", LandmarkSelection::Reobserved}},
+			 "strongest (FAST response) | reobserved (re-found most often by the survey's own frames)");
+	v("reobservation_window_m", reobservation_window_m, "m", Range::above(0),
+	  "reobserved: survey frames within this path distance of the keyframe are matched");
+	v("reobservation_radius_px", reobservation_radius_px, "px", Range::closed(1, 200),
+	  "reobserved: search circle around a landmark's projection at the VO pose");
+	v("min_reobservations", min_reobservations, "", Range::atLeast(0),
+	  "reobserved: landmarks re-found in fewer frames are dropped (0 = as the budget allows)");
+	v("selection_grid_cols", selection_grid_cols, "", Range::closed(1, 256), "landmark selection buckets across the image");
+	v("selection_grid_rows", selection_grid_rows, "", Range::closed(1, 256), "... and down the image");
+	v("patch_bits", patch_bits, "", Range::closed(1, 8), "bits kept of each stored patch pixel, 1..8 (fewer compress better)");
+	v("surface_normals", surface_normals, "", Range::any(),
+	  "store a surface normal per landmark (patches warped to the live viewpoint)");
+	v("normal_window_px", normal_window_px, "px", Range::closed(2, 32),
+	  "normals: plane fitted to the (2r+1)^2 dense disparities around a landmark");
+	v("compression_level", compression_level, "", Range::closed(1, 22), "zstd level 1 (fast) .. 22 (small)");
+	v("index_cell_m", index_cell_m, "m", Range::above(0), "cell of the spatial hash grid over camera centres");
+	v("draw_landmarks", draw_landmarks, "", Range::any(), "drawings show landmarks, coloured by channel");
+	v("draw_landmark_max_depth_m", draw_landmark_max_depth_m, "m", Range::above(0), "farther landmarks are not drawn");
+	v("draw_frame_every_m", draw_frame_every_m, "m", Range::atLeast(0),
+	  "a keyframe marker (chevron) at most this often along the path");
+}
+
 void TKeyframeMapOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	core::SettingsSection r(c, s);
-	r.read("kf_spacing_m", kf_spacing_m);
-	r.read("kf_spacing_deg", kf_spacing_deg);
-	r.read("landmarks_per_keyframe", landmarks_per_keyframe);
-	r.readChoice<LandmarkSelection>(
-		"landmark_selection", landmark_selection,
-		{{"strongest", LandmarkSelection::Strongest}, {"reobserved", LandmarkSelection::Reobserved}});
-	r.read("reobservation_window_m", reobservation_window_m);
-	r.read("reobservation_radius_px", reobservation_radius_px);
-	r.read("min_reobservations", min_reobservations);
-	r.read("selection_grid_cols", selection_grid_cols);
-	r.read("selection_grid_rows", selection_grid_rows);
-	r.read("patch_bits", patch_bits);
-	r.read("surface_normals", surface_normals);
-	r.read("normal_window_px", normal_window_px);
-	r.read("compression_level", compression_level);
-	r.read("index_cell_m", index_cell_m);
-	r.read("draw_landmarks", draw_landmarks);
-	r.read("draw_landmark_max_depth_m", draw_landmark_max_depth_m);
-	r.read("draw_frame_every_m", draw_frame_every_m);
-	r.finish();
-	try
-	{
-		validate();
-	}
-	catch (const std::exception& e)
-	{
-		throw core::SettingsError(r.where() + " " + e.what());
-	}
+	core::loadKeys(*this, c, s);
 }
 
-void TKeyframeMapOptions::dumpToTextStream(std::ostream& out) const
-{
-	core::SettingsWriter w(out);
-	w.value("kf_spacing_m", kf_spacing_m, "a new map keyframe after this path distance along the VO chain [m]");
-	w.value("kf_spacing_deg", kf_spacing_deg, "... or this change of heading [deg]");
-	w.value("landmarks_per_keyframe", landmarks_per_keyframe,
-			"kept per keyframe and channel, the best (landmark_selection) per image bucket first; 0 = all");
-	w.value("landmark_selection", toString(landmark_selection),
-			"strongest (FAST response) | reobserved (re-found most often by the survey's own frames)");
-	w.value("reobservation_window_m", reobservation_window_m,
-			"reobserved: survey frames within this path distance of the keyframe are matched [m]");
-	w.value("reobservation_radius_px", reobservation_radius_px,
-			"reobserved: search circle around a landmark's projection at the VO pose [px]");
-	w.value("min_reobservations", min_reobservations,
-			"reobserved: landmarks re-found in fewer frames are dropped (0 = as the budget allows)");
-	w.value("selection_grid_cols", selection_grid_cols, "landmark selection buckets across the image");
-	w.value("selection_grid_rows", selection_grid_rows, "... and down the image");
-	w.value("patch_bits", patch_bits, "bits kept of each stored patch pixel, 1..8 (fewer compress better)");
-	w.value("surface_normals", surface_normals, "store a surface normal per landmark (patches warped to the live viewpoint)");
-	w.value("normal_window_px", normal_window_px, "normals: plane fitted to the (2r+1)^2 dense disparities around a landmark [px]");
-	w.value("compression_level", compression_level, "zstd level 1 (fast) .. 22 (small)");
-	w.value("index_cell_m", index_cell_m, "cell of the spatial hash grid over camera centres [m]");
-	w.value("draw_landmarks", draw_landmarks, "drawings show landmarks, coloured by channel");
-	w.value("draw_landmark_max_depth_m", draw_landmark_max_depth_m, "farther landmarks are not drawn [m]");
-	w.value("draw_frame_every_m", draw_frame_every_m, "a keyframe marker (chevron) at most this often along the path [m]");
-}
+void TKeyframeMapOptions::dumpToTextStream(std::ostream& out) const { core::dumpKeys(*this, out); }
 
-void TKeyframeMapOptions::validate() const
-{
-	auto need = [](bool ok, const char* what) {
-		if (!ok) throw std::invalid_argument(std::string("keyframe map option ") + what);
-	};
-	need(kf_spacing_m >= 0 && std::isfinite(kf_spacing_m), "kf_spacing_m must be >= 0 [m]");
-	need(kf_spacing_deg > 0 && kf_spacing_deg <= 180, "kf_spacing_deg must be in (0, 180] [deg]");
-	need(landmarks_per_keyframe >= 0, "landmarks_per_keyframe must be >= 0 (0 = all)");
-	need(landmark_selection == LandmarkSelection::Strongest || landmark_selection == LandmarkSelection::Reobserved,
-		 "landmark_selection must be strongest or reobserved");
-	need(reobservation_window_m > 0 && std::isfinite(reobservation_window_m), "reobservation_window_m must be > 0 [m]");
-	need(reobservation_radius_px >= 1 && reobservation_radius_px <= 200,
-		 "reobservation_radius_px must be in [1, 200] [px]");
-	need(min_reobservations >= 0, "min_reobservations must be >= 0");
-	need(selection_grid_cols >= 1 && selection_grid_cols <= 256, "selection_grid_cols must be in 1..256");
-	need(selection_grid_rows >= 1 && selection_grid_rows <= 256, "selection_grid_rows must be in 1..256");
-	need(patch_bits >= 1 && patch_bits <= 8, "patch_bits must be in 1..8");
-	need(normal_window_px >= 2 && normal_window_px <= 32, "normal_window_px must be in 2..32 [px]");
-	need(compression_level >= 1 && compression_level <= 22, "compression_level must be in 1..22");
-	need(index_cell_m > 0 && std::isfinite(index_cell_m), "index_cell_m must be > 0 [m]");
-	need(draw_landmark_max_depth_m > 0, "draw_landmark_max_depth_m must be > 0 [m]");
-	need(draw_frame_every_m >= 0, "draw_frame_every_m must be >= 0 [m]");
-}
+void TKeyframeMapOptions::validate() const { core::checkKeys(*this); }
 
 std::string shadyloc::toString(TKeyframeMapOptions::LandmarkSelection s)
 {

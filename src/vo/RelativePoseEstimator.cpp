@@ -1,5 +1,6 @@
 /* ShadyLoc — the relative-pose estimator (stereo VO stage, reused by the localisers). */
 #include <shadyloc/vo/RelativePoseEstimator.h>
+#include <shadyloc/core/Units.h>
 
 #include <chrono>
 #include <stdexcept>
@@ -10,10 +11,7 @@ using Clock = std::chrono::steady_clock;
 
 namespace
 {
-double msSince(Clock::time_point t0)
-{
-	return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+using core::msSince;
 }  // namespace
 
 std::string toString(RelativePoseStatus s)

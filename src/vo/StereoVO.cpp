@@ -1,5 +1,6 @@
 /* ShadyLoc — keyframe-based stereo VO: the composition of its stages. */
 #include <shadyloc/vo/StereoVO.h>
+#include <shadyloc/core/Units.h>
 
 #include <mrpt/core/exceptions.h>
 
@@ -16,10 +17,7 @@ using Clock = std::chrono::steady_clock;
 
 namespace
 {
-double msSince(Clock::time_point t0)
-{
-	return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
+using core::msSince;
 double rotationDeg(const Eigen::Isometry3d& T)
 {
 	return Eigen::AngleAxisd(T.linear()).angle() * 180.0 / M_PI;

@@ -1,5 +1,5 @@
 /* ShadyLoc — options of the stereo VO ([vo] in config/vo.ini). */
-#include <shadyloc/core/Settings.h>
+#include <shadyloc/core/Options.h>
 #include <shadyloc/vo/StereoVO.h>
 #include <shadyloc/vo/VOConfig.h>
 
@@ -23,105 +23,60 @@ static const std::vector<core::TRenamedKey> kRenamedVOKeys = {
 	{"max_step_translation", "max_step_translation_m"},
 };
 
-void TStereoVOOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
+void TStereoVOOptions::keys(core::KeyVisitor& v)
 {
-	core::SettingsSection r(c, s);
-	r.renamed(kRenamedVOKeys);
+	using core::Range;
+	v.renamed(kRenamedVOKeys);
 	// Read from [vo] by the commands: `channel` picks the channel (filters::channelFromConfig);
 	// `channel_order` moved to the channel's filter section and is refused there, naming it.
-	r.alsoKnown({"channel", "channel_order"});
-	r.read("search_radius_px", search_radius_px);
-	r.read("search_radius_lost_px", search_radius_lost_px);
-	r.read("max_hamming", max_hamming);
-	r.read("match_ratio", match_ratio);
-	r.read("refine_min_zncc", refine_min_zncc);
-	r.read("refine_radius_px", refine_radius);
-	r.read("refine_iterations", refine_iterations);
-	r.read("min_stereo", min_stereo);
-	r.read("min_matches", min_matches);
-	r.read("min_inliers", min_inliers);
-	r.read("near_min_disparity_px", near_min_disparity);
-	r.read("near_min_matches", near_min_matches);
-	r.read("ransac_threshold_px", ransac_threshold_px);
-	r.read("ransac_iterations", ransac_iterations);
-	r.read("sigma_px", sigma_px);
-	r.read("huber_k", huber_k);
-	r.read("kf_translation_m", kf_translation);
-	r.read("kf_rotation_deg", kf_rotation_deg);
-	r.read("kf_min_tracked_fraction", kf_min_tracked_fraction);
-	r.read("kf_min_inliers", kf_min_inliers);
-	r.read("max_step_translation_m", max_step_translation);
-	r.read("max_step_rotation_deg", max_step_rotation_deg);
-	r.read("max_lost_frames", max_lost_frames);
-	r.read("constant_velocity", constant_velocity);
-	r.read("two_view_ba", two_view_ba);
-	r.read("ransac_prediction", ransac_prediction);
-	r.read("ransac_prior_sigma_m", ransac_prior_sigma_m);
-	r.finish();
-	try
-	{
-		validate();
-	}
-	catch (const std::exception& e)
-	{
-		throw core::SettingsError(r.where() + " " + e.what());
-	}
+	v.alsoKnown({"channel", "channel_order"});
+	v("search_radius_px", search_radius_px, "px", Range::above(0), "BRIEF search window around each predicted projection");
+	v("search_radius_lost_px", search_radius_lost_px, "px", Range::any(), "window after a failure");
+	v("max_hamming", max_hamming, "bits of 256", Range::closed(1, 256), "largest BRIEF distance of a match");
+	v("match_ratio", match_ratio, "", Range::openClosed(0, 1), "best < ratio * second best distance");
+	v("refine_min_zncc", refine_min_zncc, "", Range::any(), "patch refinement correlation");
+	v("refine_radius_px", refine_radius, "px", Range::closed(0, 4), "");
+	v("refine_iterations", refine_iterations, "", Range::closed(0, 20), "Gauss-Newton steps, 0 = parabola only");
+	v("min_stereo", min_stereo, "", Range::any(), "");
+	v("min_matches", min_matches, "", Range::any(), "");
+	v("min_inliers", min_inliers, "", Range::atLeast(3), "");
+	v("near_min_disparity_px", near_min_disparity, "px", Range::atLeast(0),
+	  "far landmarks left out of the solve when enough near ones, 0 = off");
+	v("near_min_matches", near_min_matches, "", Range::any(), "");
+	v("ransac_threshold_px", ransac_threshold_px, "px", Range::above(0), "");
+	v("ransac_iterations", ransac_iterations, "", Range::atLeast(1), "");
+	v("sigma_px", sigma_px, "px", Range::above(0), "");
+	v("huber_k", huber_k, "sigmas", Range::above(0), "");
+	v("kf_translation_m", kf_translation, "m", Range::above(0), "");
+	v("kf_rotation_deg", kf_rotation_deg, "deg", Range::above(0), "");
+	v("kf_min_tracked_fraction", kf_min_tracked_fraction, "", Range::any(), "");
+	v("kf_min_inliers", kf_min_inliers, "", Range::any(), "");
+	v("max_step_translation_m", max_step_translation, "m", Range::above(0), "");
+	v("max_step_rotation_deg", max_step_rotation_deg, "deg", Range::above(0), "");
+	v("max_lost_frames", max_lost_frames, "", Range::atLeast(0), "");
+	v("constant_velocity", constant_velocity, "", Range::any(), "predict with the last motion (else identity)");
+	v("two_view_ba", two_view_ba, "", Range::any(), "solve by two-view bundle adjustment");
+	v("ransac_prediction", ransac_prediction, "", Range::any(), "the prediction is a RANSAC hypothesis");
+	v("ransac_prior_sigma_m", ransac_prior_sigma_m, "m", Range::atLeast(0),
+	  "preference for hypotheses near the prediction, 0 = off");
 }
 
-void TStereoVOOptions::dumpToTextStream(std::ostream& o) const
+void TStereoVOOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
 {
-	core::SettingsWriter w(o);
-	w.value("search_radius_px", search_radius_px, "BRIEF search window around each predicted projection [px]");
-	w.value("search_radius_lost_px", search_radius_lost_px, "window after a failure [px]");
-	w.value("max_hamming", max_hamming, "largest BRIEF distance of a match [bits of 256]");
-	w.value("match_ratio", match_ratio, "best < ratio * second best distance");
-	w.value("refine_min_zncc", refine_min_zncc, "patch refinement correlation");
-	w.value("refine_radius_px", refine_radius, "[px]");
-	w.value("refine_iterations", refine_iterations, "Gauss-Newton steps, 0 = parabola only");
-	w.value("min_stereo", min_stereo);
-	w.value("min_matches", min_matches);
-	w.value("min_inliers", min_inliers);
-	w.value("near_min_disparity_px", near_min_disparity,
-			"far landmarks left out of the solve when enough near ones, 0 = off [px]");
-	w.value("near_min_matches", near_min_matches);
-	w.value("ransac_threshold_px", ransac_threshold_px, "[px]");
-	w.value("ransac_iterations", ransac_iterations);
-	w.value("sigma_px", sigma_px, "[px]");
-	w.value("huber_k", huber_k, "[sigmas]");
-	w.value("kf_translation_m", kf_translation, "[m]");
-	w.value("kf_rotation_deg", kf_rotation_deg, "[deg]");
-	w.value("kf_min_tracked_fraction", kf_min_tracked_fraction);
-	w.value("kf_min_inliers", kf_min_inliers);
-	w.value("max_step_translation_m", max_step_translation, "[m]");
-	w.value("max_step_rotation_deg", max_step_rotation_deg, "[deg]");
-	w.value("max_lost_frames", max_lost_frames);
-	w.value("constant_velocity", constant_velocity, "predict with the last motion (else identity)");
-	w.value("two_view_ba", two_view_ba, "solve by two-view bundle adjustment");
-	w.value("ransac_prediction", ransac_prediction, "the prediction is a RANSAC hypothesis");
-	w.value("ransac_prior_sigma_m", ransac_prior_sigma_m,
-			"preference for hypotheses near the prediction, 0 = off [m]");
+	core::loadKeys(*this, c, s);
 }
+
+void TStereoVOOptions::dumpToTextStream(std::ostream& o) const { core::dumpKeys(*this, o); }
 
 void TStereoVOOptions::validate() const
 {
-	// Messages use the .ini key names.
-	auto bad = [](const std::string& w) { throw std::invalid_argument("option " + w); };
-	if (!(search_radius_px > 0) || search_radius_lost_px < search_radius_px)
-		bad("search_radius_px must be > 0 and <= search_radius_lost_px");
-	if (max_hamming < 1 || max_hamming > 256) bad("max_hamming must be in [1,256]");
-	if (!(match_ratio > 0 && match_ratio <= 1)) bad("match_ratio must be in (0,1]");
-	if (refine_radius < 0 || refine_radius > 4) bad("refine_radius_px must be in [0,4]");
-	if (refine_iterations < 0 || refine_iterations > 20) bad("refine_iterations must be in [0,20]");
-	if (min_inliers < 3 || min_matches < min_inliers) bad("need 3 <= min_inliers <= min_matches");
-	if (!(near_min_disparity >= 0) || near_min_matches < min_matches)
-		bad("near_min_disparity_px must be >= 0 and near_min_matches >= min_matches");
-	if (!(ransac_threshold_px > 0) || ransac_iterations < 1) bad("ransac_threshold_px/iterations must be > 0");
-	if (!(sigma_px > 0) || !(huber_k > 0)) bad("sigma_px and huber_k must be > 0");
-	if (!(kf_translation > 0) || !(kf_rotation_deg > 0)) bad("kf_translation_m/kf_rotation_deg must be > 0");
-	if (!(max_step_translation > 0) || !(max_step_rotation_deg > 0))
-		bad("max_step_translation_m/max_step_rotation_deg must be > 0");
-	if (max_lost_frames < 0) bad("max_lost_frames must be >= 0");
-	if (!(ransac_prior_sigma_m >= 0)) bad("ransac_prior_sigma_m must be >= 0 (0 = off)");
+	core::checkKeys(*this);
+	auto need = [](bool ok, const char* what) {
+		if (!ok) throw std::invalid_argument(what);
+	};
+	need(search_radius_lost_px >= search_radius_px, "search_radius_lost_px: must be >= search_radius_px");
+	need(min_matches >= min_inliers, "min_matches: must be >= min_inliers");
+	need(near_min_matches >= min_matches, "near_min_matches: must be >= min_matches");
 }
 
 // ---- the config file ------------------------------------------------------------

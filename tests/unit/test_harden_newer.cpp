@@ -87,10 +87,10 @@ long peakKb(const std::string& args, int* rc)
 // 0 was refused by the describer, naming neither key nor file.
 TEST(Settings, FeatureCountsAndBriefPatchRefusedNamingTheKey)
 {
-	EXPECT_NE(featureError("[features]\nmax_per_cell = 0\n").find("[features] option max_per_cell must be >= 1"), std::string::npos)
+	EXPECT_NE(featureError("[features]\nmax_per_cell = 0\n").find("[features] max_per_cell: must be >= 1"), std::string::npos)
 		<< featureError("[features]\nmax_per_cell = 0\n");
-	EXPECT_NE(featureError("[features]\nmax_per_cell_right = -1\n").find("max_per_cell_right must be >= 1"), std::string::npos);
-	EXPECT_NE(featureError("[features]\nbrief_patch_size_px = 0\n").find("[features] option brief_patch_size_px"), std::string::npos)
+	EXPECT_NE(featureError("[features]\nmax_per_cell_right = -1\n").find("max_per_cell_right: must be >= 1"), std::string::npos);
+	EXPECT_NE(featureError("[features]\nbrief_patch_size_px = 0\n").find("[features] brief_patch_size_px: must be in [8, 250]"), std::string::npos)
 		<< featureError("[features]\nbrief_patch_size_px = 0\n");
 	EXPECT_EQ(featureError("[features]\nmax_per_cell = 1\nbrief_patch_size_px = 8\n"), "");
 }
@@ -135,7 +135,7 @@ TEST(NewerChecks, LocaliseConfigErrorNamesFileAndLine)
 	EXPECT_EQ(test::runCommand(base + " -c " + dir + "/typo.ini", &out), 1) << out;
 	EXPECT_NE(out.find(dir + "/typo.ini:3: [localiser] min_inlier: unknown key"), std::string::npos) << out;
 	EXPECT_EQ(test::runCommand(base + " -c " + dir + "/cells.ini", &out), 1) << out;
-	EXPECT_NE(out.find(dir + "/cells.ini:3: [features] option max_per_cell must be >= 1"), std::string::npos) << out;
+	EXPECT_NE(out.find(dir + "/cells.ini:3: [features] max_per_cell: must be >= 1"), std::string::npos) << out;
 	EXPECT_FALSE(fs::exists(dir + "/o"));
 }
 

@@ -719,7 +719,7 @@ TEST(Settings, MapOptionsRoundTripWithEveryFieldChanged)
 	expectRefused([&] { load("[map]\nkf_spacing = 2\n"); }, {"[map] kf_spacing", "kf_spacing_m"}, "unit");
 	EXPECT_TRUE(load("[map]\ndraw_landmarks = true ; draw them\n").draw_landmarks);
 	expectRefused([&] { load("[map]\nlandmarks_per_keyframe = 12.5\n"); }, {"[map] landmarks_per_keyframe"}, "integer");
-	expectRefused([&] { load("[map]\ncompression_level = 30\n"); }, {"[map]", "compression_level must be in 1..22"}, "range");
+	expectRefused([&] { load("[map]\ncompression_level = 30\n"); }, {"[map] compression_level: must be in [1, 22]"}, "range");
 	expectRefused([&] { load("[map]\nlandmark_selection = best\n"); }, {"[map] landmark_selection", "reobserved"}, "choice");
 }
 

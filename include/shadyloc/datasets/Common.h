@@ -8,6 +8,11 @@
 #include <stdexcept>
 #include <string>
 
+namespace shadyloc::core
+{
+class KeyVisitor;
+}
+
 namespace shadyloc::datasets
 {
 /** Bad or inconsistent dataset input; what() names the file / frame at fault. */
@@ -26,8 +31,10 @@ struct TImportOptions : public mrpt::config::CLoadableOptions
 	size_t maxFrames = 0;  //!< import at most this many frames (0: all)
 	size_t progressEvery = 100;	 //!< log progress every this many frames (0: never)
 
+	void keys(core::KeyVisitor& v);  //!< every key, declared once (core/Options.h)
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
+	void validate() const;	//!< throws std::invalid_argument naming the key
 };
 
 /** What an import did. */

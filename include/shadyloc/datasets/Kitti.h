@@ -21,6 +21,11 @@
 #include <map>
 #include <string>
 
+namespace shadyloc::core
+{
+class KeyVisitor;
+}
+
 namespace shadyloc::datasets
 {
 using TMatrix34 = mrpt::math::CMatrixFixed<double, 3, 4>;
@@ -87,8 +92,10 @@ class KittiExporter : public mrpt::system::COutputLogger
 		bool absoluteTimes = false;	 //!< times.txt: absolute [s] instead of since frame 0
 		size_t progressEvery = 100;	 //!< log progress every this many frames (0: never)
 
+		void keys(core::KeyVisitor& v);  //!< every key, declared once (core/Options.h)
 		void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 		void dumpToTextStream(std::ostream& out) const override;
+		void validate() const;	//!< throws std::invalid_argument naming the key
 	};
 	TOptions options;
 

@@ -24,6 +24,11 @@
 #include <array>
 #include <vector>
 
+namespace shadyloc::core
+{
+class KeyVisitor;
+}
+
 namespace shadyloc::features
 {
 /** Side of the stored pixel patch (for sub-pixel refinement against later frames). */
@@ -208,6 +213,7 @@ struct TStereoFeatureOptions : public mrpt::config::CLoadableOptions
 	/** ORB: size ratio of neighbouring pyramid levels (> 1). Descriptor-defining. */
 	double orb_scale_factor = 1.2;
 
+	void keys(core::KeyVisitor& v);  //!< every key, declared once (core/Options.h)
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
 	/** Throws std::invalid_argument naming the bad option. */

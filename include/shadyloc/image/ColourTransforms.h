@@ -30,6 +30,7 @@ class CConfigFileBase;
 }
 namespace shadyloc::core
 {
+class KeyVisitor;
 class SettingsSection;
 class SettingsWriter;
 }  // namespace shadyloc::core
@@ -119,6 +120,7 @@ struct InvariantParams
 	 * (gamma only with gamma linearisation; reals within 1e-9). */
 	bool sameImageAs(const InvariantParams& o) const;
 
+	void keys(core::KeyVisitor& v);  //!< every written key, declared once (core/Options.h)
 	/** Reads the keys of a section strictly (src/image/InvariantParamsSettings.cpp):
 	 * alpha and beta, or peak_wavelength_{blue,green,red}_nm (then beta =
 	 * 1 - alpha), channel_order, linearisation, gamma, scale and offset

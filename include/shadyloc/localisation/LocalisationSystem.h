@@ -40,6 +40,11 @@
 #include <string>
 #include <vector>
 
+namespace shadyloc::core
+{
+class KeyVisitor;
+}
+
 namespace shadyloc::localisation
 {
 /** Options of the combined system ([localise] in config/localise_sim.ini). */
@@ -68,6 +73,7 @@ struct TSystemOptions
 	 * global_sigma_deg, seed_with_unconfirmed. */
 	TTrackOptions track;
 
+	void keys(core::KeyVisitor& v);  //!< every key, declared once (core/Options.h)
 	void load(const mrpt::config::CConfigFileBase& c, const std::string& section);
 	void dump(std::ostream& out) const;
 	void validate() const;

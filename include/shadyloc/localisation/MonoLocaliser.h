@@ -59,6 +59,11 @@ namespace mrpt::obs
 class CObservationImage;
 }
 
+namespace shadyloc::core
+{
+class KeyVisitor;
+}
+
 namespace shadyloc::localisation
 {
 /** A pinhole camera without distortion (rectified or undistorted images):
@@ -139,6 +144,7 @@ struct TMonoLocaliserOptions
 	double max_sigma_deg = 1.0;	 //!< larger rotational one: uncertain [deg]
 
 	/** Reads `section` through core::SettingsSection; unknown keys are errors. */
+	void keys(core::KeyVisitor& v);  //!< every key, declared once (core/Options.h)
 	void load(const mrpt::config::CConfigFileBase& c, const std::string& section);
 	void dump(std::ostream& out) const;
 	void validate() const;	//!< throws std::invalid_argument naming the option

@@ -48,6 +48,11 @@
 #include <ostream>
 #include <string>
 
+namespace shadyloc::core
+{
+class KeyVisitor;
+}
+
 namespace shadyloc::localisation
 {
 /** How the localiser searches for each landmark's match (must-show 4). */
@@ -195,6 +200,7 @@ struct TLocaliserOptions
 
 	/** Reads `section` (keys as above, with their units) through
 	 * core::SettingsSection; unknown keys are errors. */
+	void keys(core::KeyVisitor& v);  //!< every key, declared once (core/Options.h)
 	void load(const mrpt::config::CConfigFileBase& c, const std::string& section);
 	void dump(std::ostream& out) const;
 	void validate() const;	//!< throws std::invalid_argument naming the option

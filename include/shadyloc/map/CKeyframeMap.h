@@ -29,6 +29,11 @@
 
 namespace shadyloc
 {
+namespace core
+{
+class KeyVisitor;
+}
+
 /** Options of the keyframe map: how a survey thins and stores keyframes, and
  * how the map is drawn. Stored with the map. ([map] in config/vo*.ini, or the
  * creationOpts section of a CMultiMetricMap .ini.) Read strictly
@@ -82,6 +87,8 @@ struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 	double draw_landmark_max_depth_m = 30.0;  //!< farther landmarks are not drawn [m]
 	double draw_frame_every_m = 5.0;  //!< a keyframe marker (chevron) at most every this far [m]
 
+	/** Every key of [map], declared once (core/Options.h). */
+	void keys(core::KeyVisitor& v);
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
 	/** Throws std::invalid_argument naming the option. */

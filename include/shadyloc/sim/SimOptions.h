@@ -17,6 +17,11 @@
 #include <string>
 #include <vector>
 
+namespace shadyloc::core
+{
+class KeyVisitor;
+}
+
 namespace shadyloc::sim
 {
 /** Error in simulator options: what() names file, section and key. */
@@ -51,6 +56,7 @@ struct TSimCameraOptions : public mrpt::config::CLoadableOptions
 	double cx() const { return 0.5 * (width - 1); }	 //!< principal point (px), pixel centres at integers
 	double cy() const { return 0.5 * (height - 1); }
 
+	void keys(core::KeyVisitor& v);  //!< every key, declared once (core/Options.h)
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
 	void validate() const;	//!< throws std::invalid_argument naming the key
@@ -77,12 +83,16 @@ struct TSimSceneOptions : public mrpt::config::CLoadableOptions
 	/** Extra spheres of a distinct purple material, world frame: x y z radius (m),
 	 * several separated by ','. For geometry checks. */
 	std::vector<std::array<double, 4>> markers;
+	/** markers as written ("x y z r, x y z r") and read (std::invalid_argument saying what is wrong). */
+	static std::string markersText(const std::vector<std::array<double, 4>>& markers);
+	static std::vector<std::array<double, 4>> parseMarkers(const std::string& text);
 
 	/** Scenery is laid out from 40 m before the route's start to 60 m past
 	 * its end (Scene::layout), so a traversal may end up to this far past
 	 * route_length_m and still look at 40 m of it ahead (m). */
 	static constexpr double kEndMargin_m = 20.0;
 
+	void keys(core::KeyVisitor& v);  //!< every key, declared once (core/Options.h)
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
 	void validate() const;
@@ -119,6 +129,7 @@ struct TTraversal : public mrpt::config::CLoadableOptions
 	uint32_t noise_seed = 1;  //!< sensor noise, speed and weave phases
 	double start_time = 1.7e9;	//!< timestamp of the first frame (s, UNIX)
 
+	void keys(core::KeyVisitor& v);  //!< every key, declared once (core/Options.h)
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
 	void validate() const;
@@ -136,6 +147,7 @@ struct TSimOptions : public mrpt::config::CLoadableOptions
 	std::vector<TTraversal> traversals;	 //!< in the order listed in [sim] traversals
 
 	/** Reads [sim] traversals = a b c, [sim.camera], [sim.scene], [traversal.a]... */
+	void keys(core::KeyVisitor& v);  //!< every key, declared once (core/Options.h)
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
 

@@ -37,6 +37,11 @@
 #include <string>
 #include <vector>
 
+namespace shadyloc::core
+{
+class KeyVisitor;
+}
+
 namespace shadyloc::vo
 {
 /** What happened to a frame (the `status` column of the stats CSV). */
@@ -151,6 +156,7 @@ struct TStereoVOOptions : public mrpt::config::CLoadableOptions
 	int max_lost_frames = 3;  //!< after this many untracked frames in a row, re-initialise (Reinit)
 	bool constant_velocity = true;	//!< predict with the last motion (else identity)
 
+	void keys(core::KeyVisitor& v);  //!< every key, declared once (core/Options.h)
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
 	void dumpToTextStream(std::ostream& out) const override;
 	void validate() const;	//!< throws std::invalid_argument naming the option
