@@ -2,6 +2,7 @@
  * with the combined system (docs/localisation.md). */
 #include "Command.h"
 #include "CommandLine.h"
+#include "LocalisedView.h"
 
 #include <shadyloc/core/ConfigLocation.h>
 #include <shadyloc/core/Settings.h>
@@ -12,7 +13,6 @@
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/localisation/LocaliseRun.h>
-#include <shadyloc/render/LocalisedView.h>
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <mrpt/config/CConfigFileMemory.h>
@@ -85,7 +85,7 @@ void writeView(const CKeyframeMap::Ptr& map, const std::vector<TLocalisationUpda
 	o.title = "frame " + std::to_string(u.frame) + ": " + (u.localised() ? u.used + " fix" : std::string("no fix"));
 	char name[32];
 	std::snprintf(name, sizeof(name), "frame_%06zu.png", u.frame);
-	render::renderLocalisedView(*map, ups, o, (dir / "view" / name).string());
+	apps::renderLocalisedView(*map, ups, o, (dir / "view" / name).string());
 }
 
 /** -i or --live, and --live's companions only with it. */

@@ -3,6 +3,7 @@
  * render command; `render-traj` is its old name. */
 #include "Command.h"
 #include "CommandLine.h"
+#include "LocalisedView.h"
 
 #include <shadyloc/eval/Figures.h>
 #include <shadyloc/eval/LocaliseOutputs.h>
@@ -12,7 +13,6 @@
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Tum.h>
 #include <shadyloc/map/CKeyframeMap.h>
-#include <shadyloc/render/LocalisedView.h>
 #include <shadyloc/render/TrajectorySnapshot.h>
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
@@ -37,9 +37,9 @@ std::pair<std::string, std::string> fileAndName(const std::string& spec)
 }
 
 // Colours of who held a frame (the same as docs/figures.md's figures).
-using render::kInvariantColour;
-using render::kMonoColour;
-using render::kNoneColour;
+using apps::kInvariantColour;
+using apps::kMonoColour;
+using apps::kNoneColour;
 
 /** The live trajectory of a `shadyloc localise` output folder, each segment
  * coloured by who held the frame it ends at (frames.csv's `used`). */
@@ -211,7 +211,7 @@ int run(int argc, char** argv)
 		if (m->keyframeCount() == 1) singleKeyframe += (singleKeyframe.empty() ? "" : ", ") + ("'" + file + "'");
 		if (localised.isSet())
 		{
-			render::TrajectoryLayer k = render::keyframesLayer(*m, name);
+			render::TrajectoryLayer k = apps::keyframesLayer(*m, name);
 			if (liveGt.isSet() && underneath.empty())
 			{
 				// T_map_world from the keyframes' own poses and their ground truth.

@@ -592,7 +592,7 @@ TEST(EvalControl, BadLayerIsRefusedNamingItBeforeAnyJob)
 	// A value out of range.
 	writeText(dir + "/range.ini", "[map]\nlandmarks_per_keyframe = -4\n");
 	refused(dir + "/range.ini", "o4", dir + "/range.ini:");
-	EXPECT_NE(out.find("landmarks_per_keyframe must be >= 0"), std::string::npos) << out;
+	EXPECT_NE(out.find("landmarks_per_keyframe: must be >= 0"), std::string::npos) << out;
 	// A layer that sets nothing would make the control the baseline.
 	writeText(dir + "/empty.ini", "; nothing\n[features]\n");
 	refused(dir + "/empty.ini", "o5", "--control '" + dir + "/empty.ini': sets no key");

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-namespace shadyloc::render
+namespace shadyloc::apps
 {
 /** Who held a frame, as every figure colours it (docs/figures.md). */
 constexpr mrpt::img::TColor kMonoColour{31, 98, 196}, kInvariantColour{230, 130, 14}, kNoneColour{214, 39, 40};
@@ -25,14 +25,14 @@ mrpt::img::TColor colourOfUsed(const std::string& used);
 
 /** The map's keyframes as a grey band with a square each (the map's own
  * drawing is blue and orange, the localisers' colours here). */
-TrajectoryLayer keyframesLayer(const CKeyframeMap& map, const std::string& name);
+render::TrajectoryLayer keyframesLayer(const CKeyframeMap& map, const std::string& name);
 
 /** The live path of the updates so far where the place was known, and a
  * short arrow of the last pose's heading. Throws std::runtime_error (via
- * renderTrajectories) if there is nothing to draw; the PNG is written
+ * render::renderTrajectories) if there is nothing to draw; the PNG is written
  * atomically. */
 void renderLocalisedView(
-	const CKeyframeMap& map, const std::vector<localisation::TLocalisationUpdate>& ups, const SnapshotOptions& opts,
+	const CKeyframeMap& map, const std::vector<localisation::TLocalisationUpdate>& ups, const render::SnapshotOptions& opts,
 	const std::string& pngPath);
 
-}  // namespace shadyloc::render
+}  // namespace shadyloc::apps

@@ -1,11 +1,15 @@
 /* ShadyLoc — a localisation run over its map, offscreen (LocalisedView.h). */
-#include <shadyloc/render/LocalisedView.h>
+#include "LocalisedView.h"
 
 #include <iomanip>
 #include <sstream>
 
-namespace shadyloc::render
+namespace shadyloc::apps
 {
+using render::renderTrajectories;
+using render::SnapshotOptions;
+using render::TrajectoryLayer;
+
 namespace
 {
 mrpt::math::TPoint3D toPoint(const Eigen::Vector3d& p) { return {p.x(), p.y(), p.z()}; }
@@ -68,4 +72,4 @@ void renderLocalisedView(
 	renderTrajectories(layers, opts, pngPath);
 }
 
-}  // namespace shadyloc::render
+}  // namespace shadyloc::apps
