@@ -59,7 +59,8 @@ echo "== 5. trajectories and the map, rendered offscreen"
 
 echo
 echo "== 6. leave-one-out evaluation (shadyloc eval): every traversal against the map of every other,"
-echo "      the baseline (mono) alone and the combined system (mono + invariant), against ground truth"
+echo "      the baseline (mono) alone, the combined system (mono + invariant) and the budget-matched control"
+echo "      (mono with both channels' feature budget, config/control_budget.ini), against ground truth"
 loc_cfg="$here/config/localise_sim.ini"
 runs="$out/runs.txt"
 {
@@ -69,7 +70,7 @@ runs="$out/runs.txt"
     echo "$n $r $data/$n.tum"
   done
 } > "$runs"
-"$app" eval --runs "$runs" -o "$out/eval" -c "$vo_cfg" -c "$loc_cfg"
+"$app" eval --runs "$runs" -o "$out/eval" -c "$vo_cfg" -c "$loc_cfg" --control "$here/config/control_budget.ini"
 
 echo
 echo "== 7. one pair of the evaluation rendered offscreen: 'overcast' against the 'noon' map, coloured by localiser"
