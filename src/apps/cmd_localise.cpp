@@ -110,6 +110,69 @@ std::string liveInputPath(const std::string& source)
 	return source;
 }
 
+CKeyframeMap::Ptr loadMap(const std::string& mapPath)
+{
+	CKeyframeMap::Ptr map;
+	try
+	{
+		map = CKeyframeMap::LoadFromFile(mapPath);
+	}
+	catch (const std::exception& e)
+	{
+		throw std::runtime_error(std::string("map: ") + e.what());
+	}
+	if (map->isEmpty()) throw std::runtime_error("map '" + mapPath + "' has no keyframes: nothing to localise against");
+	return map;
+}
+
+/** The capture's frames as the frame source's feed. */
+filters::TObjectFeed feedOf(datasets::LiveCapture& capture)
+{
+	return {[c = &capture]() -> mrpt::serialization::CSerializable::Ptr { return c->next(); }, capture.name()};
+}
+
+/** summary.json's record of a live source: what was read and dropped. */
+void recordLiveCapture(const datasets::LiveCapture& capture, eval::TLocaliseProvenance& prov)
+{
+	prov.liveHash = "not hashed (live source)";
+	prov.live = true;
+	prov.liveFramesRead = capture.grabbed();
+	prov.liveFramesDropped = capture.dropped();
+	prov.liveDropsWhenBehind = capture.dropsWhenBehind();
+}
+
+/** What the run localises against, with what, before it starts. */
+void printHeader(const CKeyframeMap& map, const std::string& mapPath, const std::string& livePath, const CLocaliseRun& lrun)
+{
+	std::cout << "map: " << mapPath << " (" << map.keyframeCount() << " keyframes, " << std::fixed << std::setprecision(1)
+			  << map.pathLength() << " m)\nlive: " << livePath << " ('" << lrun.sensorLabel() << "')\n";
+	for (size_t i = 0; i < lrun.source().channels().size(); i++)
+		std::cout << "channel " << lrun.source().channels()[i].label << ": " << lrun.source().describeInput(i) << "\n";
+	std::cout << "[localise]\n";
+	lrun.system().options().dump(std::cout);
+}
+
+/** The run's result on stdout: coverage, truth, live counts, blind distance. */
+void printResult(
+	const std::vector<TLocalisationUpdate>& ups, const eval::TEvaluation& ev, bool withGt,
+	const datasets::LiveCapture* capture, const std::string& outDir)
+{
+	std::cout << std::fixed << std::setprecision(1) << "frames " << ups.size() << ", in map " << ev.in_map_frames
+			  << ", fixes " << ev.fixes << ": coverage " << 100 * ev.coverage_in_map << " % of in-map frames ("
+			  << 100 * ev.coverage_all << " % of all)";
+	for (const auto& s : ev.channels) std::cout << "; " << s.channel << " " << s.accepted << " (used " << s.used << ")";
+	std::cout << "\n";
+	if (withGt)
+		std::cout << "ground truth: true coverage " << 100 * ev.true_coverage_in_map << " % (self-reported "
+				  << 100 * ev.coverage_in_map << " %), false fixes " << ev.false_fixes << " (" << std::setprecision(2)
+				  << 100 * ev.false_fix_share << " %)\n";
+	if (capture)
+		std::cout << "live: " << capture->grabbed() << " frames read from " << capture->name() << ", "
+				  << capture->dropped() << " dropped (the localiser was behind)\n";
+	std::cout << std::setprecision(1) << "blind: " << ev.blind_m << " m of " << ev.total_m << " m, first fix at frame "
+			  << ev.first_fix_frame << "; -> " << outDir << "\n";
+}
+
 int run(int argc, char** argv)
 {
 	shadyloc::apps::CommandLine cli(
@@ -211,16 +274,7 @@ int run(int argc, char** argv)
 	for (const auto& c : cfgArgs.getValue()) outputs.addInput(c, "config");
 	const fs::path dir = outputs.addDirectory(out.getValue(), "output folder", "shadyloc localise output");
 
-	CKeyframeMap::Ptr map;
-	try
-	{
-		map = CKeyframeMap::LoadFromFile(mapPath);
-	}
-	catch (const std::exception& e)
-	{
-		throw std::runtime_error(std::string("map: ") + e.what());
-	}
-	if (map->isEmpty()) throw std::runtime_error("map '" + mapPath + "' has no keyframes: nothing to localise against");
+	const CKeyframeMap::Ptr map = loadMap(mapPath);
 
 	TLocaliseRunOptions ro;
 	if (locArg.isSet())
@@ -248,8 +302,7 @@ int run(int argc, char** argv)
 		lo.realtime = realtime.getValue();
 		lo.queue = static_cast<size_t>(queueArg.getValue());
 		capture = std::make_unique<datasets::LiveCapture>(lo);
-		filters::TObjectFeed feed{[c = capture.get()]() -> mrpt::serialization::CSerializable::Ptr { return c->next(); }, capture->name()};
-		run = std::make_unique<CLocaliseRun>(cfg, map, mapPath, std::move(feed), ro);
+		run = std::make_unique<CLocaliseRun>(cfg, map, mapPath, feedOf(*capture), ro);
 	}
 	else
 		run = std::make_unique<CLocaliseRun>(cfg, map, mapPath, livePath, ro);
@@ -257,16 +310,7 @@ int run(int argc, char** argv)
 	checkLiveCamera(*map, mapPath, live ? "live source " + capture->name() : "live rawlog '" + livePath + "'", lrun);
 	auto& sys = lrun.system();
 	if (debug.getValue()) sys.setMinLoggingLevel(mrpt::system::LVL_DEBUG);
-	if (talk)
-	{
-		std::cout << "map: " << mapPath << " (" << map->keyframeCount() << " keyframes, " << std::fixed
-				  << std::setprecision(1) << map->pathLength() << " m)\nlive: " << livePath << " ('" << lrun.sensorLabel()
-				  << "')\n";
-		for (size_t i = 0; i < lrun.source().channels().size(); i++)
-			std::cout << "channel " << lrun.source().channels()[i].label << ": " << lrun.source().describeInput(i) << "\n";
-		std::cout << "[localise]\n";
-		sys.options().dump(std::cout);
-	}
+	if (talk) printHeader(*map, mapPath, livePath, lrun);
 	size_t droppedShown = 0;
 	const int viewEvery = viewArg.getValue();
 	if (viewEvery > 0) fs::create_directories(dir / "view");
@@ -294,31 +338,11 @@ int run(int argc, char** argv)
 	prov.livePath = livePath;
 	if (gt) prov.gtPath = gtArg.getValue();
 	prov.startKf = startKf.getValue();
-	if (capture)
-	{
-		prov.liveHash = "not hashed (live source)";
-		prov.live = true;
-		prov.liveFramesRead = capture->grabbed();
-		prov.liveFramesDropped = capture->dropped();
-		prov.liveDropsWhenBehind = capture->dropsWhenBehind();
-	}
+	if (capture) recordLiveCapture(*capture, prov);
 	eval::writeLocaliseOutputs(dir.string(), ups, ev, *map, sys.options(), prov);
 	outputs.commit();
 
-	std::cout << std::fixed << std::setprecision(1) << "frames " << ups.size() << ", in map " << ev.in_map_frames
-			  << ", fixes " << ev.fixes << ": coverage " << 100 * ev.coverage_in_map << " % of in-map frames ("
-			  << 100 * ev.coverage_all << " % of all)";
-	for (const auto& s : ev.channels) std::cout << "; " << s.channel << " " << s.accepted << " (used " << s.used << ")";
-	std::cout << "\n";
-	if (gt)
-		std::cout << "ground truth: true coverage " << 100 * ev.true_coverage_in_map << " % (self-reported "
-				  << 100 * ev.coverage_in_map << " %), false fixes " << ev.false_fixes << " (" << std::setprecision(2)
-				  << 100 * ev.false_fix_share << " %)\n";
-	if (capture)
-		std::cout << "live: " << capture->grabbed() << " frames read from " << capture->name() << ", "
-				  << capture->dropped() << " dropped (the localiser was behind)\n";
-	std::cout << std::setprecision(1) << "blind: " << ev.blind_m << " m of " << ev.total_m << " m, first fix at frame "
-			  << ev.first_fix_frame << "; -> " << out.getValue() << "\n";
+	printResult(ups, ev, gt.has_value(), capture.get(), out.getValue());
 	return 0;
 }
 
