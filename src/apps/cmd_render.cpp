@@ -67,7 +67,7 @@ render::TrajectoryLayer localisedLayer(const std::string& dir, const std::string
 		const auto& u = run.frames[f].used;
 		const int k = u == "mono" ? 0 : (u == "invariant" ? 1 : 2);
 		counts[k]++;
-		if (!l.points.empty()) l.segmentColours.push_back(k == 0 ? kMonoColour : (k == 1 ? kInvariantColour : kNoneColour));
+		if (!l.points.empty()) l.segmentColours.push_back(apps::colourOfUsed(u));
 		const auto x = p.T.translation();
 		l.points.emplace_back(x.x(), x.y(), x.z());
 	}

@@ -93,6 +93,23 @@ void TFolderCalib::dumpToTextStream(std::ostream& out) const
 	w.value("height_px", height);
 }
 
+namespace
+{
+mrpt::img::TCamera cameraOf(double fx, double fy, double cx, double cy, uint32_t w, uint32_t h)
+{
+	mrpt::img::TCamera c;
+	c.ncols = w;
+	c.nrows = h;
+	c.setIntrinsicParamsFromValues(fx, fy, cx, cy);
+	c.dist.fill(0);
+	return c;
+}
+}  // namespace
+
+mrpt::img::TCamera TFolderCalib::leftCamera() const { return cameraOf(fx_l, fy_l, cx_l, cy_l, width, height); }
+
+mrpt::img::TCamera TFolderCalib::rightCamera() const { return cameraOf(fx_r, fy_r, cx_r, cy_r, width, height); }
+
 TFolderCalib TFolderCalib::FromFile(const std::string& iniPath)
 {
 	if (!fs::is_regular_file(iniPath)) throw DatasetError("'" + iniPath + "': no such calibration file");
@@ -147,22 +164,12 @@ TImportResult FolderImporter::run(
 		"Folder import: " << filesL.size() << " pairs from '" << leftDir << "' + '" << rightDir
 						  << "', importing " << n << ", baseline " << calib.baseline_m << " m");
 
-	auto camera = [&](double fx, double fy, double cx, double cy) {
-		mrpt::img::TCamera c;
-		c.ncols = calib.width;
-		c.nrows = calib.height;
-		c.setIntrinsicParamsFromValues(fx, fy, cx, cy);
-		c.dist.fill(0);
-		return c;
-	};
 	detail::StereoSink sink(outRawlog, options, *this);
 	sink.addInput(leftDir, "left image folder");
 	sink.addInput(rightDir, "right image folder");
 	sink.addInput(calibIni, "calibration");
 	if (!timesFile.empty()) sink.addInput(timesFile, "timestamps file");
-	sink.setCalibration(
-		camera(calib.fx_l, calib.fy_l, calib.cx_l, calib.cy_l),
-		camera(calib.fx_r, calib.fy_r, calib.cx_r, calib.cy_r), calib.baseline_m);
+	sink.setCalibration(calib.leftCamera(), calib.rightCamera(), calib.baseline_m);
 	for (size_t i = 0; i < n; i++)
 	{
 		const std::string frame = "frame " + std::to_string(i) + " ('" +

@@ -42,15 +42,6 @@ cv::Mat toBgr(const cv::Mat& m)
 	return out;
 }
 
-mrpt::img::TCamera camera(double fx, double fy, double cx, double cy, uint32_t w, uint32_t h)
-{
-	mrpt::img::TCamera c;
-	c.ncols = w;
-	c.nrows = h;
-	c.setIntrinsicParamsFromValues(fx, fy, cx, cy);
-	c.dist.fill(0);
-	return c;
-}
 }  // namespace
 
 bool isCameraDevice(const std::string& source)
@@ -123,8 +114,8 @@ mrpt::obs::CObservationStereoImages::Ptr LiveCapture::makeObservation(
 	// so that a file gives the same timestamps on every run.
 	obs->timestamp = isCameraDevice(m_opts.source) ? mrpt::Clock::now()
 												   : detail::timestampFromSeconds(double(index) / m_opts.fps);
-	obs->leftCamera = camera(m_calib.fx_l, m_calib.fy_l, m_calib.cx_l, m_calib.cy_l, m_calib.width, m_calib.height);
-	obs->rightCamera = camera(m_calib.fx_r, m_calib.fy_r, m_calib.cx_r, m_calib.cy_r, m_calib.width, m_calib.height);
+	obs->leftCamera = m_calib.leftCamera();
+	obs->rightCamera = m_calib.rightCamera();
 	obs->leftCamera.cameraName = "left";
 	obs->rightCamera.cameraName = "right";
 	obs->rightCameraPose = mrpt::poses::CPose3DQuat(mrpt::poses::CPose3D(m_calib.baseline_m, 0, 0, 0, 0, 0));

@@ -5,6 +5,7 @@
 
 #include <shadyloc/datasets/Common.h>
 
+#include <mrpt/img/TCamera.h>
 #include <mrpt/system/COutputLogger.h>
 
 #include <string>
@@ -33,6 +34,9 @@ struct TFolderCalib : public mrpt::config::CLoadableOptions
 	void dumpToTextStream(std::ostream& out) const override;
 	/** Loads a file; DatasetError naming the file, section and key. */
 	static TFolderCalib FromFile(const std::string& iniPath);
+	/** Each camera as MRPT's model: its intrinsics, the image size, no distortion. */
+	mrpt::img::TCamera leftCamera() const;
+	mrpt::img::TCamera rightCamera() const;
 };
 
 /** Folder import. Timestamps: times file (one per line, first column [s]; as
