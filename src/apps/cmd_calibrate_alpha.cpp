@@ -208,6 +208,233 @@ void plotCurves(
 	}
 }
 
+/** What the command line names as data. */
+struct TInputArgs
+{
+	std::string pairsDir;
+	std::vector<std::string> pairs, sameView, runs, images;
+	std::string imagesDir;
+	std::vector<std::string> rawlogs;
+	std::string sensor;
+	int maxFrames = 0, every = 1;
+};
+
+/** The data read, by kind. */
+struct TInputs
+{
+	std::vector<TShadowPair> shadowPairs;
+	std::vector<TSameViewPair> viewPairs;
+	std::vector<cv::Mat> plain;	 //!< ordinary images and rawlog frames
+	std::vector<TChromaChanges> runChanges;	 //!< matched points of --runs
+	std::vector<cv::Mat> runFrames;	 //!< the frames of --runs
+	bool hasRuns = false;
+
+	/** Every image given: the entropy and edges methods and the mapping use
+	 * them all (pairs are images too). */
+	std::vector<cv::Mat> allImages() const
+	{
+		std::vector<cv::Mat> all = plain;
+		for (const auto& p : shadowPairs) all.push_back(p.free), all.push_back(p.shadow);
+		for (const auto& p : viewPairs) all.push_back(p.a), all.push_back(p.b);
+		all.insert(all.end(), runFrames.begin(), runFrames.end());
+		return all;
+	}
+};
+
+std::vector<cv::Mat> imagesOfDir(const std::string& dir)
+{
+	if (!fs::is_directory(dir)) throw std::runtime_error("--images '" + dir + "': not a directory");
+	std::vector<fs::path> files;
+	for (const auto& e : fs::directory_iterator(dir))
+		if (e.is_regular_file() && isImageFile(e.path())) files.push_back(e.path());
+	std::sort(files.begin(), files.end());
+	if (files.empty()) throw std::runtime_error("--images '" + dir + "': no image files");
+	std::vector<cv::Mat> out;
+	for (const auto& f : files) out.push_back(readColour(f.string()));
+	return out;
+}
+
+/** One --runs pair A,B: A's frames (every --every-th) matched in all of B's,
+ * both limited by --max-frames. Every pair must be of the first pair's
+ * camera (`runsCamera`, `runsFirst`: set by the first pair). */
+void readRunPair(
+	const std::string& s, const TInputArgs& a, const TCalibrationInput& in, std::string& runsCamera,
+	std::string& runsFirst, TInputs& out)
+{
+	const auto [ra, rb] = splitComma(s, "--runs");
+	std::string camA, camB;
+	auto fa = framesOfRawlog(ra, a.sensor, a.maxFrames, a.every, &camA);
+	auto fb = framesOfRawlog(rb, a.sensor, a.maxFrames, 1, &camB);
+	// Matching across cameras compares chromaticities of two sensors, not
+	// of two lights: the estimate would be of the cameras' difference.
+	if (camA != camB)
+		throw std::invalid_argument(
+			"--runs " + s + ": the runs are of different cameras ('" + ra + "': " + camA + "; '" + rb + "': " + camB +
+			"); two runs of one camera are needed");
+	// Every --runs pair goes into one estimate: one camera for all of them.
+	if (runsCamera.empty()) runsCamera = camA, runsFirst = s;
+	else if (camA != runsCamera)
+		throw std::invalid_argument(
+			"--runs " + s + ": its camera (" + camA + ") is not that of --runs " + runsFirst + " (" + runsCamera +
+			"); the estimate pools every pair, so they must be of one camera");
+	std::cout << "--runs " << s << ": matching " << fa.size() << " frames of '" << ra << "' in the " << fb.size()
+			  << " of '" << rb << "'\n";
+	size_t done = 0;
+	auto items = correspondencesAcrossRuns(fa, fb, in, {}, [&](const std::string& line) {
+		std::cout << "  [" << ++done << "/" << fa.size() << "] " << line << std::endl;
+	});
+	std::cout << "  " << items.size() << " of " << fa.size() << " frames matched\n";
+	const std::string prefix = fs::path(ra).stem().string() + "/" + fs::path(rb).stem().string() + " ";
+	for (auto& it : items) it.name = prefix + it.name, out.runChanges.push_back(std::move(it));
+	for (auto* f : {&fa, &fb})
+		for (auto& m : *f) out.runFrames.push_back(std::move(m));
+}
+
+TInputs readInputs(const TInputArgs& a, const TCalibrationInput& in)
+{
+	TInputs out;
+	if (!a.pairsDir.empty()) out.shadowPairs = pairsInDir(a.pairsDir);
+	for (const auto& s : a.pairs)
+	{
+		const auto [f, sh] = splitComma(s, "--pair");
+		out.shadowPairs.push_back({fs::path(sh).stem().string(), readColour(f), readColour(sh)});
+	}
+	for (const auto& s : a.sameView)
+	{
+		const auto [x, y] = splitComma(s, "--same-view");
+		out.viewPairs.push_back(
+			{fs::path(x).stem().string() + "/" + fs::path(y).stem().string(), readColour(x), readColour(y)});
+	}
+	for (const auto& f : a.images) out.plain.push_back(readColour(f));
+	if (!a.imagesDir.empty())
+		for (auto& m : imagesOfDir(a.imagesDir)) out.plain.push_back(std::move(m));
+	for (const auto& r : a.rawlogs)
+		for (auto& m : framesOfRawlog(r, a.sensor, a.maxFrames, a.every)) out.plain.push_back(std::move(m));
+	std::string runsCamera, runsFirst;
+	for (const auto& s : a.runs) readRunPair(s, a, in, runsCamera, runsFirst, out);
+	out.hasRuns = !a.runs.empty();
+	if (out.shadowPairs.empty() && out.viewPairs.empty() && out.plain.empty() && out.runFrames.empty())
+		throw std::invalid_argument("no data: give --pairs/--pair, --same-view, --runs, --image/--images or --rawlog");
+	return out;
+}
+
+/** Every method's curve that has data; the first is the preferred one (auto). */
+std::vector<TAlphaCurve> estimateCurves(
+	const TInputs& data, const std::vector<cv::Mat>& all, const TCalibrationInput& in, const TAlphaSearch& search,
+	int edgeStep, double edgeMaxChroma)
+{
+	std::vector<TAlphaCurve> curves;
+	std::vector<std::string> skipped;
+	if (!data.shadowPairs.empty())
+		curves.push_back(alphaFromShadowPairs(data.shadowPairs, in, search, 0.01, &skipped));
+	if (!data.viewPairs.empty()) curves.push_back(alphaFromSameView(data.viewPairs, in, search, 0.03, &skipped));
+	// Matched points, not whole images: a smaller minimum per frame pair.
+	if (data.hasRuns) curves.push_back(alphaFromChromaChanges(data.runChanges, search, 0.03, 50, "runs", &skipped));
+	curves.push_back(alphaByEdgeDirections(edgeSamples(all, in, edgeStep), search, edgeMaxChroma));
+	curves.push_back(alphaByEntropy(chromaSamples(all, in), search));
+	for (const auto& s : skipped) std::cout << "skipped: " << s << "\n";
+	return curves;
+}
+
+const TAlphaCurve* chooseCurve(const std::vector<TAlphaCurve>& curves, const std::string& want)
+{
+	if (want == "auto") return &curves.front();
+	for (const auto& c : curves)
+		if (c.method == want) return &c;
+	throw std::invalid_argument(
+		"--method " + want + ": that method had no data (pairs: --pairs/--pair; same-view: --same-view; runs: --runs)");
+}
+
+void printEstimates(const std::vector<TAlphaCurve>& curves, const TAlphaCurve* chosen, const TAlphaSearch& search)
+{
+	std::cout << "\nalpha estimates (beta = 1 - alpha; 95 % bootstrap interval over "
+			  << (search.bootstrapRounds > 0 ? std::to_string(search.bootstrapRounds) + " resamplings" : "none")
+			  << "):\n";
+	for (const auto& c : curves)
+		std::cout << "  " << std::left << std::setw(10) << c.method << " alpha " << fmt(c.best) << "  ["
+				  << fmt(c.ciLow) << ", " << fmt(c.ciHigh) << "]  from " << c.items << itemsOf(c.method)
+				  << (&c == chosen ? "   <- used" : "") << "\n";
+}
+
+std::string mappingShape(const InvariantParams& p, double minSpan)
+{
+	if (p.hasCompressedTails())
+		return "tails compressed (a linear mapping gave the 1st-99th percentiles fewer than " + fmt(minSpan, 0) +
+			   " levels): linear between grey levels " + fmt(p.knee_low, 2) + " and " + fmt(p.knee_high, 2) +
+			   ", slope " + fmt(p.tail_slope_low, 4) + " beyond";
+	if (minSpan > 0) return "linear mapping (it gives the 1st-99th percentiles at least " + fmt(minSpan, 0) + " levels)";
+	return "linear mapping (--min-span 0)";
+}
+
+/** Prints the calibrated mapping p and its clipping against the default
+ * mapping at the same alpha and beta and the paper's; returns p's. */
+TMappingStats reportMapping(
+	const std::vector<cv::Mat>& all, const InvariantParams& p, const InvariantParams& pDefault,
+	const TCalibrationInput& in, double minSpan)
+{
+	const auto stCal = mappingStats(all, p, in.stride);
+	const auto stDef = mappingStats(all, pDefault, in.stride);
+	auto pPaper = InvariantParams::FromAlphaBeta(0.4800, 0.5065);
+	pPaper.order = in.order, pPaper.linearisation = in.linearisation, pPaper.gamma = in.gamma;
+	const auto stPaper = mappingStats(all, pPaper, in.stride);
+	std::cout << "\nresult: alpha = " << fmt(p.alpha) << ", beta = 1 - alpha = " << fmt(p.beta)
+			  << "\n  wavelength form: 1/l2 = alpha/l1 + beta/l3, e.g. green peak "
+			  << fmt(equivalentGreenPeak(p.alpha, 470, 620), 1) << " nm for blue 470 / red 620 nm"
+			  << "\n  8-bit mapping: scale = " << fmt(p.scale, 3) << " grey levels per log unit, offset = "
+			  << fmt(p.offset) << "\n  " << mappingShape(p, minSpan) << "\n\nclipping over the " << all.size()
+			  << " calibration images (share of pixels at 0 or 255; 1st-99th percentile span):\n"
+			  << "  calibrated mapping          " << fmt(100 * stCal.clipped(), 2) << " %  (low "
+			  << fmt(100 * stCal.clipLow, 2) << ", high " << fmt(100 * stCal.clipHigh, 2) << "), span "
+			  << fmt(stCal.span(), 1) << " grey levels\n"
+			  << "  default mapping, this alpha " << fmt(100 * stDef.clipped(), 2) << " %, span "
+			  << fmt(stDef.span(), 1) << "\n"
+			  << "  paper's alpha/beta/mapping  " << fmt(100 * stPaper.clipped(), 2) << " %, span "
+			  << fmt(stPaper.span(), 1) << "\n";
+	if (stCal.span() < 200)
+		std::cout << "warning: the 1st-99th percentiles span only " << fmt(stCal.span(), 1)
+				  << " grey levels: the invariant's tails are heavy here; raise --min-span (or --tail) for more\n";
+	return stCal;
+}
+
+/** OUT.ini: an [invariant] section, with where its values came from. */
+std::string iniText(
+	const InvariantParams& p, const TAlphaCurve* chosen, const TCalibrationInput& in, size_t images, double clipped)
+{
+	shadyloc::CFilterInvariant filter;
+	filter.setParams(p);
+	std::ostringstream ini;
+	if (chosen)
+		ini << "# Calibrated by shadyloc calibrate-alpha (" << chosen->method << " method, " << chosen->items
+			<< itemsOf(chosen->method) << ", 95% interval of alpha [" << fmt(chosen->ciLow) << ", "
+			<< fmt(chosen->ciHigh) << "]).\n";
+	else
+		ini << "# alpha and beta given (--alpha); 8-bit mapping calibrated by shadyloc calibrate-alpha from "
+			<< images << " images.\n";
+	ini << "# Input linearisation: " << toString(in.linearisation)
+		<< ". Clipping over the calibration images: " << fmt(100 * clipped, 2) << " %.\n"
+		<< "# The 8-bit mapping (scale, offset, knees, tail slopes) defines the descriptors: keep it equal for map "
+		   "and live data.\n"
+		<< "[invariant]\n"
+		<< filter.optionsAsIni();
+	return ini.str();
+}
+
+/** OUT_curve.csv: alpha, then each method's cost (the curves share one grid). */
+std::string curvesCsv(const std::vector<TAlphaCurve>& curves)
+{
+	std::ostringstream csv;
+	csv << "alpha";
+	for (const auto& c : curves) csv << "," << c.method;
+	csv << "\n" << std::setprecision(8);
+	for (size_t j = 0; j < curves.front().alpha.size(); j++)
+	{
+		csv << curves.front().alpha[j];
+		for (const auto& c : curves) csv << "," << c.cost[j];
+		csv << "\n";
+	}
+	return csv.str();
+}
+
 int run(int argc, char** argv)
 {
 	shadyloc::apps::CommandLine cli(
@@ -323,83 +550,16 @@ int run(int argc, char** argv)
 	const std::string csvTmp = withCurve ? outputs.addFile(csvPath, "-o (curve csv)") : "";
 	const std::string pngTmp = withCurve && !noPlot.getValue() ? outputs.addFile(pngPath, "-o (curve png)") : "";
 
-	// ---- inputs
-	std::vector<TShadowPair> shadowPairs;
-	if (pairsDir.isSet()) shadowPairs = pairsInDir(pairsDir.getValue());
-	for (const auto& s : pair.getValue())
-	{
-		const auto [f, sh] = splitComma(s, "--pair");
-		shadowPairs.push_back({fs::path(sh).stem().string(), readColour(f), readColour(sh)});
-	}
-	std::vector<TSameViewPair> viewPairs;
-	for (const auto& s : sameView.getValue())
-	{
-		const auto [a, b] = splitComma(s, "--same-view");
-		viewPairs.push_back({fs::path(a).stem().string() + "/" + fs::path(b).stem().string(), readColour(a), readColour(b)});
-	}
-	std::vector<cv::Mat> plain;
-	for (const auto& f : images.getValue()) plain.push_back(readColour(f));
-	if (imagesDir.isSet())
-	{
-		if (!fs::is_directory(imagesDir.getValue()))
-			throw std::runtime_error("--images '" + imagesDir.getValue() + "': not a directory");
-		std::vector<fs::path> files;
-		for (const auto& e : fs::directory_iterator(imagesDir.getValue()))
-			if (e.is_regular_file() && isImageFile(e.path())) files.push_back(e.path());
-		std::sort(files.begin(), files.end());
-		if (files.empty()) throw std::runtime_error("--images '" + imagesDir.getValue() + "': no image files");
-		for (const auto& f : files) plain.push_back(readColour(f.string()));
-	}
-	for (const auto& r : rawlog.getValue())
-		for (auto& m : framesOfRawlog(r, sensor.getValue(), maxFrames.getValue(), every.getValue()))
-			plain.push_back(std::move(m));
-	// Two runs: A's frames (every --every-th) against all of B's, both limited by --max-frames.
-	std::vector<TChromaChanges> runChanges;
-	std::vector<cv::Mat> runFrames;
-	std::string runsCamera, runsFirst;
-	for (const auto& s : runs.getValue())
-	{
-		const auto [a, b] = splitComma(s, "--runs");
-		std::string camA, camB;
-		auto fa = framesOfRawlog(a, sensor.getValue(), maxFrames.getValue(), every.getValue(), &camA);
-		auto fb = framesOfRawlog(b, sensor.getValue(), maxFrames.getValue(), 1, &camB);
-		// Matching across cameras compares chromaticities of two sensors, not
-		// of two lights: the estimate would be of the cameras' difference.
-		if (camA != camB)
-			throw std::invalid_argument(
-				"--runs " + s + ": the runs are of different cameras ('" + a + "': " + camA + "; '" + b + "': " + camB +
-				"); two runs of one camera are needed");
-		// Every --runs pair goes into one estimate: one camera for all of them.
-		if (runsCamera.empty()) runsCamera = camA, runsFirst = s;
-		else if (camA != runsCamera)
-			throw std::invalid_argument(
-				"--runs " + s + ": its camera (" + camA + ") is not that of --runs " + runsFirst + " (" + runsCamera +
-				"); the estimate pools every pair, so they must be of one camera");
-		std::cout << "--runs " << s << ": matching " << fa.size() << " frames of '" << a << "' in the " << fb.size()
-				  << " of '" << b << "'\n";
-		size_t done = 0;
-		auto items = correspondencesAcrossRuns(fa, fb, in, {}, [&](const std::string& line) {
-			std::cout << "  [" << ++done << "/" << fa.size() << "] " << line << std::endl;
-		});
-		std::cout << "  " << items.size() << " of " << fa.size() << " frames matched\n";
-		const std::string prefix = fs::path(a).stem().string() + "/" + fs::path(b).stem().string() + " ";
-		for (auto& it : items) it.name = prefix + it.name, runChanges.push_back(std::move(it));
-		for (auto* f : {&fa, &fb})
-			for (auto& m : *f) runFrames.push_back(std::move(m));
-	}
-	if (shadowPairs.empty() && viewPairs.empty() && plain.empty() && runFrames.empty())
-		throw std::invalid_argument("no data: give --pairs/--pair, --same-view, --runs, --image/--images or --rawlog");
-
+	const TInputs data = readInputs(
+		{pairsDir.isSet() ? pairsDir.getValue() : "", pair.getValue(), sameView.getValue(), runs.getValue(),
+		 images.getValue(), imagesDir.isSet() ? imagesDir.getValue() : "", rawlog.getValue(), sensor.getValue(),
+		 maxFrames.getValue(), every.getValue()},
+		in);
 	std::cout << "input: linearisation " << toString(in.linearisation)
 			  << (in.linearisation == Linearisation::Gamma ? " (gamma " + fmt(in.gamma, 2) + ")" : "")
-			  << ", channel order " << toString(in.order) << "; " << shadowPairs.size() << " shadow pair(s), "
-			  << viewPairs.size() << " same-view pair(s), " << plain.size() << " ordinary image(s)\n";
-
-	// The entropy/edges methods and the mapping run on every image given (pairs are images too).
-	std::vector<cv::Mat> all = plain;
-	for (const auto& p : shadowPairs) all.push_back(p.free), all.push_back(p.shadow);
-	for (const auto& p : viewPairs) all.push_back(p.a), all.push_back(p.b);
-	all.insert(all.end(), runFrames.begin(), runFrames.end());
+			  << ", channel order " << toString(in.order) << "; " << data.shadowPairs.size() << " shadow pair(s), "
+			  << data.viewPairs.size() << " same-view pair(s), " << data.plain.size() << " ordinary image(s)\n";
+	const std::vector<cv::Mat> all = data.allImages();
 
 	// ---- estimates (none with a known alpha)
 	std::vector<TAlphaCurve> curves;
@@ -413,105 +573,30 @@ int run(int argc, char** argv)
 	}
 	else
 	{
-		std::vector<std::string> skipped;
-		if (!shadowPairs.empty()) curves.push_back(alphaFromShadowPairs(shadowPairs, in, search, 0.01, &skipped));
-		if (!viewPairs.empty()) curves.push_back(alphaFromSameView(viewPairs, in, search, 0.03, &skipped));
-		// Matched points, not whole images: a smaller minimum per frame pair.
-		if (!runs.getValue().empty())
-			curves.push_back(alphaFromChromaChanges(runChanges, search, 0.03, 50, "runs", &skipped));
-		curves.push_back(alphaByEdgeDirections(edgeSamples(all, in, edgeStep.getValue()), search, edgeMaxChroma.getValue()));
-		curves.push_back(alphaByEntropy(chromaSamples(all, in), search));
-		for (const auto& s : skipped) std::cout << "skipped: " << s << "\n";
-
-		const std::string want = method.getValue();
-		for (const auto& c : curves)
-			if (c.method == want) chosen = &c;
-		if (want == "auto") chosen = &curves.front();
-		if (!chosen)
-			throw std::invalid_argument(
-				"--method " + want + ": that method had no data (pairs: --pairs/--pair; same-view: --same-view; runs: --runs)");
-
-		std::cout << "\nalpha estimates (beta = 1 - alpha; 95 % bootstrap interval over "
-				  << (search.bootstrapRounds > 0 ? std::to_string(search.bootstrapRounds) + " resamplings" : "none")
-				  << "):\n";
-		for (const auto& c : curves)
-			std::cout << "  " << std::left << std::setw(10) << c.method << " alpha " << fmt(c.best) << "  ["
-					  << fmt(c.ciLow) << ", " << fmt(c.ciHigh) << "]  from " << c.items
-					  << itemsOf(c.method) << (&c == chosen ? "   <- used" : "") << "\n";
-
+		curves = estimateCurves(data, all, in, search, edgeStep.getValue(), edgeMaxChroma.getValue());
+		chosen = chooseCurve(curves, method.getValue());
+		printEstimates(curves, chosen, search);
 		p = in.params(chosen->best);
 	}
 
 	// ---- mapping
-	auto pDef = p;	// default mapping at the same alpha and beta
+	const InvariantParams pDefault = p;	 // the default mapping at the same alpha and beta
 	p = calibrateMapping(all, p, tail.getValue(), in.stride, minSpan.getValue());
-	const auto stCal = mappingStats(all, p, in.stride);
-	const auto stDef = mappingStats(all, pDef, in.stride);
-	auto pPaper = InvariantParams::FromAlphaBeta(0.4800, 0.5065);
-	pPaper.order = in.order, pPaper.linearisation = in.linearisation, pPaper.gamma = in.gamma;
-	const auto stPaper = mappingStats(all, pPaper, in.stride);
-	std::cout << "\nresult: alpha = " << fmt(p.alpha) << ", beta = 1 - alpha = " << fmt(p.beta)
-			  << "\n  wavelength form: 1/l2 = alpha/l1 + beta/l3, e.g. green peak "
-			  << fmt(equivalentGreenPeak(p.alpha, 470, 620), 1) << " nm for blue 470 / red 620 nm"
-			  << "\n  8-bit mapping: scale = " << fmt(p.scale, 3) << " grey levels per log unit, offset = "
-			  << fmt(p.offset)
-			  << (p.hasCompressedTails()
-					  ? "\n  tails compressed (a linear mapping gave the 1st-99th percentiles fewer than " +
-							fmt(minSpan.getValue(), 0) + " levels): linear between grey levels " + fmt(p.knee_low, 2) +
-							" and " + fmt(p.knee_high, 2) + ", slope " + fmt(p.tail_slope_low, 4) + " beyond"
-					  : minSpan.getValue() > 0
-							? "\n  linear mapping (it gives the 1st-99th percentiles at least " + fmt(minSpan.getValue(), 0) +
-								  " levels)"
-							: std::string("\n  linear mapping (--min-span 0)"))
-			  << "\n\nclipping over the " << all.size() << " calibration images (share of pixels at 0 or 255; 1st-99th percentile span):\n"
-			  << "  calibrated mapping          " << fmt(100 * stCal.clipped(), 2) << " %  (low " << fmt(100 * stCal.clipLow, 2)
-			  << ", high " << fmt(100 * stCal.clipHigh, 2) << "), span " << fmt(stCal.span(), 1) << " grey levels\n"
-			  << "  default mapping, this alpha " << fmt(100 * stDef.clipped(), 2) << " %, span " << fmt(stDef.span(), 1) << "\n"
-			  << "  paper's alpha/beta/mapping  " << fmt(100 * stPaper.clipped(), 2) << " %, span "
-			  << fmt(stPaper.span(), 1) << "\n";
-	if (stCal.span() < 200)
-		std::cout << "warning: the 1st-99th percentiles span only " << fmt(stCal.span(), 1)
-				  << " grey levels: the invariant's tails are heavy here; raise --min-span (or --tail) for more\n";
+	const auto stCal = reportMapping(all, p, pDefault, in, minSpan.getValue());
 
 	// ---- outputs
-	shadyloc::CFilterInvariant filter;
-	filter.setParams(p);
-	std::ostringstream ini;
-	if (chosen)
-		ini << "# Calibrated by shadyloc calibrate-alpha (" << chosen->method << " method, " << chosen->items
-			<< itemsOf(chosen->method)
-			<< ", 95% interval of alpha [" << fmt(chosen->ciLow) << ", " << fmt(chosen->ciHigh) << "]).\n";
-	else
-		ini << "# alpha and beta given (--alpha); 8-bit mapping calibrated by shadyloc calibrate-alpha from "
-			<< all.size() << " images.\n";
-	ini << "# Input linearisation: " << toString(in.linearisation)
-		<< ". Clipping over the calibration images: " << fmt(100 * stCal.clipped(), 2) << " %.\n"
-		<< "# The 8-bit mapping (scale, offset, knees, tail slopes) defines the descriptors: keep it equal for map "
-		   "and live data.\n"
-		<< "[invariant]\n"
-		<< filter.optionsAsIni();
-	writeText(iniTmp, ini.str());
+	const std::string ini = iniText(p, chosen, in, all.size(), stCal.clipped());
+	writeText(iniTmp, ini);
 	if (withCurve)
 	{
-		std::ostringstream csv;
-		csv << "alpha";
-		for (const auto& c : curves) csv << "," << c.method;
-		csv << "\n" << std::setprecision(8);
-		// Curves share one grid (one TAlphaSearch).
-		for (size_t j = 0; j < curves.front().alpha.size(); j++)
-		{
-			csv << curves.front().alpha[j];
-			for (const auto& c : curves) csv << "," << c.cost[j];
-			csv << "\n";
-		}
-		writeText(csvTmp, csv.str());
+		writeText(csvTmp, curvesCsv(curves));
 		if (!pngTmp.empty())
 			plotCurves(curves, csvTmp, pngTmp, 0.48,
 				"alpha calibration (linearisation " + toString(in.linearisation) + ")");
 	}
 	outputs.commit();
 	std::cout << "\nwrote " << iniPath << (withCurve ? ", " + csvPath : "")
-			  << (withCurve && !noPlot.getValue() ? ", " + pngPath : "") << "\n\n" << ini.str();
+			  << (withCurve && !noPlot.getValue() ? ", " + pngPath : "") << "\n\n" << ini;
 	return 0;
 }
 shadyloc::apps::RegisterCommand reg(
