@@ -55,6 +55,214 @@ bool imageResidual(
 	Sigma = sigma_px * sigma_px * Eigen::Matrix2d::Identity() + JP * c.cov_ref * JP.transpose();
 	return true;
 }
+
+/** Landmark j's feature (-1: none) and its descriptor distance. */
+struct TLandmarkMatches
+{
+	explicit TLandmarkMatches(size_t n) : feature(n, -1), distance(n, 257) {}
+	std::vector<int> feature, distance;
+};
+
+/** The best feature of a landmark among those `consider` admits, if it
+ * passes the distance bound and the ratio test. */
+template <typename Admit>
+void bestFeature(
+	const features::TStereoMeasurement& lm, const TImageFeatures& f, const TMonoLocaliserOptions& o, Admit&& consider,
+	int& feature, int& distance)
+{
+	int b1 = 257, b2 = 257, bi = -1;
+	for (size_t i = 0; i < f.feats.size(); i++)
+	{
+		if (!consider(i)) continue;
+		const int d = features::hamming(lm.desc, f.feats[i].desc);
+		if (d < b1) b2 = b1, b1 = d, bi = static_cast<int>(i);
+		else if (d < b2) b2 = d;
+	}
+	if (bi >= 0 && b1 <= o.max_hamming && b1 < o.match_ratio * b2) feature = bi, distance = b1;
+}
+
+/** Without a prediction every feature is a candidate: ratio test on the
+ * landmark's side, then (option) mutual. */
+void matchEverywhere(
+	const std::vector<features::TStereoMeasurement>& lms, const TImageFeatures& f, const TMonoLocaliserOptions& o,
+	TLandmarkMatches& m)
+{
+	const size_t nF = f.feats.size();
+	std::vector<int> bestLm(nF, -1), bestLmDist(nF, 257);
+	for (size_t j = 0; j < lms.size(); j++)
+	{
+		// Both sides in one pass over the distances: the landmark's best two, each feature's best landmark.
+		int b1 = 257, b2 = 257, bi = -1;
+		for (size_t i = 0; i < nF; i++)
+		{
+			const int d = features::hamming(lms[j].desc, f.feats[i].desc);
+			if (d < bestLmDist[i]) bestLmDist[i] = d, bestLm[i] = static_cast<int>(j);
+			if (d < b1) b2 = b1, b1 = d, bi = static_cast<int>(i);
+			else if (d < b2) b2 = d;
+		}
+		if (bi >= 0 && b1 <= o.max_hamming && b1 < o.match_ratio * b2) m.feature[j] = bi, m.distance[j] = b1;
+	}
+	if (!o.mutual) return;
+	for (size_t j = 0; j < lms.size(); j++)
+		if (m.feature[j] >= 0 && bestLm[static_cast<size_t>(m.feature[j])] != static_cast<int>(j)) m.feature[j] = -1;
+}
+
+/** One landmark per feature: the closer descriptor keeps it. */
+void oneLandmarkPerFeature(size_t nFeatures, TLandmarkMatches& m)
+{
+	std::vector<int> owner(nFeatures, -1);
+	for (size_t j = 0; j < m.feature.size(); j++)
+	{
+		if (m.feature[j] < 0) continue;
+		int& w = owner[static_cast<size_t>(m.feature[j])];
+		if (w < 0) w = static_cast<int>(j);
+		else if (m.distance[j] < m.distance[static_cast<size_t>(w)])
+		{
+			m.feature[static_cast<size_t>(w)] = -1;
+			w = static_cast<int>(j);
+		}
+		else
+			m.feature[j] = -1;
+	}
+}
+
+/** With a prediction: each landmark searched in the chi-square gate of its
+ * predicted pixel (first order, with a floor; a gate longer than
+ * gate_max_px is not searched, never clipped). False (lost) when too many
+ * gates overflow. */
+bool matchInGates(
+	const std::vector<features::TStereoMeasurement>& lms, const TImageFeatures& f, const TPinholeCalib& calib,
+	const TKeyframePose& prediction, const TMonoLocaliserOptions& o, TLandmarkMatches& m, vo::TGateStats& gate)
+{
+	const Eigen::Isometry3d T_live_kf = prediction.T_kf_live.inverse();
+	const Matrix6d covT = geometry::invertCovariance(prediction.T_kf_live, prediction.cov);
+	std::vector<double> axes;
+	const double minL = o.gate_min_px * o.gate_min_px / o.gate_chi2;
+	for (size_t j = 0; j < lms.size(); j++)
+	{
+		const Eigen::Vector3d p = T_live_kf * lms[j].P;
+		if (!(p.z() > 0.1)) continue;
+		Eigen::Matrix<double, 2, 3> Jp;
+		const Eigen::Vector2d z = calib.project(p, &Jp);
+		if (z.x() < 0 || z.y() < 0 || z.x() >= f.image.cols || z.y() >= f.image.rows) continue;
+		Eigen::Matrix<double, 2, 6> Jx;
+		Jx.leftCols<3>() = Jp;
+		Jx.rightCols<3>() = -Jp * skew(p);
+		const Eigen::Matrix<double, 2, 3> JP = Jp * T_live_kf.linear();
+		const Eigen::Matrix2d S = JP * lms[j].cov * JP.transpose() + Jx * covT * Jx.transpose() +
+								  o.sigma_px * o.sigma_px * Eigen::Matrix2d::Identity();
+		Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(0.5 * (S + S.transpose()));
+		gate.predicted++;
+		const double longest = std::sqrt(o.gate_chi2 * std::max(0.0, es.eigenvalues().maxCoeff()));
+		axes.push_back(longest);
+		if (longest > o.gate_max_px)
+		{
+			gate.overflow++;  // never clipped: not searched
+			continue;
+		}
+		const Eigen::Vector2d lam = es.eigenvalues().cwiseMax(minL);
+		const Eigen::Matrix2d Ginv = es.eigenvectors() * lam.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+		const auto inGate = [&](size_t i) {
+			const Eigen::Vector2d dz(f.feats[i].u - z.x(), f.feats[i].v - z.y());
+			if (std::abs(dz.x()) > o.gate_max_px || std::abs(dz.y()) > o.gate_max_px) return false;
+			return dz.dot(Ginv * dz) <= o.gate_chi2;
+		};
+		bestFeature(lms[j], f, o, inGate, m.feature[j], m.distance[j]);
+	}
+	if (!axes.empty())
+	{
+		std::nth_element(axes.begin(), axes.begin() + axes.size() / 2, axes.end());
+		gate.median_axis_px = axes[axes.size() / 2];
+	}
+	if (gate.predicted > 0 && gate.overflow > o.max_overflow_fraction * gate.predicted) return false;
+	oneLandmarkPerFeature(f.feats.size(), m);
+	return true;
+}
+
+/** Each matched landmark's keyframe patch located to sub-pixel in the image;
+ * `descriptorMatches` counts the matches tried. */
+std::vector<TImageCorrespondence> refineMatches(
+	const std::vector<features::TStereoMeasurement>& lms, const TImageFeatures& f, const TMonoLocaliserOptions& o,
+	const TLandmarkMatches& m, int& descriptorMatches)
+{
+	std::vector<TImageCorrespondence> corr;
+	for (size_t j = 0; j < lms.size(); j++)
+	{
+		if (m.feature[j] < 0) continue;
+		descriptorMatches++;
+		const auto& ft = f.feats[static_cast<size_t>(m.feature[j])];
+		float xs, ys;
+		if (!features::locatePatch(
+				lms[j].patch, f.image, static_cast<int>(ft.u), static_cast<int>(ft.v), o.refine_radius_px,
+				o.refine_min_zncc, o.refine_iterations, xs, ys))
+			continue;
+		corr.push_back({lms[j].P, lms[j].cov, Eigen::Vector2d(xs, ys)});
+	}
+	return corr;
+}
+
+/** OpenCV's PnP RANSAC (AP3P): T_curr_ref, or none (also for degenerate
+ * sets); `use` marks its inliers, `inliers` counts them. */
+std::optional<Eigen::Isometry3d> pnpRansac(
+	const std::vector<TImageCorrespondence>& corr, const TPinholeCalib& calib, const TMonoLocaliserOptions& o,
+	std::vector<uint8_t>& use, int& inliers)
+{
+	std::vector<cv::Point3d> obj;
+	std::vector<cv::Point2d> pix;
+	for (const auto& k : corr)
+	{
+		obj.emplace_back(k.P_ref.x(), k.P_ref.y(), k.P_ref.z());
+		pix.emplace_back(k.z.x(), k.z.y());
+	}
+	const cv::Matx33d K(calib.fx, 0, calib.cx, 0, calib.fy, calib.cy, 0, 0, 1);
+	cv::Mat rvec, tvec;
+	std::vector<int> inl;
+	bool ok = false;
+	try
+	{
+		ok = cv::solvePnPRansac(
+			obj, pix, K, cv::noArray(), rvec, tvec, false, o.ransac_iterations,
+			static_cast<float>(o.ransac_threshold_px), o.ransac_confidence, inl, cv::SOLVEPNP_AP3P);
+	}
+	catch (const cv::Exception&)
+	{
+		ok = false;	 // degenerate sets: no pose
+	}
+	inliers = static_cast<int>(inl.size());
+	if (!ok) return std::nullopt;
+	use.assign(corr.size(), 0);
+	for (const int i : inl) use[static_cast<size_t>(i)] = 1;
+	cv::Mat Rcv;
+	cv::Rodrigues(rvec, Rcv);
+	Eigen::Matrix3d R;
+	cv::cv2eigen(Rcv, R);
+	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+	T.linear() = R;
+	T.translation() = Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
+	return T;
+}
+
+/** Inliers re-selected at pose T: marks `use`, returns their count. */
+int reselectInliers(
+	const std::vector<TImageCorrespondence>& corr, const TPinholeCalib& calib, const Eigen::Isometry3d& T,
+	double threshold_px, std::vector<uint8_t>& use)
+{
+	int n = 0;
+	for (size_t i = 0; i < corr.size(); i++)
+	{
+		const Eigen::Vector3d p = T * corr[i].P_ref;
+		use[i] = p.z() > 1e-3 && (calib.project(p) - corr[i].z).norm() < threshold_px;
+		n += use[i];
+	}
+	return n;
+}
+
+/** Square root of the largest eigenvalue of a 3x3 covariance block. */
+double largestSigma(const Eigen::Matrix3d& block)
+{
+	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(block, Eigen::EigenvaluesOnly);
+	return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
+}
 }  // namespace
 
 // ---- the camera ------------------------------------------------------------------------------------
@@ -310,176 +518,37 @@ TMonoLocaliserResult CMonoLocaliser::localise(
 	if (lms.empty() || f.feats.empty() || img.empty()) return done(LocaliserStatus::FewMatches);
 
 	// ---- matching: landmark j -> feature matchOf[j]
-	const size_t nL = lms.size(), nF = f.feats.size();
-	std::vector<int> matchOf(nL, -1), distOf(nL, 257);
-	const bool gated = prediction && prediction->valid;
-	if (!gated)
-	{
-		// Every feature a candidate: ratio test on the landmark's side, then mutual.
-		std::vector<int> bestLm(nF, -1), bestLmDist(nF, 257);
-		for (size_t j = 0; j < nL; j++)
-		{
-			int b1 = 257, b2 = 257, bi = -1;
-			for (size_t i = 0; i < nF; i++)
-			{
-				const int d = features::hamming(lms[j].desc, f.feats[i].desc);
-				if (d < bestLmDist[i]) bestLmDist[i] = d, bestLm[i] = static_cast<int>(j);
-				if (d < b1) b2 = b1, b1 = d, bi = static_cast<int>(i);
-				else if (d < b2) b2 = d;
-			}
-			if (bi >= 0 && b1 <= o.max_hamming && b1 < o.match_ratio * b2) matchOf[j] = bi, distOf[j] = b1;
-		}
-		if (o.mutual)
-			for (size_t j = 0; j < nL; j++)
-				if (matchOf[j] >= 0 && bestLm[static_cast<size_t>(matchOf[j])] != static_cast<int>(j)) matchOf[j] = -1;
-	}
-	else
-	{
-		// The gate of each landmark's predicted pixel (first order).
-		const Eigen::Isometry3d T_live_kf = prediction->T_kf_live.inverse();
-		const Matrix6d covT = geometry::invertCovariance(prediction->T_kf_live, prediction->cov);
-		std::vector<double> axes;
-		const double minL = o.gate_min_px * o.gate_min_px / o.gate_chi2;
-		for (size_t j = 0; j < nL; j++)
-		{
-			const Eigen::Vector3d p = T_live_kf * lms[j].P;
-			if (!(p.z() > 0.1)) continue;
-			Eigen::Matrix<double, 2, 3> Jp;
-			const Eigen::Vector2d z = calib.project(p, &Jp);
-			if (z.x() < 0 || z.y() < 0 || z.x() >= img.cols || z.y() >= img.rows) continue;
-			Eigen::Matrix<double, 2, 6> Jx;
-			Jx.leftCols<3>() = Jp;
-			Jx.rightCols<3>() = -Jp * skew(p);
-			const Eigen::Matrix<double, 2, 3> JP = Jp * T_live_kf.linear();
-			const Eigen::Matrix2d S = JP * lms[j].cov * JP.transpose() + Jx * covT * Jx.transpose() +
-									  o.sigma_px * o.sigma_px * Eigen::Matrix2d::Identity();
-			Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> es(0.5 * (S + S.transpose()));
-			r.gate.predicted++;
-			const double longest = std::sqrt(o.gate_chi2 * std::max(0.0, es.eigenvalues().maxCoeff()));
-			axes.push_back(longest);
-			if (longest > o.gate_max_px)
-			{
-				r.gate.overflow++;  // never clipped: not searched
-				continue;
-			}
-			const Eigen::Vector2d lam = es.eigenvalues().cwiseMax(minL);
-			const Eigen::Matrix2d Ginv = es.eigenvectors() * lam.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
-			int b1 = 257, b2 = 257, bi = -1;
-			for (size_t i = 0; i < nF; i++)
-			{
-				const Eigen::Vector2d dz(f.feats[i].u - z.x(), f.feats[i].v - z.y());
-				if (std::abs(dz.x()) > o.gate_max_px || std::abs(dz.y()) > o.gate_max_px) continue;
-				if (dz.dot(Ginv * dz) > o.gate_chi2) continue;
-				const int d = features::hamming(lms[j].desc, f.feats[i].desc);
-				if (d < b1) b2 = b1, b1 = d, bi = static_cast<int>(i);
-				else if (d < b2) b2 = d;
-			}
-			if (bi >= 0 && b1 <= o.max_hamming && b1 < o.match_ratio * b2) matchOf[j] = bi, distOf[j] = b1;
-		}
-		if (!axes.empty())
-		{
-			std::nth_element(axes.begin(), axes.begin() + axes.size() / 2, axes.end());
-			r.gate.median_axis_px = axes[axes.size() / 2];
-		}
-		if (r.gate.predicted > 0 && r.gate.overflow > o.max_overflow_fraction * r.gate.predicted)
-			return done(LocaliserStatus::Lost);
-		// One landmark per feature: the closer descriptor keeps it.
-		std::vector<int> owner(nF, -1);
-		for (size_t j = 0; j < nL; j++)
-		{
-			if (matchOf[j] < 0) continue;
-			int& w = owner[static_cast<size_t>(matchOf[j])];
-			if (w < 0) w = static_cast<int>(j);
-			else if (distOf[j] < distOf[static_cast<size_t>(w)])
-			{
-				matchOf[static_cast<size_t>(w)] = -1;
-				w = static_cast<int>(j);
-			}
-			else
-				matchOf[j] = -1;
-		}
-	}
+	TLandmarkMatches m(lms.size());
+	if (!prediction || !prediction->valid) matchEverywhere(lms, f, o, m);
+	else if (!matchInGates(lms, f, calib, *prediction, o, m, r.gate))
+		return done(LocaliserStatus::Lost);
 
 	// ---- sub-pixel: the keyframe's patch located in the image
-	std::vector<TImageCorrespondence> corr;
-	for (size_t j = 0; j < nL; j++)
-	{
-		if (matchOf[j] < 0) continue;
-		r.descriptor_matches++;
-		const auto& ft = f.feats[static_cast<size_t>(matchOf[j])];
-		float xs, ys;
-		if (!features::locatePatch(
-				lms[j].patch, img, static_cast<int>(ft.u), static_cast<int>(ft.v), o.refine_radius_px, o.refine_min_zncc,
-				o.refine_iterations, xs, ys))
-			continue;
-		corr.push_back({lms[j].P, lms[j].cov, Eigen::Vector2d(xs, ys)});
-	}
+	const std::vector<TImageCorrespondence> corr = refineMatches(lms, f, o, m, r.descriptor_matches);
 	r.matches = static_cast<int>(corr.size());
 	if (r.matches < o.min_matches) return done(LocaliserStatus::FewMatches);
 
 	// ---- PnP RANSAC (OpenCV), then the robust refinement
-	std::vector<cv::Point3d> obj;
-	std::vector<cv::Point2d> pix;
-	for (const auto& k : corr)
-	{
-		obj.emplace_back(k.P_ref.x(), k.P_ref.y(), k.P_ref.z());
-		pix.emplace_back(k.z.x(), k.z.y());
-	}
-	const cv::Matx33d K(calib.fx, 0, calib.cx, 0, calib.fy, calib.cy, 0, 0, 1);
-	cv::Mat rvec, tvec;
-	std::vector<int> inl;
-	bool ok = false;
-	try
-	{
-		ok = cv::solvePnPRansac(
-			obj, pix, K, cv::noArray(), rvec, tvec, false, o.ransac_iterations, static_cast<float>(o.ransac_threshold_px),
-			o.ransac_confidence, inl, cv::SOLVEPNP_AP3P);
-	}
-	catch (const cv::Exception&)
-	{
-		ok = false;	 // degenerate sets: no pose
-	}
-	r.ransac_inliers = static_cast<int>(inl.size());
-	if (!ok || r.ransac_inliers < o.min_inliers) return done(LocaliserStatus::FewInliers);
-	cv::Mat Rcv;
-	cv::Rodrigues(rvec, Rcv);
-	Eigen::Matrix3d R;
-	cv::cv2eigen(Rcv, R);
-	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-	T.linear() = R;
-	T.translation() = Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
-
-	std::vector<uint8_t> use(corr.size(), 0);
-	for (const int i : inl) use[static_cast<size_t>(i)] = 1;
-	geometry::TPoseSolution sol;
+	std::vector<uint8_t> use;
+	const auto T0 = pnpRansac(corr, calib, o, use, r.ransac_inliers);
+	if (!T0 || r.ransac_inliers < o.min_inliers) return done(LocaliserStatus::FewInliers);
+	Eigen::Isometry3d T = *T0;
 	for (int pass = 0; pass < 2; pass++)
 	{
-		sol = solveImagePose(calib, corr, use, T, o.sigma_px, o.huber_k, o.max_iterations);
+		const auto sol = solveImagePose(calib, corr, use, T, o.sigma_px, o.huber_k, o.max_iterations);
 		if (!sol.ok) return done(LocaliserStatus::SolverFailed);
 		T = sol.T_curr_ref;
-		// Inliers re-selected at the refined pose.
-		int n = 0;
-		for (size_t i = 0; i < corr.size(); i++)
-		{
-			const Eigen::Vector3d p = T * corr[i].P_ref;
-			use[i] = p.z() > 1e-3 && (calib.project(p) - corr[i].z).norm() < o.ransac_threshold_px;
-			n += use[i];
-		}
-		r.inliers = n;
-		if (n < o.min_inliers) return done(LocaliserStatus::FewInliers);
+		r.inliers = reselectInliers(corr, calib, T, o.ransac_threshold_px, use);
+		if (r.inliers < o.min_inliers) return done(LocaliserStatus::FewInliers);
 	}
-	sol = solveImagePose(calib, corr, use, T, o.sigma_px, o.huber_k, o.max_iterations);
+	const auto sol = solveImagePose(calib, corr, use, T, o.sigma_px, o.huber_k, o.max_iterations);
 	if (!sol.ok) return done(LocaliserStatus::SolverFailed);
 	r.solved = true;
 	r.T_kf_live = sol.T_curr_ref.inverse();
 	r.cov = o.cov_scale * sol.cov_T_ref_curr;
 	r.rms_px = sol.rms_px;
-	{
-		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> et(r.cov.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
-		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> er(r.cov.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
-		r.sigma_m = std::sqrt(std::max(0.0, et.eigenvalues().maxCoeff()));
-		r.sigma_deg = std::sqrt(std::max(0.0, er.eigenvalues().maxCoeff())) / kDeg;
-	}
+	r.sigma_m = largestSigma(r.cov.topLeftCorner<3, 3>());
+	r.sigma_deg = largestSigma(r.cov.bottomRightCorner<3, 3>()) / kDeg;
 	if (r.sigma_m > o.max_sigma_m || r.sigma_deg > o.max_sigma_deg) return done(LocaliserStatus::Uncertain);
 	return done(LocaliserStatus::Ok);
 }
