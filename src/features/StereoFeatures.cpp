@@ -14,6 +14,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
 #include <ostream>
 #include <stdexcept>
 #include <vector>
@@ -625,6 +626,156 @@ TBest bestOnRow(
 }
 }  // namespace
 
+namespace
+{
+struct TPair
+{
+	int kp;
+	float uR, s;
+};
+
+/** Climbs the left patch's correlation along the right row from x to the
+ * local maximum (at most two steps); false when none is reached. c0, cm, cp:
+ * the scores at the peak and beside it. */
+bool climbToPeak(
+	const cv::Mat& left, int xl, int y, const cv::Mat& right, int r, int& x, float& c0, float& cm, float& cp)
+{
+	const int W = left.cols;
+	c0 = zncc(left, xl, y, right, x, y, r);
+	for (int step = 0; step < 3; step++)
+	{
+		if (x - 1 < r + 1 || x + 1 > W - r - 2) return false;
+		cm = zncc(left, xl, y, right, x - 1, y, r);
+		cp = zncc(left, xl, y, right, x + 1, y, r);
+		if (c0 >= cm && c0 >= cp) return true;
+		if (cm > cp)
+		{
+			x--;
+			cp = c0;
+			c0 = cm;
+		}
+		else
+		{
+			x++;
+			cm = c0;
+			c0 = cp;
+		}
+	}
+	return false;
+}
+
+/** One left corner's stereo match through every check the options turn on. */
+struct TCornerMatcher
+{
+	const StereoFeatureExtractor::TOptions& o;
+	const geometry::TStereoCalib& calib;
+	const cv::Mat &left, &right;
+	const RowIndex &rowsR, &rowsL;
+	TRightWindowStats& rightStats;	//!< of `right`, when dense_check
+	std::vector<float> dense;  //!< scratch
+	std::vector<int32_t> denseAcc;	//!< scratch
+
+	struct TMatch
+	{
+		float uR, s;
+	};
+
+	std::optional<TMatch> match(const cv::KeyPoint& k)
+	{
+		const int r = o.patch_radius, xl = static_cast<int>(k.pt.x), y = static_cast<int>(k.pt.y);
+		const double doffs = calib.doffs();
+		// uR = uL + doffs - D for D in [min, max]
+		const int xmin = static_cast<int>(std::floor(xl + doffs - o.max_disparity));
+		const int xmax = static_cast<int>(std::ceil(xl + doffs - o.min_disparity));
+		const TBest b = bestOnRow(left, xl, y, right, rowsR, o.row_tolerance, xmin, xmax, r);
+		if (b.x < 0 || b.s1 < o.min_zncc) return std::nullopt;
+		if (b.s2 > -2.f && (1.0 - b.s1) > o.max_ambiguity * (1.0 - b.s2)) return std::nullopt;
+		// Dense refinement on the left row around the candidate corner: climb to
+		// the local maximum, then fit a parabola.
+		int x = b.x;
+		float c0 = 0, cm = 0, cp = 0;
+		if (!climbToPeak(left, xl, y, right, r, x, c0, cm, cp) || c0 < o.min_zncc) return std::nullopt;
+		const float uR =
+			refineRowShift(left, xl, y, right, x + parabolaPeak(cm, c0, cp), r, o.subpixel_iterations);
+		const double D = calib.disparity(xl, uR);
+		if (D < o.min_disparity || D > o.max_disparity) return std::nullopt;
+		if (o.min_zncc_shifted > -1 && !silhouetteAgrees(xl, x, y)) return std::nullopt;
+		// Left-right consistency: the right position's best left corner must be this one.
+		const int xlmin = static_cast<int>(std::floor(x - doffs + o.min_disparity));
+		const int xlmax = static_cast<int>(std::ceil(x - doffs + o.max_disparity));
+		const TBest back = bestOnRow(right, x, y, left, rowsL, o.row_tolerance, xlmin, xlmax, r);
+		if (back.x < 0 || std::abs(back.x - xl) > o.lr_tolerance_px) return std::nullopt;
+		if (o.dense_check && !denseAgrees(xl, x, y, xmin, xmax)) return std::nullopt;
+		return TMatch{uR, c0};
+	}
+
+	/** Windows beside the patch (disjoint from it: shift 2r+1) at the same
+	 * disparity must correlate too. Near-flat windows carry no evidence and
+	 * are skipped. */
+	bool silhouetteAgrees(int xl, int x, int y) const
+	{
+		const int r = o.patch_radius, W = left.cols, sh = 2 * r + 1;
+		const int sx[4] = {-sh, sh, 0, 0}, sy[4] = {0, 0, -sh, sh};
+		for (int k = 0; k < 4; k++)
+		{
+			const int xa = xl + sx[k], xb = x + sx[k], yy = y + sy[k];
+			if (xa - r < 0 || xa + r >= W || xb - r < 0 || xb + r >= W || yy - r < 0 || yy + r >= left.rows) continue;
+			if (patchStd(left, xa, yy, r) < 3.0) continue;
+			if (zncc(left, xa, yy, right, xb, yy, r) < o.min_zncc_shifted) return false;
+		}
+		return true;
+	}
+
+	/** Every integer shift of the range, not only the right corners: the
+	 * dense maximum must be this match (+-1 px), and no other local maximum
+	 * may pass the ambiguity bound. A right corner missing at the true
+	 * position otherwise lets a look-alike win. */
+	bool denseAgrees(int xl, int x, int y, int xmin, int xmax)
+	{
+		const int r = o.patch_radius, W = left.cols;
+		const int x0 = std::max(xmin, r + 1), x1 = std::min(xmax, W - r - 2);
+		denseRowZncc(left, xl, y, right, rightStats, x0, x1, r, dense, denseAcc);
+		const int bi = argMax(dense);
+		if (bi < 0 || std::abs(x0 + bi - x) > 1) return false;
+		float s2 = -1.f;
+		const int nd = static_cast<int>(dense.size());
+		for (int k = 0; k < nd; k++)
+			if (std::abs(k - bi) > 1 && (k == 0 || dense[k] >= dense[k - 1]) && (k + 1 == nd || dense[k] >= dense[k + 1]))
+				s2 = std::max(s2, dense[k]);
+		if ((1.0 - dense[bi]) > o.max_ambiguity * (1.0 - s2)) return false;
+		return !o.shifted_window_check || shiftedWindowsAgree(xl, x, y, x0, x1);
+	}
+
+	/** Shiftable windows (Fusiello et al. 1997; Hirschmueller et al. 2002):
+	 * the four windows holding the corner pixel at one of their corners. At a
+	 * depth edge one of them lies on the pixel's own surface; if any textured
+	 * one prefers another shift, the pixel's disparity is in doubt (typically
+	 * a background pixel whose centred window is dominated by a foreground
+	 * edge). */
+	bool shiftedWindowsAgree(int xl, int x, int y, int x0, int x1)
+	{
+		const int r = o.patch_radius, W = left.cols;
+		const int ox[4] = {-r, r, -r, r}, oy[4] = {-r, -r, r, r};
+		for (int k = 0; k < 4; k++)
+		{
+			const int xa = xl + ox[k], ya = y + oy[k];
+			if (xa - r < 0 || xa + r >= W || ya - r < 0 || ya + r >= left.rows) continue;
+			if (patchStd(left, xa, ya, r) < 3.0) continue;  // no evidence either way
+			const int a0 = std::max(x0 + ox[k], r + 1), a1 = std::min(x1 + ox[k], W - r - 2);
+			if (x + ox[k] < a0 || x + ox[k] > a1) continue;
+			denseRowZncc(left, xa, ya, right, rightStats, a0, a1, r, dense, denseAcc);
+			const int b = argMax(dense), c = x + ox[k] - a0;
+			if (b < 0) continue;
+			float sm = dense[c];
+			if (c > 0) sm = std::max(sm, dense[c - 1]);
+			if (c + 1 < static_cast<int>(dense.size())) sm = std::max(sm, dense[c + 1]);
+			if (std::abs(b - c) > 1 && dense[b] > sm + o.shifted_window_margin) return false;
+		}
+		return true;
+	}
+};
+}  // namespace
+
 void StereoFeatureExtractor::process(
 	const cv::Mat& leftIn, const cv::Mat& rightIn, const geometry::TStereoCalib& calib,
 	TStereoFrame& out) const
@@ -657,133 +808,14 @@ void StereoFeatureExtractor::process(
 	RowIndex rowsR, rowsL;
 	rowsR.build(kr, right.rows);
 	rowsL.build(kl, left.rows);
-	const double doffs = calib.doffs();
-	const int W = left.cols;
 	// Scratch reused across frames (one per thread: the channels may run in parallel).
 	thread_local TRightWindowStats rightStats;
 	if (o.dense_check) rightStats.reset(right, r);
-	std::vector<float> dense;
-	std::vector<int32_t> denseAcc;
-	struct TPair
-	{
-		int kp;
-		float uR, s;
-	};
+	TCornerMatcher matcher{o, calib, left, right, rowsR, rowsL, rightStats, {}, {}};
 	std::vector<TPair> pairs;
 	pairs.reserve(kl.size());
 	for (size_t i = 0; i < kl.size(); i++)
-	{
-		const int xl = static_cast<int>(kl[i].pt.x), y = static_cast<int>(kl[i].pt.y);
-		// uR = uL + doffs - D for D in [min, max]
-		const int xmin = static_cast<int>(std::floor(xl + doffs - o.max_disparity));
-		const int xmax = static_cast<int>(std::ceil(xl + doffs - o.min_disparity));
-		const TBest b = bestOnRow(left, xl, y, right, rowsR, o.row_tolerance, xmin, xmax, r);
-		if (b.x < 0 || b.s1 < o.min_zncc) continue;
-		if (b.s2 > -2.f && (1.0 - b.s1) > o.max_ambiguity * (1.0 - b.s2)) continue;
-		// Dense refinement on the left row around the candidate corner: climb to
-		// the local maximum (at most two steps), then fit a parabola.
-		int x = b.x;
-		float c0 = zncc(left, xl, y, right, x, y, r);
-		float cm = 0, cp = 0;
-		bool peak = false;
-		for (int step = 0; step < 3; step++)
-		{
-			if (x - 1 < r + 1 || x + 1 > W - r - 2) break;
-			cm = zncc(left, xl, y, right, x - 1, y, r);
-			cp = zncc(left, xl, y, right, x + 1, y, r);
-			if (c0 >= cm && c0 >= cp)
-			{
-				peak = true;
-				break;
-			}
-			if (cm > cp)
-			{
-				x--;
-				cp = c0;
-				c0 = cm;
-			}
-			else
-			{
-				x++;
-				cm = c0;
-				c0 = cp;
-			}
-		}
-		if (!peak || c0 < o.min_zncc) continue;
-		const float uR =
-			refineRowShift(left, xl, y, right, x + parabolaPeak(cm, c0, cp), r, o.subpixel_iterations);
-		const double D = calib.disparity(xl, uR);
-		if (D < o.min_disparity || D > o.max_disparity) continue;
-		if (o.min_zncc_shifted > -1)
-		{
-			// Windows beside the patch (disjoint from it: shift 2r+1) at the
-			// same disparity. Near-flat windows carry no evidence and are skipped.
-			const int sh = 2 * r + 1;
-			const int sx[4] = {-sh, sh, 0, 0}, sy[4] = {0, 0, -sh, sh};
-			bool ok = true;
-			for (int k = 0; k < 4 && ok; k++)
-			{
-				const int xa = xl + sx[k], xb = x + sx[k], yy = y + sy[k];
-				if (xa - r < 0 || xa + r >= W || xb - r < 0 || xb + r >= W || yy - r < 0 ||
-					yy + r >= left.rows)
-					continue;
-				if (patchStd(left, xa, yy, r) < 3.0) continue;
-				ok = zncc(left, xa, yy, right, xb, yy, r) >= o.min_zncc_shifted;
-			}
-			if (!ok) continue;
-		}
-		// Left-right consistency: the right position's best left corner must be this one.
-		const int xlmin = static_cast<int>(std::floor(x - doffs + o.min_disparity));
-		const int xlmax = static_cast<int>(std::ceil(x - doffs + o.max_disparity));
-		const TBest back = bestOnRow(right, x, y, left, rowsL, o.row_tolerance, xlmin, xlmax, r);
-		if (back.x < 0 || std::abs(back.x - xl) > o.lr_tolerance_px) continue;
-		if (o.dense_check)
-		{
-			// Every integer shift of the range, not only the right corners: the
-			// dense maximum must be this match (+-1 px), and no other local
-			// maximum may pass the ambiguity bound. A right corner missing at the
-			// true position otherwise lets a look-alike win.
-			const int x0 = std::max(xmin, r + 1), x1 = std::min(xmax, W - r - 2);
-			denseRowZncc(left, xl, y, right, rightStats, x0, x1, r, dense, denseAcc);
-			const int bi = argMax(dense);
-			if (bi < 0 || std::abs(x0 + bi - x) > 1) continue;
-			float s2 = -1.f;
-			const int nd = static_cast<int>(dense.size());
-			for (int k = 0; k < nd; k++)
-				if (std::abs(k - bi) > 1 && (k == 0 || dense[k] >= dense[k - 1]) &&
-					(k + 1 == nd || dense[k] >= dense[k + 1]))
-					s2 = std::max(s2, dense[k]);
-			if ((1.0 - dense[bi]) > o.max_ambiguity * (1.0 - s2)) continue;
-			if (o.shifted_window_check)
-			{
-				// Shiftable windows (Fusiello et al. 1997; Hirschmueller et al.
-				// 2002): the four windows holding the corner pixel at one of
-				// their corners. At a depth edge one of them lies on the pixel's
-				// own surface; if any textured one prefers another shift, the
-				// pixel's disparity is in doubt (typically a background pixel
-				// whose centred window is dominated by a foreground edge).
-				const int ox[4] = {-r, r, -r, r}, oy[4] = {-r, -r, r, r};
-				bool ok = true;
-				for (int k = 0; k < 4 && ok; k++)
-				{
-					const int xa = xl + ox[k], ya = y + oy[k];
-					if (xa - r < 0 || xa + r >= W || ya - r < 0 || ya + r >= left.rows) continue;
-					if (patchStd(left, xa, ya, r) < 3.0) continue;  // no evidence either way
-					const int a0 = std::max(x0 + ox[k], r + 1), a1 = std::min(x1 + ox[k], W - r - 2);
-					if (x + ox[k] < a0 || x + ox[k] > a1) continue;
-					denseRowZncc(left, xa, ya, right, rightStats, a0, a1, r, dense, denseAcc);
-					const int b = argMax(dense), c = x + ox[k] - a0;
-					if (b < 0) continue;
-					float sm = dense[c];
-					if (c > 0) sm = std::max(sm, dense[c - 1]);
-					if (c + 1 < static_cast<int>(dense.size())) sm = std::max(sm, dense[c + 1]);
-					ok = std::abs(b - c) <= 1 || dense[b] <= sm + o.shifted_window_margin;
-				}
-				if (!ok) continue;
-			}
-		}
-		pairs.push_back({static_cast<int>(i), uR, c0});
-	}
+		if (const auto m = matcher.match(kl[i])) pairs.push_back({static_cast<int>(i), m->uR, m->s});
 	out.timings.stereo_ms = msSince(t0);
 
 	t0 = Clock::now();
