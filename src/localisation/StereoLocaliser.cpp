@@ -680,28 +680,18 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 	return globalSearch(meas, calib, seed, all);
 }
 
-TGlobalPlace CStereoLocaliser::globalSearch(
-	const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed,
-	const std::vector<uint32_t>& among, const std::optional<Eigen::Isometry3d>& guess) const
+std::vector<std::pair<int, uint32_t>> CStereoLocaliser::placeVotes(
+	const features::TStereoFrame& meas, const std::vector<uint32_t>& among) const
 {
-	const auto& o = m_opts;
-	TGlobalPlace out;
-	if (among.empty() || meas.meas.empty())
-	{
-		out.why = "no keyframes or no measurements";
-		return out;
-	}
-	// ---- BRIEF voting: every live descriptor votes for the keyframe of its
-	// nearest map landmark (within global_vote_hamming). One vote per live
-	// feature, to the nearest only: counting instead every landmark with some
-	// live descriptor nearby let about half of any keyframe's landmarks vote
-	// in any frame (BRIEF of natural images is far from uniform), so the
-	// keyframes with the most landmarks won everywhere (on the simulator the
-	// street of buildings was never a candidate).
+	// One vote per live feature, to the nearest only: counting instead every
+	// landmark with some live descriptor nearby let about half of any
+	// keyframe's landmarks vote in any frame (BRIEF of natural images is far
+	// from uniform), so the keyframes with the most landmarks won everywhere
+	// (on the simulator the street of buildings was never a candidate).
 	std::vector<int> count(among.size(), 0);
 	for (const auto& m : meas.meas)
 	{
-		int best = o.global_vote_hamming + 1;
+		int best = m_opts.global_vote_hamming + 1;
 		int bestK = -1;
 		for (size_t a = 0; a < among.size(); a++)
 			for (const auto& lm : m_map.measurements(among[a], m_channel))
@@ -715,114 +705,103 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 			}
 		if (bestK >= 0) count[static_cast<size_t>(bestK)]++;
 	}
-	std::vector<std::pair<int, uint32_t>> votes;  // (-votes, id): most first, then smaller id
+	std::vector<std::pair<int, uint32_t>> votes;
 	votes.reserve(among.size());
 	for (size_t a = 0; a < among.size(); a++) votes.emplace_back(-count[a], among[a]);
 	std::sort(votes.begin(), votes.end());
-	if (guess) putNearestFirst(*guess, votes);
-	// ---- geometric check of the best candidates.
-	struct TVerified
+	return votes;
+}
+
+std::optional<CStereoLocaliser::TVerifiedPlace> CStereoLocaliser::verifyPlace(
+	const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed, uint32_t k,
+	const std::optional<Eigen::Isometry3d>& guess, int& solves) const
+{
+	const auto& o = m_opts;
+	// (1) a window around each landmark's projection: where the guess puts it
+	// (warped), else from the keyframe's own pose;
+	vo::TKeyframeMatchInput mi;
+	mi.landmarks = &m_map.measurements(k, m_channel);
+	mi.calib_kf = m_map.calibration();
+	mi.frame = &meas;
+	mi.calib = calib;
+	vo::TKeyframeMatchOutput mo;
+	vo::TRelativePoseOutput po;
+	vo::TRelativePoseInput pi;
+	pi.calib = calib;
+	pi.seed = seed + k;
+	bool verified = false;
+	for (const bool atGuess : {true, false})
 	{
-		uint32_t kf;
-		int inliers, votes;
-		Eigen::Isometry3d T_kf_live, T_map_live;
-		vo::TRelativePoseOutput solve;
-		std::vector<geometry::TStereoCorrespondence> corr;	//!< the solve's
-	};
-	std::vector<TVerified> ver;
-	for (int c = 0; c < o.global_candidates && c < static_cast<int>(votes.size()); c++)
-	{
-		const uint32_t k = votes[c].second;
-		const bool nearGuess = guess && c == 0;	 // putNearestFirst: no votes needed
-		if (!nearGuess && -votes[c].first < o.min_matches) continue;
-		// (1) a window around each landmark's projection: where the guess
-		// puts it (warped), else from the keyframe's own pose;
-		vo::TKeyframeMatchInput mi;
-		mi.landmarks = &m_map.measurements(k, m_channel);
-		mi.calib_kf = m_map.calibration();
-		mi.frame = &meas;
-		mi.calib = calib;
-		vo::TKeyframeMatchOutput mo;
-		vo::TRelativePoseOutput po;
-		vo::TRelativePoseInput pi;
-		pi.calib = calib;
-		pi.seed = seed + k;
-		bool verified = false;
-		for (const bool atGuess : {true, false})
-		{
-			if (atGuess && !guess) continue;
-			mi.T_curr_kf_pred = atGuess ? guess->inverse() * m_map.keyframe(k).T_map_kf : Eigen::Isometry3d::Identity();
-			mi.brief = atGuess ? briefPattern() : nullptr;
-			m_placeMatcher.match(mi, mo);
-			if (static_cast<int>(mo.corr.size()) < o.min_matches) continue;
-			pi.corr = &mo.corr;
-			m_estimator.estimate(pi, po);
-			out.verified++;
-			// A first pass below min_inliers is what random matches give
-			// (RANSAC finds 6-8 consistent ones among ~150 in a world that is
-			// not the map's); the gates around such a pose are wide enough for
-			// a second pass to gather a spurious consensus, so it is not refined.
-			verified = po.ok() && static_cast<int>(po.inliers) >= o.min_inliers;
-			if (verified) break;
-		}
-		if (!verified) continue;
-		// (2) active search around that pose, solved again (without it as prior).
-		TPoseWithCov p1;
-		p1.T = po.T_curr_ref;
-		p1.cov = geometry::invertCovariance(po.T_curr_ref.inverse(), o.cov_scale * po.cov_T_ref_curr);
-		mi.T_curr_kf_pred = p1.T;
-		mi.cov_T_curr_kf_pred = p1.cov;
-		mi.brief = briefPattern();  // a pose now: the second pass may warp
-		vo::TKeyframeMatchOutput mo2;
-		m_gateMatcher.match(mi, mo2);
-		vo::TRelativePoseOutput po2;
-		if (static_cast<int>(mo2.corr.size()) >= o.min_matches)
-		{
-			pi.corr = &mo2.corr;
-			m_estimator.estimate(pi, po2);
-		}
-		const bool second = po2.ok() && po2.inliers >= po.inliers;
-		TVerified v;
-		v.solve = second ? po2 : po;
-		v.corr = second ? mo2.corr : mo.corr;
-		if (o.patch_search)
-		{
-			// The patch pass at the verified pose, as a tracked frame gets it.
-			TLocaliserInput li;
-			li.meas = &meas;
-			li.calib = calib;
-			vo::TKeyframeMatchOutput more = second ? mo2 : mo;
-			std::vector<uint32_t> keyframeOf(more.corr.size(), k);
-			const size_t before = more.corr.size();
-			searchLocalMapByPatches(li, k, v.solve.T_curr_ref, more, keyframeOf);
-			vo::TRelativePoseOutput po3;
-			if (more.corr.size() > before)
-			{
-				pi.corr = &more.corr;
-				m_estimator.estimate(pi, po3);
-			}
-			if (po3.ok() && po3.inliers >= v.solve.inliers)
-			{
-				v.solve = po3;
-				v.corr = std::move(more.corr);
-			}
-		}
-		v.kf = k;
-		v.inliers = static_cast<int>(v.solve.inliers);
-		v.votes = -votes[c].first;
-		v.T_kf_live = v.solve.T_curr_ref.inverse();
-		v.T_map_live = m_map.keyframe(k).T_map_kf * v.T_kf_live;
-		ver.push_back(v);
+		if (atGuess && !guess) continue;
+		mi.T_curr_kf_pred = atGuess ? guess->inverse() * m_map.keyframe(k).T_map_kf : Eigen::Isometry3d::Identity();
+		mi.brief = atGuess ? briefPattern() : nullptr;
+		m_placeMatcher.match(mi, mo);
+		if (static_cast<int>(mo.corr.size()) < o.min_matches) continue;
+		pi.corr = &mo.corr;
+		m_estimator.estimate(pi, po);
+		solves++;
+		// A first pass below min_inliers is what random matches give (RANSAC
+		// finds 6-8 consistent ones among ~150 in a world that is not the
+		// map's); the gates around such a pose are wide enough for a second
+		// pass to gather a spurious consensus, so it is not refined.
+		verified = po.ok() && static_cast<int>(po.inliers) >= o.min_inliers;
+		if (verified) break;
 	}
-	if (ver.empty())
+	if (!verified) return std::nullopt;
+	// (2) active search around that pose, solved again (without it as prior).
+	mi.T_curr_kf_pred = po.T_curr_ref;
+	mi.cov_T_curr_kf_pred = geometry::invertCovariance(po.T_curr_ref.inverse(), o.cov_scale * po.cov_T_ref_curr);
+	mi.brief = briefPattern();	// a pose now: the second pass may warp
+	vo::TKeyframeMatchOutput mo2;
+	m_gateMatcher.match(mi, mo2);
+	vo::TRelativePoseOutput po2;
+	if (static_cast<int>(mo2.corr.size()) >= o.min_matches)
 	{
-		out.why = "no candidate verified";
-		return out;
+		pi.corr = &mo2.corr;
+		m_estimator.estimate(pi, po2);
 	}
-	const auto bestIt = std::max_element(ver.begin(), ver.end(), [](const TVerified& a, const TVerified& b) {
+	const bool second = po2.ok() && po2.inliers >= po.inliers;
+	TVerifiedPlace v;
+	v.solve = second ? po2 : po;
+	v.corr = second ? mo2.corr : mo.corr;
+	if (o.patch_search)
+	{
+		// The patch pass at the verified pose, as a tracked frame gets it.
+		TLocaliserInput li;
+		li.meas = &meas;
+		li.calib = calib;
+		vo::TKeyframeMatchOutput more = second ? mo2 : mo;
+		std::vector<uint32_t> keyframeOf(more.corr.size(), k);
+		const size_t before = more.corr.size();
+		searchLocalMapByPatches(li, k, v.solve.T_curr_ref, more, keyframeOf);
+		vo::TRelativePoseOutput po3;
+		if (more.corr.size() > before)
+		{
+			pi.corr = &more.corr;
+			m_estimator.estimate(pi, po3);
+		}
+		if (po3.ok() && po3.inliers >= v.solve.inliers)
+		{
+			v.solve = po3;
+			v.corr = std::move(more.corr);
+		}
+	}
+	v.kf = k;
+	v.inliers = static_cast<int>(v.solve.inliers);
+	v.T_kf_live = v.solve.T_curr_ref.inverse();
+	v.T_map_live = m_map.keyframe(k).T_map_kf * v.T_kf_live;
+	return v;
+}
+
+TGlobalPlace CStereoLocaliser::bestPlace(
+	const std::vector<TVerifiedPlace>& ver, const geometry::TStereoCalib& calib, uint32_t seed) const
+{
+	const auto& o = m_opts;
+	TGlobalPlace out;
+	const auto bestIt = std::max_element(ver.begin(), ver.end(), [](const TVerifiedPlace& a, const TVerifiedPlace& b) {
 		return a.inliers < b.inliers || (a.inliers == b.inliers && a.kf > b.kf);
 	});
-	const TVerified& best = *bestIt;
+	const TVerifiedPlace& best = *bestIt;
 	for (const auto& v : ver)
 		if ((v.T_map_live.translation() - best.T_map_live.translation()).norm() > o.global_distinct_m)
 			out.runner_up_inliers = std::max(out.runner_up_inliers, v.inliers);
@@ -849,6 +828,38 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 	}
 	out.ok = true;
 	out.pose.valid = true;
+	return out;
+}
+
+TGlobalPlace CStereoLocaliser::globalSearch(
+	const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed,
+	const std::vector<uint32_t>& among, const std::optional<Eigen::Isometry3d>& guess) const
+{
+	const auto& o = m_opts;
+	if (among.empty() || meas.meas.empty())
+	{
+		TGlobalPlace out;
+		out.why = "no keyframes or no measurements";
+		return out;
+	}
+	// ---- BRIEF voting, then the geometric check of the best candidates.
+	auto votes = placeVotes(meas, among);
+	if (guess) putNearestFirst(*guess, votes);
+	std::vector<TVerifiedPlace> ver;
+	int solves = 0;
+	for (int c = 0; c < o.global_candidates && c < static_cast<int>(votes.size()); c++)
+	{
+		const bool nearGuess = guess && c == 0;	 // putNearestFirst: no votes needed
+		if (!nearGuess && -votes[c].first < o.min_matches) continue;
+		if (auto v = verifyPlace(meas, calib, seed, votes[c].second, guess, solves))
+		{
+			v->votes = -votes[c].first;
+			ver.push_back(std::move(*v));
+		}
+	}
+	TGlobalPlace out = ver.empty() ? TGlobalPlace{} : bestPlace(ver, calib, seed);
+	out.verified = solves;
+	if (ver.empty()) out.why = "no candidate verified";
 	return out;
 }
 

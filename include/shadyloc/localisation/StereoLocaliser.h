@@ -379,6 +379,30 @@ class CStereoLocaliser
 		const vo::TRelativePoseOutput& po, uint32_t seed) const;
 	/** Within the fix bounds (max_sigma_m, max_sigma_deg; 0 = none). */
 	bool certain(const geometry::Matrix6d& cov) const;
+	/** A place the global search verified: its solve and correspondences. */
+	struct TVerifiedPlace
+	{
+		uint32_t kf = 0;
+		int inliers = 0, votes = 0;
+		Eigen::Isometry3d T_kf_live, T_map_live;
+		vo::TRelativePoseOutput solve;
+		std::vector<geometry::TStereoCorrespondence> corr;	//!< the solve's
+	};
+	/** BRIEF voting: each live descriptor votes for the keyframe of `among`
+	 * holding its nearest landmark (within global_vote_hamming). (-votes, id),
+	 * most votes first, then the smaller id. */
+	std::vector<std::pair<int, uint32_t>> placeVotes(
+		const features::TStereoFrame& meas, const std::vector<uint32_t>& among) const;
+	/** Keyframe k verified as the live frame's place: matched around `guess`
+	 * (if any) or its own view, solved, searched again around that pose (and
+	 * by patches), solved again; none when no solve reaches min_inliers.
+	 * `solves` counts the solves tried. */
+	std::optional<TVerifiedPlace> verifyPlace(
+		const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed, uint32_t k,
+		const std::optional<Eigen::Isometry3d>& guess, int& solves) const;
+	/** The best of the verified places as the search's result. */
+	TGlobalPlace bestPlace(
+		const std::vector<TVerifiedPlace>& ver, const geometry::TStereoCalib& calib, uint32_t seed) const;
 	/** Moves the candidate keyframe nearest `guess` (T_map_live) to the front. */
 	void putNearestFirst(const Eigen::Isometry3d& guess, std::vector<std::pair<int, uint32_t>>& candidates) const;
 	/** The map channel's BRIEF pattern, for warped descriptors; null when
