@@ -109,6 +109,115 @@ void checkLocalisedInputs(const std::string& dir, const std::string& mapFile, co
 			std::to_string(live.back().t) + " s): the ground truth of another run?");
 }
 
+mrpt::math::TPoint3D toPoint(const Eigen::Vector3d& x) { return mrpt::math::TPoint3D(x.x(), x.y(), x.z()); }
+
+/** With --align, the pose that brings traj into the reference's frame
+ * (identity without --align or for the first trajectory). */
+Eigen::Isometry3d alignment(
+	bool align, const io::Trajectory& reference, const io::Trajectory& traj, const std::string& file)
+{
+	if (!align || reference.empty()) return Eigen::Isometry3d::Identity();
+	const auto err = eval::computeErrors(reference, traj);
+	if (err.matched < 3)
+		throw std::runtime_error(
+			"'" + file + "': fewer than 3 poses share timestamps with the first trajectory: cannot --align");
+	return err.T_gt_est;
+}
+
+/** The -t trajectories in a fixed palette; `reference` becomes the first. */
+std::vector<render::TrajectoryLayer> trajectoryLayers(
+	const std::vector<std::string>& specs, bool align, io::Trajectory& reference)
+{
+	static const mrpt::img::TColor palette[] = {
+		{0, 0, 0}, {215, 40, 40}, {40, 160, 60}, {230, 140, 0}, {140, 60, 170}, {30, 90, 210}};
+	std::vector<render::TrajectoryLayer> layers;
+	for (const auto& spec : specs)
+	{
+		const auto [file, name] = fileAndName(spec);
+		render::TrajectoryLayer l;
+		l.name = name;
+		l.colour = palette[layers.size() % std::size(palette)];
+		l.widthPx = 3.0;
+		auto traj = io::readTum(file);
+		io::sortByTime(traj);
+		const Eigen::Isometry3d T_ref_this = alignment(align, reference, traj, file);
+		if (reference.empty()) reference = traj;
+		for (const auto& p : traj) l.points.push_back(toPoint(T_ref_this * p.T.translation()));
+		if (l.points.size() < 2) throw std::runtime_error("'" + file + "': fewer than two poses to draw");
+		layers.push_back(l);
+	}
+	return layers;
+}
+
+/** --gt: the live run's ground truth in the map frame, through T_map_world
+ * fitted to the keyframes' own poses and their ground truth. */
+render::TrajectoryLayer liveTruthLayer(const CKeyframeMap& m, const std::string& file, const std::string& gtFile)
+{
+	io::Trajectory chain, truth;
+	for (const auto& kf : m.keyframes())
+		if (kf.T_gt_kf && !kf.predicted)
+		{
+			chain.push_back({kf.timestamp, kf.T_map_kf});
+			truth.push_back({kf.timestamp, *kf.T_gt_kf});
+		}
+	if (chain.size() < 3)
+		throw std::runtime_error(
+			"--gt: keyframe map '" + file + "' has fewer than 3 keyframes with ground truth (survey it with --gt)");
+	const Eigen::Isometry3d T_map_world = eval::computeErrors(chain, truth).T_gt_est;
+	auto gt = io::readTum(gtFile);
+	io::sortByTime(gt);
+	render::TrajectoryLayer g;
+	g.name = "ground truth of the live run";
+	g.colour = {0, 0, 0};
+	g.widthPx = 1.5;
+	for (const auto& p : gt) g.points.push_back(toPoint(T_map_world * p.T.translation()));
+	if (g.points.size() < 2) throw std::runtime_error("'" + gtFile + "': fewer than two poses to draw");
+	return g;
+}
+
+/** A map as CKeyframeMap::getVisualizationInto draws it, brought into the
+ * picture's frame by T_ref_map, with its legend (and its landmarks'). */
+render::TObjectLayer mapLayer(
+	const CKeyframeMap::Ptr& m, const std::string& name, const Eigen::Isometry3d& T_ref_map, bool landmarks)
+{
+	render::TObjectLayer l;
+	std::ostringstream legend;
+	legend << "map " << name << ": " << m->keyframeCount() << " keyframes, " << std::fixed << std::setprecision(0)
+		   << m->pathLength() << " m";
+	size_t predicted = 0;
+	for (const auto& k : m->keyframes()) predicted += k.predicted;
+	if (predicted) legend << " (orange: " << predicted << " after a VO break, predicted)";
+	legend << "; chevrons every " << std::setprecision(0) << m->options.draw_frame_every_m << " m";
+	l.legend.push_back({legend.str(), CKeyframeMap::kDrawColourMeasured});
+	for (const auto& k : m->keyframes()) l.extent.push_back(toPoint(T_ref_map * k.T_map_kf.translation()));
+	if (landmarks)
+		for (size_t c = 0; c < m->channels().size(); c++)
+		{
+			size_t n = 0;
+			for (const auto& k : m->keyframes())
+				for (const auto& s : k.channels[c])
+					if (s.P.z() <= m->options.draw_landmark_max_depth_m)
+					{
+						l.extent.push_back(toPoint(T_ref_map * (k.T_map_kf * s.P)));
+						n++;
+					}
+			l.legend.push_back(
+				{m->channels()[c].label + " landmarks (" + std::to_string(n) + ")", CKeyframeMap::drawColourOfChannel(c)});
+		}
+	l.make = [m, T_ref_map](double mPerPx) {
+		CKeyframeMap::TDrawStyle style;
+		style.path_width_m = 12 * mPerPx;  // a band under the 3 px trajectories
+		style.marker_size_m = 18 * mPerPx;
+		auto inMap = mrpt::opengl::CSetOfObjects::Create();
+		m->getVisualizationInto(*inMap, style);
+		inMap->setPose(mrpt::poses::CPose3D(mrpt::math::CMatrixDouble44(T_ref_map.matrix())));
+		auto o = mrpt::opengl::CSetOfObjects::Create();
+		o->insert(inMap);
+		return o;
+	};
+	return l;
+}
+
 int run(int argc, char** argv)
 {
 	shadyloc::apps::CommandLine cli(
@@ -171,35 +280,7 @@ int run(int argc, char** argv)
 
 	// The first trajectory's frame is the picture's, for --align.
 	io::Trajectory reference;
-	auto alignment = [&](const io::Trajectory& traj, const std::string& file) {
-		if (!align.getValue() || reference.empty()) return Eigen::Isometry3d::Identity();
-		const auto err = eval::computeErrors(reference, traj);
-		if (err.matched < 3)
-			throw std::runtime_error(
-				"'" + file + "': fewer than 3 poses share timestamps with the first trajectory: cannot --align");
-		return err.T_gt_est;
-	};
-	auto toPoint = [](const Eigen::Vector3d& x) { return mrpt::math::TPoint3D(x.x(), x.y(), x.z()); };
-
-	static const mrpt::img::TColor palette[] = {
-		{0, 0, 0}, {215, 40, 40}, {40, 160, 60}, {230, 140, 0}, {140, 60, 170}, {30, 90, 210}};
-	std::vector<render::TrajectoryLayer> layers;
-	for (const auto& spec : trajs.getValue())
-	{
-		const auto [file, name] = fileAndName(spec);
-		render::TrajectoryLayer l;
-		l.name = name;
-		l.colour = palette[layers.size() % std::size(palette)];
-		l.widthPx = 3.0;
-		auto traj = io::readTum(file);
-		io::sortByTime(traj);
-		const Eigen::Isometry3d T_ref_this = alignment(traj, file);
-		if (reference.empty()) reference = traj;
-		for (const auto& p : traj) l.points.push_back(toPoint(T_ref_this * p.T.translation()));
-		if (l.points.size() < 2) throw std::runtime_error("'" + file + "': fewer than two poses to draw");
-		layers.push_back(l);
-	}
-
+	std::vector<render::TrajectoryLayer> layers = trajectoryLayers(trajs.getValue(), align.getValue(), reference);
 	std::vector<render::TObjectLayer> objects;
 	std::string singleKeyframe;	// maps of one keyframe: a single point
 	std::vector<render::TrajectoryLayer> underneath;  // --localised: the maps' keyframes, under every path
@@ -211,32 +292,8 @@ int run(int argc, char** argv)
 		if (m->keyframeCount() == 1) singleKeyframe += (singleKeyframe.empty() ? "" : ", ") + ("'" + file + "'");
 		if (localised.isSet())
 		{
-			render::TrajectoryLayer k = apps::keyframesLayer(*m, name);
-			if (liveGt.isSet() && underneath.empty())
-			{
-				// T_map_world from the keyframes' own poses and their ground truth.
-				io::Trajectory chain, truth;
-				for (const auto& kf : m->keyframes())
-					if (kf.T_gt_kf && !kf.predicted)
-					{
-						chain.push_back({kf.timestamp, kf.T_map_kf});
-						truth.push_back({kf.timestamp, *kf.T_gt_kf});
-					}
-				if (chain.size() < 3)
-					throw std::runtime_error(
-						"--gt: keyframe map '" + file + "' has fewer than 3 keyframes with ground truth (survey it with --gt)");
-				const Eigen::Isometry3d T_map_world = eval::computeErrors(chain, truth).T_gt_est;
-				auto gt = io::readTum(liveGt.getValue());
-				io::sortByTime(gt);
-				render::TrajectoryLayer g;
-				g.name = "ground truth of the live run";
-				g.colour = {0, 0, 0};
-				g.widthPx = 1.5;
-				for (const auto& p : gt) g.points.push_back(toPoint(T_map_world * p.T.translation()));
-				if (g.points.size() < 2) throw std::runtime_error("'" + liveGt.getValue() + "': fewer than two poses to draw");
-				layers.push_back(g);  // over the live path
-			}
-			underneath.push_back(k);
+			if (liveGt.isSet() && underneath.empty()) layers.push_back(liveTruthLayer(*m, file, liveGt.getValue()));
+			underneath.push_back(apps::keyframesLayer(*m, name));
 			continue;
 		}
 		m->options.draw_landmarks = landmarks.getValue();
@@ -244,43 +301,7 @@ int run(int argc, char** argv)
 		io::Trajectory chain;
 		for (const auto& k : m->keyframes())
 			if (!k.predicted) chain.push_back({k.timestamp, k.T_map_kf});
-		const Eigen::Isometry3d T_ref_map = alignment(chain, file);
-		render::TObjectLayer l;
-		std::ostringstream legend;
-		legend << "map " << name << ": " << m->keyframeCount() << " keyframes, " << std::fixed
-			   << std::setprecision(0) << m->pathLength() << " m";
-		size_t predicted = 0;
-		for (const auto& k : m->keyframes()) predicted += k.predicted;
-		if (predicted) legend << " (orange: " << predicted << " after a VO break, predicted)";
-		legend << "; chevrons every " << std::setprecision(0) << m->options.draw_frame_every_m << " m";
-		l.legend.push_back({legend.str(), CKeyframeMap::kDrawColourMeasured});
-		for (const auto& k : m->keyframes()) l.extent.push_back(toPoint(T_ref_map * k.T_map_kf.translation()));
-		if (landmarks.getValue())
-			for (size_t c = 0; c < m->channels().size(); c++)
-			{
-				size_t n = 0;
-				for (const auto& k : m->keyframes())
-					for (const auto& s : k.channels[c])
-						if (s.P.z() <= m->options.draw_landmark_max_depth_m)
-						{
-							l.extent.push_back(toPoint(T_ref_map * (k.T_map_kf * s.P)));
-							n++;
-						}
-				l.legend.push_back(
-					{m->channels()[c].label + " landmarks (" + std::to_string(n) + ")", CKeyframeMap::drawColourOfChannel(c)});
-			}
-		l.make = [m, T_ref_map](double mPerPx) {
-			CKeyframeMap::TDrawStyle style;
-			style.path_width_m = 12 * mPerPx;	 // a band under the 3 px trajectories
-			style.marker_size_m = 18 * mPerPx;
-			auto inMap = mrpt::opengl::CSetOfObjects::Create();
-			m->getVisualizationInto(*inMap, style);
-			inMap->setPose(mrpt::poses::CPose3D(mrpt::math::CMatrixDouble44(T_ref_map.matrix())));
-			auto o = mrpt::opengl::CSetOfObjects::Create();
-			o->insert(inMap);
-			return o;
-		};
-		objects.push_back(l);
+		objects.push_back(mapLayer(m, name, alignment(align.getValue(), reference, chain, file), landmarks.getValue()));
 	}
 	if (localised.isSet())
 	{
