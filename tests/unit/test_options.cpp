@@ -8,6 +8,7 @@
 #include <shadyloc/datasets/Common.h>
 #include <shadyloc/datasets/Kitti.h>
 #include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/filters/Filters.h>
 #include <shadyloc/image/ColourTransforms.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/Localiser.h>
@@ -369,6 +370,38 @@ TSimFile simFile()
 	return f;
 }
 
+/** A filter's section as FilterPipeline reads and asIni() writes it: class,
+ * the common keys, its own keys (those the round trip changes). */
+template <typename T>
+void loadFilter(T& f, const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+	f.loadFromConfig(c, s);
+}
+template <typename T>
+void dumpFilter(const T& f, std::ostream& out)
+{
+	out << f.optionsAsIni();
+}
+template <typename T>
+TOptionsCase filterCase(const std::string& name, const std::string& section)
+{
+	return optionsCase<T>(name, section, loadFilter<T>, dumpFilter<T>);
+}
+
+/** The keys every filter has: their table shows no default suffix (each class has its own). */
+TOptionsCase filterCommonCase()
+{
+	using TCommon = CObservationFilter::TCommonOptions;
+	TOptionsCase c = optionsCase<TCommon>(
+		"filter", "filter", loadGeneric<TCommon>, dumpGeneric<TCommon>, std::function<TCommon()>([] {
+			TCommon o;
+			o.output_suffix = "_mono";
+			return o;
+		}));
+	c.table = [] { return core::keyTable(TCommon()); };
+	return c;
+}
+
 TOptionsCase undocumented(TOptionsCase c)
 {
 	c.documented = false;
@@ -413,6 +446,10 @@ const std::vector<TOptionsCase>& optionsCases()
 				t.end_s_m = 120;
 				return t;
 			}))),
+		filterCommonCase(),
+		filterCase<CFilterMonochrome>("CFilterMonochrome", "mono"),
+		filterCase<CFilterInvariant>("CFilterInvariant", "invariant"),
+		filterCase<CFilterLinearise>("CFilterLinearise", "lin"),
 		// The whole simulator file: [sim] names the traversals, each read from its section.
 		optionsCase<TSimFile>("sim", "sim", loadCL<TSimFile>, dumpCL<TSimFile>, std::function<TSimFile()>(simFile)),
 	};
