@@ -6,6 +6,7 @@
  * SHADYLOC_WRITE_DOCS=1 rewrites the docs' tables instead of comparing them. */
 #include <shadyloc/core/Options.h>
 #include <shadyloc/datasets/Common.h>
+#include <shadyloc/datasets/Folder.h>
 #include <shadyloc/datasets/Kitti.h>
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/filters/Filters.h>
@@ -402,6 +403,35 @@ TOptionsCase filterCommonCase()
 	return c;
 }
 
+/** The folder calibration (a file of three sections) through its own load
+ * and dump, one section's keys changed: a camera's ([left]; [right] has the
+ * same declaration) or [stereo]'s. */
+template <bool Stereo>
+struct TCalibSection
+{
+	datasets::TFolderCalib c;
+	void keys(core::KeyVisitor& v)
+	{
+		if constexpr (Stereo)
+			c.stereoKeys().keys(v);
+		else
+			c.leftKeys().keys(v);
+	}
+	void validate() const { core::checkKeys(*this); }
+};
+template <bool Stereo>
+TOptionsCase calibCase(const std::string& name)
+{
+	using T = TCalibSection<Stereo>;
+	return optionsCase<T>(
+		name, "calib", [](T& o, const mrpt::config::CConfigFileBase& c, const std::string& s) { o.c.loadFromConfigFile(c, s); },
+		[](const T& o, std::ostream& out) { o.c.dumpToTextStream(out); }, std::function<T()>([] {
+			T o;
+			o.c = datasets::TFolderCalib::FromFile(std::string(SHADYLOC_SOURCE_DIR) + "/config/folder_calib_example.ini");
+			return o;
+		}));
+}
+
 TOptionsCase undocumented(TOptionsCase c)
 {
 	c.documented = false;
@@ -450,6 +480,8 @@ const std::vector<TOptionsCase>& optionsCases()
 		filterCase<CFilterMonochrome>("CFilterMonochrome", "mono"),
 		filterCase<CFilterInvariant>("CFilterInvariant", "invariant"),
 		filterCase<CFilterLinearise>("CFilterLinearise", "lin"),
+		calibCase<false>("folder_calib.camera"),
+		calibCase<true>("folder_calib.stereo"),
 		// The whole simulator file: [sim] names the traversals, each read from its section.
 		optionsCase<TSimFile>("sim", "sim", loadCL<TSimFile>, dumpCL<TSimFile>, std::function<TSimFile()>(simFile)),
 	};
