@@ -14,7 +14,7 @@
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/Localiser.h>
 #include <shadyloc/localisation/LocaliserAppKeys.h>
-#include <shadyloc/localisation/MonoLocaliser.h>
+#include <shadyloc/localisation/MonocularLocaliser.h>
 #include <shadyloc/localisation/StereoLocaliser.h>
 #include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/sim/SimOptions.h>
@@ -449,9 +449,9 @@ const std::vector<TOptionsCase>& optionsCases()
 		optionsCase<localisation::TLocaliserOptions>(
 			"localiser", "localiser", loadPlain<localisation::TLocaliserOptions>,
 			dumpPlain<localisation::TLocaliserOptions>),
-		optionsCase<localisation::TMonoLocaliserOptions>(
-			"localiser_2d", "localiser_2d", loadPlain<localisation::TMonoLocaliserOptions>,
-			dumpPlain<localisation::TMonoLocaliserOptions>),
+		optionsCase<localisation::TMonocularLocaliserOptions>(
+			"localiser_2d", "localiser_2d", loadPlain<localisation::TMonocularLocaliserOptions>,
+			dumpPlain<localisation::TMonocularLocaliserOptions>),
 		optionsCase<localisation::TSystemOptions>(
 			"localise", "localise", loadPlain<localisation::TSystemOptions>, dumpPlain<localisation::TSystemOptions>),
 		optionsCase<TAppKeys>("application", "application", loadGeneric<TAppKeys>, dumpGeneric<TAppKeys>),

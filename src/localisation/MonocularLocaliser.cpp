@@ -1,9 +1,9 @@
 /* ShadyLoc — the localiser's core for a single image (2D-3D) against a
- * stereo keyframe (include/shadyloc/localisation/MonoLocaliser.h). */
+ * stereo keyframe (include/shadyloc/localisation/MonocularLocaliser.h). */
 #include <shadyloc/core/Options.h>
 #include <shadyloc/core/Units.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
-#include <shadyloc/localisation/MonoLocaliser.h>
+#include <shadyloc/localisation/MonocularLocaliser.h>
 
 #include <mrpt/img/TCamera.h>
 #include <mrpt/obs/CObservationImage.h>
@@ -118,7 +118,7 @@ void extractImageFeatures(
 }
 
 // ---- options ---------------------------------------------------------------------------------------
-void TMonoLocaliserOptions::keys(core::KeyVisitor& v)
+void TMonocularLocaliserOptions::keys(core::KeyVisitor& v)
 {
 	using core::Range;
 	v("corners_per_cell", corners_per_cell, "", Range::closed(1, 10000), "FAST corners kept per grid bucket");
@@ -146,20 +146,20 @@ void TMonoLocaliserOptions::keys(core::KeyVisitor& v)
 	v("max_sigma_deg", max_sigma_deg, "deg", Range::above(0), "");
 }
 
-void TMonoLocaliserOptions::load(const mrpt::config::CConfigFileBase& c, const std::string& s) { core::loadKeys(*this, c, s); }
+void TMonocularLocaliserOptions::load(const mrpt::config::CConfigFileBase& c, const std::string& s) { core::loadKeys(*this, c, s); }
 
-void TMonoLocaliserOptions::dump(std::ostream& out) const { core::dumpKeys(*this, out); }
+void TMonocularLocaliserOptions::dump(std::ostream& out) const { core::dumpKeys(*this, out); }
 
-void TMonoLocaliserOptions::validate() const
+void TMonocularLocaliserOptions::validate() const
 {
 	core::checkKeys(*this);
 	if (!(gate_min_px <= gate_max_px)) throw std::invalid_argument("gate_min_px: must be <= gate_max_px");
 }
 
-TMonoLocaliserOptions monoLocaliserOptionsFor(
+TMonocularLocaliserOptions monocularLocaliserOptionsFor(
 	const mrpt::config::CConfigFileBase& cfg, const std::string& channel, const std::string& section)
 {
-	TMonoLocaliserOptions o;
+	TMonocularLocaliserOptions o;
 	if (cfg.sectionExists(section)) o.load(cfg, section);
 	const std::string over = section + "." + channel;
 	if (cfg.sectionExists(over)) o.load(cfg, over);
@@ -245,19 +245,19 @@ geometry::TPoseSolution solveImagePose(
 }
 
 // ---- the localiser ---------------------------------------------------------------------------------
-CMonoLocaliser::CMonoLocaliser(
+MonocularLocaliser::MonocularLocaliser(
 	const CKeyframeMap& map, const filters::TChannel& channel, const features::TStereoFeatureOptions& fo,
-	const TMonoLocaliserOptions& o)
+	const TMonocularLocaliserOptions& o)
 	: m_map(map), m_channel(channel), m_fo(fo), m_opts(o)
 {
-	if (!channel.filter) throw std::invalid_argument("CMonoLocaliser: channel '" + channel.label + "' has no filter");
+	if (!channel.filter) throw std::invalid_argument("MonocularLocaliser: channel '" + channel.label + "' has no filter");
 	m_opts.validate();
 	fo.validate();
 	map.channelIndex(channel.label);  // throws naming the map's channels
-	map.checkCompatible(CLocalisationSystem::liveParams(channel, fo));
+	map.checkCompatible(LocalisationSystem::liveParams(channel, fo));
 }
 
-TImageFeatures CMonoLocaliser::features(const cv::Mat& image) const
+TImageFeatures MonocularLocaliser::features(const cv::Mat& image) const
 {
 	cv::Mat grey;
 	m_channel.convert(image, grey);
@@ -266,7 +266,7 @@ TImageFeatures CMonoLocaliser::features(const cv::Mat& image) const
 	return f;
 }
 
-TMonoLocaliserResult CMonoLocaliser::localise(
+TMonocularLocaliserResult MonocularLocaliser::localise(
 	const cv::Mat& image, const TPinholeCalib& calib, uint32_t kf, const std::optional<TKeyframePose>& prediction) const
 {
 	const auto t0 = std::chrono::steady_clock::now();
@@ -275,7 +275,7 @@ TMonoLocaliserResult CMonoLocaliser::localise(
 	return r;
 }
 
-TMonoLocaliserResult CMonoLocaliser::localise(
+TMonocularLocaliserResult MonocularLocaliser::localise(
 	const mrpt::obs::CObservationImage& obs, uint32_t kf, const std::optional<TKeyframePose>& prediction) const
 {
 	if (obs.image.isEmpty())
@@ -283,22 +283,22 @@ TMonoLocaliserResult CMonoLocaliser::localise(
 	return localise(obs.image.asCvMatRef(), TPinholeCalib::FromCamera(obs.cameraParams), kf, prediction);
 }
 
-TMonoLocaliserResult CMonoLocaliser::localise(
+TMonocularLocaliserResult MonocularLocaliser::localise(
 	const TImageFeatures& f, const TPinholeCalib& calib, uint32_t kf, const std::optional<TKeyframePose>& prediction) const
 {
 	const auto t0 = std::chrono::steady_clock::now();
 	const auto& o = m_opts;
-	TMonoLocaliserResult r;
+	TMonocularLocaliserResult r;
 	r.channel = m_channel.label;
 	r.kf_id = kf;
 	r.features = static_cast<int>(f.feats.size());
 	if (kf >= m_map.keyframeCount())
 		throw std::out_of_range(
-			"CMonoLocaliser: keyframe " + std::to_string(kf) + " is not in the map (" +
+			"MonocularLocaliser: keyframe " + std::to_string(kf) + " is not in the map (" +
 			std::to_string(m_map.keyframeCount()) + " keyframes)");
 	if (prediction && prediction->valid && prediction->kf != kf)
 		throw std::invalid_argument(
-			"CMonoLocaliser: the prediction is relative to keyframe " + std::to_string(prediction->kf) + ", not " +
+			"MonocularLocaliser: the prediction is relative to keyframe " + std::to_string(prediction->kf) + ", not " +
 			std::to_string(kf));
 	const auto& lms = m_map.measurements(kf, m_channel.label);
 	const auto done = [&](LocaliserStatus s) {
