@@ -1,7 +1,7 @@
 /* ShadyLoc — speed of the combined localisation system per frame at 512x384
  * on the default dataset (docs/localisation.md, "Speed"): the noon map, the
  * overcast traversal live, frames decoded beforehand (decoding excluded).
- * BM_CombinedFrame: CLocalisationSystem::processFrame (both channels'
+ * BM_CombinedFrame: LocalisationSystem::processFrame (both channels'
  * conversion and features, live VO, both localisers, global search when the
  * place is unknown, policy) with [localise] threads = 2 and 1;
  * BM_VOFrameMono: the monochrome channel's conversion and the stereo VO alone
@@ -133,7 +133,7 @@ void BM_CombinedFrame(benchmark::State& st, int threads, const char* extra = "")
 		return;
 	}
 	mrpt::config::CConfigFileMemory cfg(d.cfgText + "\n" + extra);
-	auto sys = localisation::CLocalisationSystem::FromConfig(cfg, d.map, {}, threads, "vo_sim.ini + localise_sim.ini");
+	auto sys = localisation::LocalisationSystem::FromConfig(cfg, d.map, {}, threads, "vo_sim.ini + localise_sim.ini");
 	std::vector<double> ms, voMs;
 	size_t i = 0, fixes = 0;
 	for (auto _ : st)

@@ -2,7 +2,7 @@
  * rays, exposure, noise, 8-bit) in each stretch of the route and lighting,
  * and the cost of turning a frame into a rawlog record. */
 #include <shadyloc/io/Rawlog.h>
-#include <shadyloc/sim/CStereoSimulator.h>
+#include <shadyloc/sim/StereoSimulator.h>
 
 #include <benchmark/benchmark.h>
 
@@ -24,7 +24,7 @@ std::string configPath()
 void renderAt(benchmark::State& state, const char* traversal, double s0)
 {
 	auto o = TSimOptions::FromFile(configPath());
-	CStereoSimulator sim(o);
+	StereoSimulator sim(o);
 	auto t = o.traversal(traversal);
 	t.start_s_m = s0;
 	sim.setTraversal(t);
@@ -54,7 +54,7 @@ BENCHMARK(BM_SimTrees_Overcast)->Unit(benchmark::kMillisecond)->UseRealTime();
 static void BM_SimWriteRawlog(benchmark::State& state)
 {
 	auto o = TSimOptions::FromFile(configPath());
-	CStereoSimulator sim(o);
+	StereoSimulator sim(o);
 	const TSimFrame f = sim.renderFrame(0);
 	const std::string path = (std::filesystem::temp_directory_path() / "bench_sim.rawlog").string();
 	{

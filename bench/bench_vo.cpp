@@ -395,7 +395,7 @@ void BM_StageKeyframeMatcher(benchmark::State& st, vo::SearchRegion region)
 	const auto& s = stageInputs();
 	auto o = vo::matcherOptionsFrom(vo::TStereoVOOptions());
 	o.region = region;
-	const vo::CKeyframeMatcher m(o);
+	const vo::KeyframeMatcher m(o);
 	const auto in = matchInput(s);
 	vo::TKeyframeMatchOutput out;
 	for (auto _ : st) m.match(in, out);
@@ -409,8 +409,8 @@ void BM_StageRelativePoseEstimator(benchmark::State& st, bool withPrior)
 {
 	const auto& s = stageInputs();
 	vo::TKeyframeMatchOutput mo;
-	vo::CKeyframeMatcher(vo::matcherOptionsFrom(vo::TStereoVOOptions())).match(matchInput(s), mo);
-	const vo::CRelativePoseEstimator est(vo::poseEstimatorOptionsFrom(vo::TStereoVOOptions()));
+	vo::KeyframeMatcher(vo::matcherOptionsFrom(vo::TStereoVOOptions())).match(matchInput(s), mo);
+	const vo::RelativePoseEstimator est(vo::poseEstimatorOptionsFrom(vo::TStereoVOOptions()));
 	vo::TRelativePoseInput in;
 	in.corr = &mo.corr;
 	in.calib = data().calib;

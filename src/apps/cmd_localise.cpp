@@ -63,7 +63,7 @@ bool sameCamera(const geometry::TStereoCalib& a, const geometry::TStereoCalib& b
 /** The live run's camera (its first frame) must be the map's: landmarks
  * projected with another calibration find nothing, and the run would end
  * with no fix and exit 0 (eval refuses such pairs too). */
-void checkLiveCamera(const CKeyframeMap& map, const std::string& mapPath, const std::string& liveWhat, const CLocaliseRun& run)
+void checkLiveCamera(const CKeyframeMap& map, const std::string& mapPath, const std::string& liveWhat, const LocaliseRun& run)
 {
 	const auto& f = run.firstFrame();
 	if (sameCamera(f.calib, map.calibration()) && f.size.width == map.imageWidth() && f.size.height == map.imageHeight())
@@ -142,7 +142,7 @@ void recordLiveCapture(const datasets::LiveCapture& capture, eval::TLocaliseProv
 }
 
 /** What the run localises against, with what, before it starts. */
-void printHeader(const CKeyframeMap& map, const std::string& mapPath, const std::string& livePath, const CLocaliseRun& lrun)
+void printHeader(const CKeyframeMap& map, const std::string& mapPath, const std::string& livePath, const LocaliseRun& lrun)
 {
 	std::cout << "map: " << mapPath << " (" << map.keyframeCount() << " keyframes, " << std::fixed << std::setprecision(1)
 			  << map.pathLength() << " m)\nlive: " << livePath << " ('" << lrun.sensorLabel() << "')\n";
@@ -291,7 +291,7 @@ int run(int argc, char** argv)
 			std::to_string(map->keyframeCount() - 1));
 	ro.startKf = startKf.isSet() ? startKf.getValue() : -1;
 	std::unique_ptr<datasets::LiveCapture> capture;
-	std::unique_ptr<CLocaliseRun> run;
+	std::unique_ptr<LocaliseRun> run;
 	if (live)
 	{
 		datasets::TLiveCaptureOptions lo;
@@ -302,11 +302,11 @@ int run(int argc, char** argv)
 		lo.realtime = realtime.getValue();
 		lo.queue = static_cast<size_t>(queueArg.getValue());
 		capture = std::make_unique<datasets::LiveCapture>(lo);
-		run = std::make_unique<CLocaliseRun>(cfg, map, mapPath, feedOf(*capture), ro);
+		run = std::make_unique<LocaliseRun>(cfg, map, mapPath, feedOf(*capture), ro);
 	}
 	else
-		run = std::make_unique<CLocaliseRun>(cfg, map, mapPath, livePath, ro);
-	CLocaliseRun& lrun = *run;
+		run = std::make_unique<LocaliseRun>(cfg, map, mapPath, livePath, ro);
+	LocaliseRun& lrun = *run;
 	checkLiveCamera(*map, mapPath, live ? "live source " + capture->name() : "live rawlog '" + livePath + "'", lrun);
 	auto& sys = lrun.system();
 	if (debug.getValue()) sys.setMinLoggingLevel(mrpt::system::LVL_DEBUG);

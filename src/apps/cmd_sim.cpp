@@ -6,7 +6,7 @@
 #include <shadyloc/image/ColourTransforms.h>
 #include <shadyloc/io/ImageFile.h>
 #include <shadyloc/io/OutputTransaction.h>
-#include <shadyloc/sim/CStereoSimulator.h>
+#include <shadyloc/sim/StereoSimulator.h>
 
 #include <mrpt/system/string_utils.h>
 
@@ -193,7 +193,7 @@ int run(int argc, char** argv)
 			shadyloc::io::checkImageWritable(path);
 		}
 
-	shadyloc::sim::CStereoSimulator sim(opts);
+	shadyloc::sim::StereoSimulator sim(opts);
 	sim.setMinLoggingLevel(quiet.getValue() ? mrpt::system::LVL_WARN : mrpt::system::LVL_INFO);
 	std::vector<int> counts;
 	for (const auto& t : todo)

@@ -80,7 +80,7 @@ int run(int argc, char** argv)
 	const bool talk = !quiet.getValue();
 
 	// ---- channels: the first one's VO makes the chain, every one is stored ------
-	survey::CSurveyRun surveyRun(inPath, *cfg, so);
+	survey::SurveyRun surveyRun(inPath, *cfg, so);
 	for (const auto& w : surveyRun.warnings()) std::cerr << "warning: " << w << "\n";
 	surveyRun.setMinLoggingLevel(talk ? mrpt::system::LVL_WARN : mrpt::system::LVL_ERROR);
 	if (talk) surveyRun.describe(std::cout);

@@ -1,6 +1,7 @@
 /* ShadyLoc — the visitors of options keys (see Options.h). */
 #include <shadyloc/core/Options.h>
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -150,20 +151,25 @@ void KeyReader::textKey(const KeyDef& k, std::string& t, const std::function<voi
 }
 
 // ---- writer -------------------------------------------------------------------------
+bool KeyWriter::leftOut(const KeyDef& k) const
+{
+	return std::find(m_leaveOut.begin(), m_leaveOut.end(), k.name) != m_leaveOut.end();
+}
+
 void KeyWriter::key(const KeyDef& k, Field v)
 {
-	if (!k.written) return;
+	if (!k.written || leftOut(k)) return;
 	std::visit([&](auto* p) { writeValue(m_w, k, *p, k.comment()); }, v);
 }
 
 void KeyWriter::choiceKey(const KeyDef& k, std::string& v, const std::vector<std::string>&)
 {
-	m_w.value(k.name, v, k.comment());
+	if (!leftOut(k)) m_w.value(k.name, v, k.comment());
 }
 
 void KeyWriter::textKey(const KeyDef& k, std::string& t, const std::function<void(const std::string&)>&)
 {
-	m_w.value(k.name, t, k.comment());
+	if (!leftOut(k)) m_w.value(k.name, t, k.comment());
 }
 
 // ---- checker ------------------------------------------------------------------------

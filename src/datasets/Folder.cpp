@@ -3,7 +3,7 @@
 
 #include "Detail.h"
 
-#include <shadyloc/core/Settings.h>
+#include <shadyloc/core/Options.h>
 
 #include <mrpt/config/CConfigFile.h>
 
@@ -33,64 +33,63 @@ std::vector<std::string> listImages(const std::string& dir)
 	return out;
 }
 
+void TFolderCalib::TCameraKeys::keys(core::KeyVisitor& v)
+{
+	using core::Range;
+	v.renamed({{"fx", "fx_px"}, {"fy", "fy_px"}, {"cx", "cx_px"}, {"cy", "cy_px"}});
+	v("fx_px", fx, "px", Range::above(0), "focal length along x");
+	v("fy_px", fy, "px", Range::above(0), "focal length along y");
+	v("cx_px", cx, "px", Range::any(), "principal point x");
+	v("cy_px", cy, "px", Range::any(), "principal point y");
+}
+
+void TFolderCalib::TStereoKeys::keys(core::KeyVisitor& v)
+{
+	using core::Range;
+	v.renamed({{"width", "width_px"}, {"height", "height_px"}});
+	v("baseline_m", baseline_m, "m", Range::above(0), "right camera centre at +baseline_m along the left camera's x axis");
+	v("width_px", width, "px", Range::atLeast(1), "every image must be width x height");
+	v("height_px", height, "px", Range::atLeast(1), "");
+}
+
+namespace
+{
+/** Reads keys' section from s, then finishes it; required: each key must be there. */
+template <typename Keys>
+void readSection(core::SettingsSection& s, Keys keys, bool required)
+{
+	core::readKeys(s, keys);
+	if (required)
+		for (const auto& k : core::keyTexts(keys))
+			if (!s.has(k.first)) s.fail(k.first, "missing");
+	s.finish();
+}
+}  // namespace
+
 void TFolderCalib::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string&)
 {
 	core::checkSections(c, {"left", "right", "stereo"}, "stereo calibration");
-	const std::vector<core::TRenamedKey> renamedIntrinsics = {
-		{"fx", "fx_px"}, {"fy", "fy_px"}, {"cx", "cx_px"}, {"cy", "cy_px"}};
-	auto need = [](core::SettingsSection& s, const char* key, auto& v) {
-		if (!s.has(key)) s.fail(key, "missing");
-		s.read(key, v);
-	};
 	core::SettingsSection left(c, "left"), right(c, "right"), stereo(c, "stereo");
-	left.renamed(renamedIntrinsics);
-	right.renamed(renamedIntrinsics);
-	stereo.renamed({{"width", "width_px"}, {"height", "height_px"}});
-	need(left, "fx_px", fx_l);
-	need(left, "fy_px", fy_l);
-	need(left, "cx_px", cx_l);
-	need(left, "cy_px", cy_l);
-	left.finish();
+	readSection(left, leftKeys(), true);
 	// Any key missing in [right]: the left value.
 	fx_r = fx_l, fy_r = fy_l, cx_r = cx_l, cy_r = cy_l;
-	right.read("fx_px", fx_r);
-	right.read("fy_px", fy_r);
-	right.read("cx_px", cx_r);
-	right.read("cy_px", cy_r);
-	right.finish();
-	need(stereo, "baseline_m", baseline_m);
-	need(stereo, "width_px", width);
-	need(stereo, "height_px", height);
-	stereo.finish();
-	auto focal = [](core::SettingsSection& s, const char* key, double f) {
-		if (!(f > 0)) s.fail(key, "a focal length must be > 0 (pixels)");
-	};
-	focal(left, "fx_px", fx_l);
-	focal(left, "fy_px", fy_l);
-	focal(right, "fx_px", fx_r);
-	focal(right, "fy_px", fy_r);
-	if (!(baseline_m > 0)) stereo.fail("baseline_m", "must be > 0 (metres, right camera along +x)");
-	if (width < 1) stereo.fail("width_px", "must be a positive integer (pixels)");
-	if (height < 1) stereo.fail("height_px", "must be a positive integer (pixels)");
+	readSection(right, rightKeys(), false);
+	readSection(stereo, stereoKeys(), true);
+	core::validateAt(left, [&] { core::checkKeys(leftKeys()); });
+	core::validateAt(right, [&] { core::checkKeys(rightKeys()); });
+	core::validateAt(stereo, [&] { core::checkKeys(stereoKeys()); });
 }
 
 void TFolderCalib::dumpToTextStream(std::ostream& out) const
 {
 	core::SettingsWriter w(out);
+	auto& self = core::keysOf(*this);
 	w.section("left");
-	w.value("fx_px", fx_l);
-	w.value("fy_px", fy_l);
-	w.value("cx_px", cx_l);
-	w.value("cy_px", cy_l);
+	core::writeKeys(w, self.leftKeys());
 	w.section("right");
-	w.value("fx_px", fx_r);
-	w.value("fy_px", fy_r);
-	w.value("cx_px", cx_r);
-	w.value("cy_px", cy_r);
+	core::writeKeys(w, self.rightKeys());
 	w.section("stereo");
-	w.value("baseline_m", baseline_m, "right camera centre at +baseline_m along the left camera's x axis");
-	w.value("width_px", width);
-	w.value("height_px", height);
+	core::writeKeys(w, self.stereoKeys());
 }
 
 namespace

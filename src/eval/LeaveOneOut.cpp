@@ -157,7 +157,7 @@ double runMapJob(const std::string& outDir, const TEvalInputs& in, const TEvalJo
 	survey::TSurveyStats st;
 	try
 	{
-		survey::CSurveyRun sr(run.rawlogPath, in.configOf(job.system), so);
+		survey::SurveyRun sr(run.rawlogPath, in.configOf(job.system), so);
 		sr.setMinLoggingLevel(o.verbosity);
 		for (const auto& w : sr.warnings()) sr.logStr(mrpt::system::LVL_WARN, w);
 		map = sr.run();
@@ -227,7 +227,7 @@ TPairRun localisePair(
 	TPairRun r;
 	try
 	{
-		localisation::CLocaliseRun lr(in.configOf(job.system), map, mapRel, in.runs[job.run].rawlogPath, ro);
+		localisation::LocaliseRun lr(in.configOf(job.system), map, mapRel, in.runs[job.run].rawlogPath, ro);
 		lr.system().setMinLoggingLevel(o.verbosity);
 		if (gt) lr.enableOracle(*gt);
 		r.ups = lr.run();
@@ -335,7 +335,7 @@ TEvalInputs TEvalInputs::Load(
 		// parameters differ, and pairs of different cameras are not the
 		// paper's comparison.
 		std::vector<filters::TChannel> channels;
-		for (const auto& ch : localisation::CLocalisationSystem::SetupFromConfig(*in.m_cfg, {}, 0, cfgNames).channels)
+		for (const auto& ch : localisation::LocalisationSystem::SetupFromConfig(*in.m_cfg, {}, 0, cfgNames).channels)
 			channels.push_back(ch.channel);
 		std::vector<TCamera> cams;
 		for (const auto& r : in.runs) cams.push_back(cameraOf(runsPath, r, channels));

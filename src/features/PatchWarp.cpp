@@ -42,7 +42,7 @@ bool planeInducedAffine(
 
 double warpDistortion(const Eigen::Matrix2d& A) { return (A - Eigen::Matrix2d::Identity()).cwiseAbs().maxCoeff(); }
 
-CWarpedBriefPattern::CWarpedBriefPattern(const BriefExtractor& brief, const Eigen::Matrix2d& A)
+WarpedBriefPattern::WarpedBriefPattern(const BriefExtractor& brief, const Eigen::Matrix2d& A)
 {
 	const auto& p = brief.pattern();
 	for (size_t i = 0; i < p.size() && i < m_pattern.size(); i++)
@@ -57,7 +57,7 @@ CWarpedBriefPattern::CWarpedBriefPattern(const BriefExtractor& brief, const Eige
 		}
 }
 
-bool CWarpedBriefPattern::compute(const cv::Mat& img, int x, int y, TBriefDescriptor& d) const
+bool WarpedBriefPattern::compute(const cv::Mat& img, int x, int y, TBriefDescriptor& d) const
 {
 	if (x < m_reach || y < m_reach || x >= img.cols - m_reach || y >= img.rows - m_reach) return false;
 	briefTests(img.ptr<uint8_t>(y) + x, static_cast<ptrdiff_t>(img.step[0]), m_pattern, d);

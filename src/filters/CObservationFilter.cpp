@@ -14,25 +14,39 @@ using namespace shadyloc;
 
 IMPLEMENTS_VIRTUAL_SERIALIZABLE(CObservationFilter, CSerializable, shadyloc)
 
+void CObservationFilter::TCommonOptions::keys(core::KeyVisitor& v)
+{
+	using core::Range;
+	// No comments: a filtered rawlog records these lines (tests/golden/filter_record.txt).
+	v("output_suffix", output_suffix, "", Range::any(), "");
+	v("sensor_labels", sensor_labels, "", Range::any(), "");
+}
+
+void CObservationFilter::TCommonOptions::validate() const
+{
+	if (output_suffix.empty())
+		throw std::invalid_argument(
+			"output_suffix: must not be empty (the derived channel would take the source's sensor label)");
+}
+
+void CObservationFilter::validate() const { core::checkKeys(*this); }
+
 void CObservationFilter::loadFromConfig(
 	const mrpt::config::CConfigFileBase& cfg, const std::string& section)
 {
 	core::SettingsSection s(cfg, section);
 	s.alsoKnown({"class"});	// read by FilterPipeline::FromConfig
-	s.read("output_suffix", common.output_suffix);
-	s.read("sensor_labels", common.sensor_labels);
-	if (common.output_suffix.empty())
-		s.fail("output_suffix", "must not be empty (the derived channel would take the source's sensor label)");
+	core::readKeys(s, common);
+	core::validateAt(s, [&] { common.validate(); });
 	loadSpecificOptions(s);
 	s.finish();
-	try
-	{
-		onOptionsChanged();
-	}
-	catch (const std::exception& e)
-	{
-		throw core::SettingsError(s.where() + " " + e.what());
-	}
+	core::validateAt(s, [&] { onOptionsChanged(); });
+}
+
+void CObservationFilter::loadSpecificOptions(core::SettingsSection& s)
+{
+	core::readKeys(s, *this);
+	core::validateAt(s, [&] { validate(); });
 }
 
 std::string CObservationFilter::optionsAsIni() const
@@ -40,52 +54,50 @@ std::string CObservationFilter::optionsAsIni() const
 	std::ostringstream s;
 	core::SettingsWriter w(s);
 	w.value("class", GetRuntimeClass()->className);
-	w.value("output_suffix", common.output_suffix);
-	w.value("sensor_labels", common.sensor_labels);
-	specificOptionsAsIni(s);
+	core::writeKeys(w, common);
+	core::writeKeys(w, *this);
 	return s.str();
+}
+
+std::vector<std::string> CObservationFilter::specificOptionLines(const std::vector<std::string>& leaveOut) const
+{
+	std::ostringstream s;
+	core::SettingsWriter w(s);
+	core::KeyWriter v(w, leaveOut);
+	core::keysOf(*this).keys(v);
+	std::istringstream in(s.str());
+	std::string line;
+	std::vector<std::string> lines;
+	while (std::getline(in, line))
+	{
+		line = mrpt::system::trim(line);
+		if (!line.empty() && line[0] != ';' && line[0] != '#') lines.push_back(line);
+	}
+	return lines;
 }
 
 std::string CObservationFilter::imageOptionsAsIni() const
 {
-	// The specific options without their comments.
-	std::ostringstream s;
-	specificOptionsAsIni(s);
-	std::istringstream in(s.str());
-	std::string line, out;
-	while (std::getline(in, line))
-	{
-		const std::string t = mrpt::system::trim(line);
-		if (t.empty() || t[0] == ';' || t[0] == '#') continue;
-		out += t + "\n";
-	}
+	std::string out;
+	for (const auto& l : specificOptionLines(keysNotDecidingImages())) out += l + "\n";
 	return out;
 }
 
 std::string CObservationFilter::describe() const
 {
-	// The specific options, comments dropped, on one line.
-	std::ostringstream s;
-	specificOptionsAsIni(s);
-	std::istringstream in(s.str());
-	std::string line, out;
-	while (std::getline(in, line))
+	// The own options on one line.
+	std::string out;
+	for (auto l : specificOptionLines())
 	{
-		line = mrpt::system::trim(line);
-		if (line.empty() || line[0] == ';' || line[0] == '#') continue;
-		line.erase(std::remove(line.begin(), line.end(), ' '), line.end());
-		out += (out.empty() ? "" : " ") + line;
+		l.erase(std::remove(l.begin(), l.end(), ' '), l.end());
+		out += (out.empty() ? "" : " ") + l;
 	}
 	return out;
 }
 
 bool CObservationFilter::sameImagesAs(const CObservationFilter& o) const
 {
-	if (GetRuntimeClass() != o.GetRuntimeClass()) return false;
-	std::ostringstream a, b;
-	specificOptionsAsIni(a);
-	o.specificOptionsAsIni(b);
-	return a.str() == b.str();
+	return GetRuntimeClass() == o.GetRuntimeClass() && specificOptionLines() == o.specificOptionLines();
 }
 
 bool CObservationFilter::accepts(const mrpt::obs::CObservation& obs) const

@@ -3,8 +3,6 @@
 
 #include <mrpt/serialization/CArchive.h>
 
-#include <ostream>
-#include <sstream>
 #include <stdexcept>
 
 using namespace shadyloc;
@@ -41,14 +39,9 @@ void CFilterMonochrome::transformImage(const cv::Mat& in, cv::Mat& out) const
 {
 	image::toMonochrome(in, out, order);
 }
-void CFilterMonochrome::loadSpecificOptions(core::SettingsSection& s)
+void CFilterMonochrome::keys(core::KeyVisitor& v)
 {
-	s.readChoice("channel_order", order, {{"bgr", image::ChannelOrder::BGR}, {"rgb", image::ChannelOrder::RGB}});
-}
-void CFilterMonochrome::specificOptionsAsIni(std::ostream& out) const
-{
-	core::SettingsWriter w(out);
-	w.value("channel_order", image::toString(order), "memory order of colour input: bgr | rgb");
+	v.choice("channel_order", order, image::channelOrderNames(), "memory order of colour input: bgr | rgb");
 }
 uint8_t CFilterMonochrome::serializeGetVersion() const { return 0; }
 void CFilterMonochrome::serializeTo(mrpt::serialization::CArchive& out) const
@@ -112,42 +105,29 @@ void CFilterInvariant::transformImages(
 		for (size_t i = 0; i < in.size(); i++) m_transform->apply(in[i], out[i]);
 }
 
+void CFilterInvariant::keys(core::KeyVisitor& v)
+{
+	m_params.keys(v);
+	v("parallel_eyes", parallel_eyes, "", core::Range::any(), "transform left and right on two threads");
+}
+
+void CFilterInvariant::validate() const { m_params.validate(); }
+
 void CFilterInvariant::loadSpecificOptions(core::SettingsSection& s)
 {
 	image::InvariantParams p = m_params;
-	p.readFrom(s);
-	s.read("parallel_eyes", parallel_eyes);
-	m_params = p;
+	p.readFrom(s);	// validates
+	core::readKeys(s, *this);  // parallel_eyes (and the parameters again, as written)
+	m_params = p;  // the parameters as readFrom() made them
 }
 
-void CFilterInvariant::specificOptionsAsIni(std::ostream& out) const
+std::vector<std::string> CFilterInvariant::keysNotDecidingImages() const
 {
-	core::SettingsWriter w(out);
-	m_params.writeTo(w);
-	w.value("parallel_eyes", parallel_eyes, "transform left and right on two threads");
-}
-
-std::string CFilterInvariant::imageOptionsAsIni() const
-{
-	std::ostringstream s;
-	core::SettingsWriter w(s);
-	w.value("alpha", m_params.alpha);
-	w.value("beta", m_params.beta);
-	w.value("channel_order", image::toString(m_params.order));
-	w.value("linearisation", image::toString(m_params.linearisation));
-	if (m_params.linearisation == image::Linearisation::Gamma) w.value("gamma", m_params.gamma);
-	w.value("scale", m_params.scale);
-	w.value("offset", m_params.offset);
-	// Only when used, so that linear-mapping channels keep the string maps
-	// made before the tails existed recorded.
-	if (m_params.hasCompressedTails())
-	{
-		w.value("knee_low", m_params.knee_low);
-		w.value("knee_high", m_params.knee_high);
-		w.value("tail_slope_low", m_params.tail_slope_low);
-		w.value("tail_slope_high", m_params.tail_slope_high);
-	}
-	return s.str();
+	std::vector<std::string> out = {"parallel_eyes"};
+	if (m_params.linearisation != image::Linearisation::Gamma) out.push_back("gamma");
+	if (!m_params.hasCompressedTails())
+		out.insert(out.end(), {"knee_low", "knee_high", "tail_slope_low", "tail_slope_high"});
+	return out;
 }
 
 // 0: no compressed tails; 1: knees and tail slopes after parallel_eyes.
@@ -209,29 +189,21 @@ void CFilterLinearise::transformImage(const cv::Mat& in, cv::Mat& out) const
 	requireColour(in);
 	image::toLinear8(in, out, linearisation, gamma);
 }
-void CFilterLinearise::loadSpecificOptions(core::SettingsSection& s)
+void CFilterLinearise::keys(core::KeyVisitor& v)
 {
-	s.readChoice(
-		"linearisation", linearisation,
-		{{"none", image::Linearisation::None}, {"srgb", image::Linearisation::SRGB},
-		 {"gamma", image::Linearisation::Gamma}});
-	s.read("gamma", gamma);
+	v.choice("linearisation", linearisation, image::linearisationNames(), "none | srgb | gamma");
+	v("gamma", gamma, "", core::Range::any(), "exponent with linearisation = gamma");
+}
+void CFilterLinearise::validate() const
+{
+	CObservationFilter::validate();
 	if (linearisation == image::Linearisation::Gamma && !(gamma > 0 && gamma < 10))
-		s.fail("gamma", "'" + core::formatSetting(gamma) + "' must be in (0,10)");
+		throw std::invalid_argument("gamma: '" + core::formatSetting(gamma) + "' must be in (0,10)");
 }
-void CFilterLinearise::specificOptionsAsIni(std::ostream& out) const
+std::vector<std::string> CFilterLinearise::keysNotDecidingImages() const
 {
-	core::SettingsWriter w(out);
-	w.value("linearisation", image::toString(linearisation), "none | srgb | gamma");
-	w.value("gamma", gamma, "exponent with linearisation = gamma");
-}
-std::string CFilterLinearise::imageOptionsAsIni() const
-{
-	std::ostringstream s;
-	core::SettingsWriter w(s);
-	w.value("linearisation", image::toString(linearisation));
-	if (linearisation == image::Linearisation::Gamma) w.value("gamma", gamma);
-	return s.str();
+	if (linearisation == image::Linearisation::Gamma) return {};
+	return {"gamma"};
 }
 
 uint8_t CFilterLinearise::serializeGetVersion() const { return 0; }

@@ -8,13 +8,18 @@
 
 namespace shadyloc::image
 {
-namespace
+const std::vector<std::pair<std::string, ChannelOrder>>& channelOrderNames()
 {
-const std::vector<std::pair<std::string, ChannelOrder>> kOrders = {
-	{"bgr", ChannelOrder::BGR}, {"rgb", ChannelOrder::RGB}};
-const std::vector<std::pair<std::string, Linearisation>> kLinearisations = {
-	{"none", Linearisation::None}, {"srgb", Linearisation::SRGB}, {"gamma", Linearisation::Gamma}};
-}  // namespace
+	static const std::vector<std::pair<std::string, ChannelOrder>> names = {
+		{"bgr", ChannelOrder::BGR}, {"rgb", ChannelOrder::RGB}};
+	return names;
+}
+const std::vector<std::pair<std::string, Linearisation>>& linearisationNames()
+{
+	static const std::vector<std::pair<std::string, Linearisation>> names = {
+		{"none", Linearisation::None}, {"srgb", Linearisation::SRGB}, {"gamma", Linearisation::Gamma}};
+	return names;
+}
 
 void InvariantParams::readFrom(core::SettingsSection& s)
 {
@@ -59,8 +64,8 @@ void InvariantParams::keys(core::KeyVisitor& v)
 	using core::Range;
 	v("alpha", alpha, "", Range::closed(0, 1), "I = log(R2) - alpha log(R1) - beta log(R3): weights of log(blue) and log(red)");
 	v("beta", beta, "", Range::closed(0, 1.5), "");
-	v.choice("channel_order", order, kOrders, "memory order of the colour input: bgr | rgb");
-	v.choice("linearisation", linearisation, kLinearisations, "none | srgb | gamma");
+	v.choice("channel_order", order, channelOrderNames(), "memory order of the colour input: bgr | rgb");
+	v.choice("linearisation", linearisation, linearisationNames(), "none | srgb | gamma");
 	v("gamma", gamma, "", Range::any(), "exponent with linearisation = gamma");
 	// The upper bound keeps the fixed-point sums of InvariantTransform in 32 bits.
 	v("scale", scale, "", Range::openClosed(0, 10000),

@@ -54,7 +54,7 @@ std::string toString(AcceptanceVerdict v)
 	return "?";
 }
 
-TAcceptance CFixAcceptance::judge(
+TAcceptance FixAcceptance::judge(
 	const TSolve& s, const TKeyframePose& pred, const TMotion& motion, bool trackConfirmed, bool countable,
 	const KeyframeLink& link)
 {
@@ -104,14 +104,14 @@ TAcceptance CFixAcceptance::judge(
 	return a;
 }
 
-void CFixAcceptance::noSolve()
+void FixAcceptance::noSolve()
 {
 	m_ref.reset();
 	m_consistent = 0;
 	m_confirmed = false;
 }
 
-void CFixAcceptance::startFrom(size_t frame, const TKeyframePose& place)
+void FixAcceptance::startFrom(size_t frame, const TKeyframePose& place)
 {
 	noSolve();
 	m_ref = TSolve{frame, place};
@@ -119,6 +119,6 @@ void CFixAcceptance::startFrom(size_t frame, const TKeyframePose& place)
 	m_confirmed = m_consistent >= m_opts.consistent_frames;
 }
 
-void CFixAcceptance::reset() { noSolve(); }
+void FixAcceptance::reset() { noSolve(); }
 
 }  // namespace shadyloc::localisation

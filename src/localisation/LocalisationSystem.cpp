@@ -137,18 +137,18 @@ mrpt::poses::CPose3DPDFGaussian TLocalisationUpdate::pdf() const
 namespace
 {
 features::TStereoFeatureOptions featuresOf(
-	const std::vector<CLocalisationSystem::TChannelSetup>& channels, const std::string& label)
+	const std::vector<LocalisationSystem::TChannelSetup>& channels, const std::string& label)
 {
 	for (const auto& c : channels)
 		if (c.channel.label == label) return c.features;
-	throw std::invalid_argument("CLocalisationSystem: no channel '" + label + "' given (the VO's channel)");
+	throw std::invalid_argument("LocalisationSystem: no channel '" + label + "' given (the VO's channel)");
 }
 }  // namespace
 
-CLocalisationSystem::CLocalisationSystem(
+LocalisationSystem::LocalisationSystem(
 	CKeyframeMap::Ptr map, const std::vector<TChannelSetup>& channels, const vo::TStereoVOOptions& vopt,
 	const TSystemOptions& o, const std::optional<vo::TStereoVOOptions>& voFallback)
-	: mrpt::system::COutputLogger("CLocalisationSystem"),
+	: mrpt::system::COutputLogger("LocalisationSystem"),
 	  m_map(std::move(map)),
 	  m_opts(o),
 	  // The VO runs on the VO channel's shared measurements (track() with a
@@ -157,8 +157,8 @@ CLocalisationSystem::CLocalisationSystem(
 	  m_track(o.track)
 {
 	m_opts.validate();
-	if (!m_map) throw std::invalid_argument("CLocalisationSystem: no map");
-	if (m_map->isEmpty()) throw std::invalid_argument("CLocalisationSystem: the map has no keyframes");
+	if (!m_map) throw std::invalid_argument("LocalisationSystem: no map");
+	if (m_map->isEmpty()) throw std::invalid_argument("LocalisationSystem: the map has no keyframes");
 	auto find = [&](const std::string& l) -> const TChannelSetup* {
 		for (const auto& c : channels)
 			if (c.channel.label == l) return &c;
@@ -170,14 +170,14 @@ CLocalisationSystem::CLocalisationSystem(
 	for (const auto& l : labels)
 	{
 		const TChannelSetup* c = find(l);
-		if (!c) throw std::invalid_argument("CLocalisationSystem: no channel '" + l + "' given");
+		if (!c) throw std::invalid_argument("LocalisationSystem: no channel '" + l + "' given");
 		TPipe p{*c, features::StereoFeatureExtractor(c->features), nullptr, -1};
 		const auto it = std::find(m_opts.localisers.begin(), m_opts.localisers.end(), l);
 		if (it != m_opts.localisers.end())
 		{
 			p.policyRank = static_cast<int>(it - m_opts.localisers.begin());
 			// Throws naming the map's channels when it has no such channel.
-			p.localiser = std::make_unique<CStereoLocaliser>(*m_map, l, c->localiser);
+			p.localiser = std::make_unique<StereoLocaliser>(*m_map, l, c->localiser);
 			m_map->checkCompatible(liveParams(c->channel, c->features));
 		}
 		m_pipes.push_back(std::move(p));
@@ -193,33 +193,33 @@ CLocalisationSystem::CLocalisationSystem(
 			}
 }
 
-map::TChannelParams CLocalisationSystem::liveParams(const filters::TChannel& ch, const features::TStereoFeatureOptions& fo)
+map::TChannelParams LocalisationSystem::liveParams(const filters::TChannel& ch, const features::TStereoFeatureOptions& fo)
 {
 	// What the survey records for a channel (survey::channelParams): the filter and the features.
 	return map::TChannelParams::From(ch.label, ch.filter->GetRuntimeClass()->className, ch.filter->imageOptionsAsIni(), fo);
 }
 
-map::TChannelParams CLocalisationSystem::liveParams(const std::string& label) const
+map::TChannelParams LocalisationSystem::liveParams(const std::string& label) const
 {
 	const auto& s = channelSetup(label);
 	return liveParams(s.channel, s.features);
 }
 
-std::vector<std::string> CLocalisationSystem::channelLabels() const
+std::vector<std::string> LocalisationSystem::channelLabels() const
 {
 	std::vector<std::string> l;
 	for (const auto& p : m_pipes) l.push_back(p.setup.channel.label);
 	return l;
 }
 
-const CLocalisationSystem::TChannelSetup& CLocalisationSystem::channelSetup(const std::string& label) const
+const LocalisationSystem::TChannelSetup& LocalisationSystem::channelSetup(const std::string& label) const
 {
 	for (const auto& p : m_pipes)
 		if (p.setup.channel.label == label) return p.setup;
-	throw std::out_of_range("CLocalisationSystem: no channel '" + label + "'");
+	throw std::out_of_range("LocalisationSystem: no channel '" + label + "'");
 }
 
-CLocalisationSystem::TSetup CLocalisationSystem::SetupFromConfig(
+LocalisationSystem::TSetup LocalisationSystem::SetupFromConfig(
 	const mrpt::config::CConfigFileBase& cfg, const std::vector<std::string>& localisers, int threads,
 	const std::string& what)
 {
@@ -259,15 +259,15 @@ CLocalisationSystem::TSetup CLocalisationSystem::SetupFromConfig(
 	return r;
 }
 
-std::unique_ptr<CLocalisationSystem> CLocalisationSystem::FromConfig(
+std::unique_ptr<LocalisationSystem> LocalisationSystem::FromConfig(
 	const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::vector<std::string>& localisers,
 	int threads, const std::string& what)
 {
 	TSetup s = SetupFromConfig(cfg, localisers, threads, what);
-	return std::make_unique<CLocalisationSystem>(std::move(map), s.channels, s.vo, s.system, s.voFallback);
+	return std::make_unique<LocalisationSystem>(std::move(map), s.channels, s.vo, s.system, s.voFallback);
 }
 
-void CLocalisationSystem::reset()
+void LocalisationSystem::reset()
 {
 	for (TVOTrack* t : {&m_vo, m_voFallback.get()})
 		if (t)
@@ -283,14 +283,14 @@ void CLocalisationSystem::reset()
 	m_distance = 0;
 }
 
-void CLocalisationSystem::setStartKeyframe(uint32_t id, double radius)
+void LocalisationSystem::setStartKeyframe(uint32_t id, double radius)
 {
 	m_map->keyframe(id);  // throws naming the id
 	m_track.reset();
 	m_searchAmong = m_map->keyframesAlongChain(id, radius, radius);
 }
 
-TMotion CLocalisationSystem::motionOf(const vo::TFrameResult& r, TVOTrack& t, bool& measured) const
+TMotion LocalisationSystem::motionOf(const vo::TFrameResult& r, TVOTrack& t, bool& measured) const
 {
 	TMotion m;
 	measured = false;
@@ -322,19 +322,19 @@ TMotion CLocalisationSystem::motionOf(const vo::TFrameResult& r, TVOTrack& t, bo
 	}
 	else
 		m.cov = diagCov(m_opts.vo_lost_sigma_m, m_opts.vo_lost_sigma_deg);
-	return m;  // drift since the last fix: CTrack::predict
+	return m;  // drift since the last fix: Track::predict
 }
 
-TLocalisationUpdate CLocalisationSystem::processObservation(const mrpt::obs::CObservationStereoImages& obs)
+TLocalisationUpdate LocalisationSystem::processObservation(const mrpt::obs::CObservationStereoImages& obs)
 {
 	if (!obs.hasImageRight)
-		throw std::invalid_argument("CLocalisationSystem: observation '" + obs.sensorLabel + "' has no right image");
+		throw std::invalid_argument("LocalisationSystem: observation '" + obs.sensorLabel + "' has no right image");
 	const cv::Mat l = obs.imageLeft.asCvMat<cv::Mat>(mrpt::img::SHALLOW_COPY);
 	const cv::Mat r = obs.imageRight.asCvMat<cv::Mat>(mrpt::img::SHALLOW_COPY);
 	return processFrame(l, r, geometry::TStereoCalib::FromObservation(obs), mrpt::Clock::toDouble(obs.timestamp));
 }
 
-void CLocalisationSystem::frontEnd(
+void LocalisationSystem::frontEnd(
 	const ChannelImages& images, const geometry::TStereoCalib& calib, double timestamp,
 	std::vector<features::TStereoFrame>& meas, TLocalisationUpdate& u)
 {
@@ -400,7 +400,7 @@ void CLocalisationSystem::frontEnd(
 }
 
 template <typename F>
-void CLocalisationSystem::forLocalisers(F&& fn)
+void LocalisationSystem::forLocalisers(F&& fn)
 {
 	const bool par = m_opts.threads >= 2 && m_pipes.size() >= 2;
 	auto runFirst = [&] {
@@ -413,7 +413,7 @@ void CLocalisationSystem::forLocalisers(F&& fn)
 	both(par, runFirst, runRest);
 }
 
-const TLocaliserResult* CLocalisationSystem::policyFix(
+const TLocaliserResult* LocalisationSystem::policyFix(
 	const std::vector<TLocaliserResult>& res, const std::vector<size_t>& order) const
 {
 	std::vector<size_t> accepted;
@@ -438,7 +438,7 @@ const TLocaliserResult* CLocalisationSystem::policyFix(
 	return &res[accepted[k]];
 }
 
-TKeyframePose CLocalisationSystem::fusedFix(const TLocaliserResult& r, const TKeyframePose& pred, bool confirmed) const
+TKeyframePose LocalisationSystem::fusedFix(const TLocaliserResult& r, const TKeyframePose& pred, bool confirmed) const
 {
 	TKeyframePose f = r.pose();
 	// Only a prediction made of accepted fixes, linked by measurements.
@@ -473,7 +473,7 @@ std::vector<uint32_t> keyframesAroundDeadReckoning(
 	return among;
 }
 
-void CLocalisationSystem::searchPlace(
+void LocalisationSystem::searchPlace(
 	SearchScope scope, const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib,
 	const std::vector<size_t>& order, TLocalisationUpdate& u)
 {
@@ -532,7 +532,7 @@ void CLocalisationSystem::searchPlace(
 		}
 }
 
-TLocalisationUpdate CLocalisationSystem::processFrame(
+TLocalisationUpdate LocalisationSystem::processFrame(
 	const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& calib, double timestamp)
 {
 	// Each channel made from the colour pair on the thread that extracts it.
@@ -541,7 +541,7 @@ TLocalisationUpdate CLocalisationSystem::processFrame(
 		timestamp);
 }
 
-TLocalisationUpdate CLocalisationSystem::processChannels(
+TLocalisationUpdate LocalisationSystem::processChannels(
 	const ChannelImages& images, const geometry::TStereoCalib& calib, double timestamp)
 {
 	TLocalisationUpdate u;
@@ -624,7 +624,7 @@ TLocalisationUpdate CLocalisationSystem::processChannels(
 	return u;
 }
 
-const CStereoLocaliser* CLocalisationSystem::localiser(const std::string& label) const
+const StereoLocaliser* LocalisationSystem::localiser(const std::string& label) const
 {
 	for (const auto& p : m_pipes)
 		if (p.setup.channel.label == label) return p.localiser.get();

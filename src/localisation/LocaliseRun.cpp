@@ -30,10 +30,10 @@ void checkLocaliseConfig(
 	const mrpt::config::CConfigFileBase& cfg, const std::vector<std::string>& localisers, const std::string& what)
 {
 	checkLocaliseSections(cfg, what);
-	(void)CLocalisationSystem::SetupFromConfig(cfg, localisers, 0, what);
+	(void)LocalisationSystem::SetupFromConfig(cfg, localisers, 0, what);
 }
 
-CLocaliseRun::CLocaliseRun(
+LocaliseRun::LocaliseRun(
 	const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::string& mapPath,
 	const std::string& livePath, const TLocaliseRunOptions& o)
 	: m_livePath(livePath)
@@ -42,7 +42,7 @@ CLocaliseRun::CLocaliseRun(
 	openLive(o.sensorLabel, nullptr);
 }
 
-CLocaliseRun::CLocaliseRun(
+LocaliseRun::LocaliseRun(
 	const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::string& mapPath,
 	filters::TObjectFeed feed, const TLocaliseRunOptions& o)
 	: m_livePath(feed.name)
@@ -51,7 +51,7 @@ CLocaliseRun::CLocaliseRun(
 	openLive(o.sensorLabel, &feed);
 }
 
-void CLocaliseRun::makeSystem(
+void LocaliseRun::makeSystem(
 	const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::string& mapPath,
 	const TLocaliseRunOptions& o)
 {
@@ -67,7 +67,7 @@ void CLocaliseRun::makeSystem(
 	try
 	{
 		checkLocaliseSections(cfg, o.configWhat);
-		m_sys = CLocalisationSystem::FromConfig(cfg, std::move(map), o.localisers, o.threads, o.configWhat);
+		m_sys = LocalisationSystem::FromConfig(cfg, std::move(map), o.localisers, o.threads, o.configWhat);
 	}
 	catch (const std::out_of_range& e)
 	{
@@ -86,7 +86,7 @@ void CLocaliseRun::makeSystem(
 	}
 }
 
-void CLocaliseRun::openLive(const std::string& camera, filters::TObjectFeed* feed)
+void LocaliseRun::openLive(const std::string& camera, filters::TObjectFeed* feed)
 {
 	// Each channel read from a filtered rawlog, or made from the colour pair
 	// on the system's threads (as processFrame would).
@@ -119,18 +119,18 @@ void checkRecordedFilter(const filters::TChannelInput& in, const filters::TChann
 			ch.label + "] " + ch.filter->describe() + " (localise the colour original, or filter it with the config)");
 }
 
-CLocaliseRun::~CLocaliseRun() = default;
+LocaliseRun::~LocaliseRun() = default;
 
-void CLocaliseRun::enableOracle(const io::Trajectory& gt)
+void LocaliseRun::enableOracle(const io::Trajectory& gt)
 {
-	m_oracle = std::make_unique<COracle>(*m_sys, gt);
+	m_oracle = std::make_unique<Oracle>(*m_sys, gt);
 	m_sys->setFrameHook([this](TLocalisationUpdate& u, const std::vector<features::TStereoFrame>& meas,
 							   const geometry::TStereoCalib& calib) { m_oracle->probe(u, meas, calib); });
 }
 
-const std::vector<TLocalisationUpdate>& CLocaliseRun::run(const std::function<void(const TLocalisationUpdate&)>& onFrame)
+const std::vector<TLocalisationUpdate>& LocaliseRun::run(const std::function<void(const TLocalisationUpdate&)>& onFrame)
 {
-	if (!m_first) throw std::logic_error("CLocaliseRun::run: called twice");
+	if (!m_first) throw std::logic_error("LocaliseRun::run: called twice");
 	m_ups.clear();
 	filters::TChannelFrame fr = std::move(*m_first);
 	m_first.reset();
@@ -160,9 +160,9 @@ const std::vector<TLocalisationUpdate>& CLocaliseRun::run(const std::function<vo
 	return m_ups;
 }
 
-const filters::TChannelFrame& CLocaliseRun::firstFrame() const
+const filters::TChannelFrame& LocaliseRun::firstFrame() const
 {
-	if (!m_first) throw std::logic_error("CLocaliseRun::firstFrame: the run has started");
+	if (!m_first) throw std::logic_error("LocaliseRun::firstFrame: the run has started");
 	return *m_first;
 }
 

@@ -23,7 +23,7 @@ namespace shadyloc
 {
 namespace
 {
-using localisation::CLocalisationSystem;
+using localisation::LocalisationSystem;
 using localisation::TLocalisationUpdate;
 
 /** Every key of every section of `from` but `skip` into `to`, values as
@@ -94,7 +94,7 @@ void LocaliserOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c
 	copySections(cfg, sys, section);
 	localisation::checkLocaliseSections(sys, source);
 	// Every struct read from the original, so that errors name its file.
-	(void)CLocalisationSystem::SetupFromConfig(cfg, {}, 0, source);
+	(void)LocalisationSystem::SetupFromConfig(cfg, {}, 0, source);
 	sys.getContent(system_config);
 }
 
@@ -114,7 +114,7 @@ void LocaliserOptions::saveToConfigFile(mrpt::config::CConfigFileBase& cfg, cons
 struct Localiser::Impl
 {
 	CKeyframeMap::Ptr map;
-	std::unique_ptr<CLocalisationSystem> sys;
+	std::unique_ptr<LocalisationSystem> sys;
 	std::string label;	//!< the live camera ("" until chosen)
 	std::function<bool(const std::string&)> notDerived;	//!< false for a label with a channel's suffix (a filtered rawlog's)
 	/** Pairs the live camera's observations into frames: its colour pair,
@@ -129,7 +129,7 @@ struct Localiser::Impl
 		// The options may have been filled in code: checked as when loaded.
 		const mrpt::config::CConfigFileMemory cfg(o.system_config);
 		localisation::checkLocaliseSections(cfg, o.source);
-		sys = CLocalisationSystem::FromConfig(cfg, map, {}, 0, o.source);
+		sys = LocalisationSystem::FromConfig(cfg, map, {}, 0, o.source);
 		if (o.start_keyframe >= 0) sys->setStartKeyframe(static_cast<uint32_t>(o.start_keyframe));
 		std::vector<std::string> suffixes;
 		for (const auto& l : sys->channelLabels()) suffixes.push_back(sys->channelSetup(l).channel.suffix());

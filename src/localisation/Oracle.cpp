@@ -18,29 +18,29 @@ double axesAngleDeg(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B)
 }
 }  // namespace
 
-struct COracle::TImpl
+struct Oracle::TImpl
 {
-	const CLocalisationSystem& sys;
+	const LocalisationSystem& sys;
 	io::Trajectory gt;	//!< sorted by time
 	TOracleOptions o;
 	struct TProbe
 	{
 		size_t channel;	 //!< index into the system's channels (the measurements' order)
-		std::unique_ptr<CStereoLocaliser> localiser;
+		std::unique_ptr<StereoLocaliser> localiser;
 	};
 	std::vector<TProbe> probes;	 //!< policy order
 
-	TImpl(const CLocalisationSystem& s, const io::Trajectory& g, const TOracleOptions& opts) : sys(s), gt(g), o(opts)
+	TImpl(const LocalisationSystem& s, const io::Trajectory& g, const TOracleOptions& opts) : sys(s), gt(g), o(opts)
 	{
 		io::sortByTime(gt);
 		const auto labels = sys.channelLabels();
 		for (const auto& l : sys.options().localisers)
 		{
 			const auto it = std::find(labels.begin(), labels.end(), l);
-			const CStereoLocaliser* loc = sys.localiser(l);
+			const StereoLocaliser* loc = sys.localiser(l);
 			if (it == labels.end() || !loc) continue;
 			probes.push_back({static_cast<size_t>(it - labels.begin()),
-							  std::make_unique<CStereoLocaliser>(sys.map(), l, loc->options())});
+							  std::make_unique<StereoLocaliser>(sys.map(), l, loc->options())});
 		}
 	}
 
@@ -76,14 +76,14 @@ struct COracle::TImpl
 	}
 };
 
-COracle::COracle(const CLocalisationSystem& sys, const io::Trajectory& gt, const TOracleOptions& o)
+Oracle::Oracle(const LocalisationSystem& sys, const io::Trajectory& gt, const TOracleOptions& o)
 	: m(std::make_unique<TImpl>(sys, gt, o))
 {
 }
 
-COracle::~COracle() = default;
+Oracle::~Oracle() = default;
 
-void COracle::probe(TLocalisationUpdate& u, const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib)
+void Oracle::probe(TLocalisationUpdate& u, const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib)
 {
 	u.oracle.assign(m->probes.size(), -1);
 	const Eigen::Isometry3d* T = m->truthAt(u.timestamp);

@@ -240,7 +240,7 @@ std::string toString(LocaliserStatus s)
 	return "?";
 }
 
-CStereoLocaliser::CStereoLocaliser(const CKeyframeMap& map, const std::string& channel, const TLocaliserOptions& o)
+StereoLocaliser::StereoLocaliser(const CKeyframeMap& map, const std::string& channel, const TLocaliserOptions& o)
 	: m_map(map),
 	  m_channel(channel),
 	  m_opts(o),
@@ -257,15 +257,15 @@ CStereoLocaliser::CStereoLocaliser(const CKeyframeMap& map, const std::string& c
 	map.channelIndex(channel);	// throws naming the map's channels
 }
 
-void CStereoLocaliser::reset() { m_accept.reset(); }
+void StereoLocaliser::reset() { m_accept.reset(); }
 
-const features::BriefExtractor* CStereoLocaliser::briefPattern() const
+const features::BriefExtractor* StereoLocaliser::briefPattern() const
 {
 	return m_map.channels()[m_map.channelIndex(m_channel)].descriptor == features::DescriptorKind::Brief ? &m_brief
 																										   : nullptr;
 }
 
-TPoseWithCov CStereoLocaliser::between(uint32_t a, uint32_t b) const
+TPoseWithCov StereoLocaliser::between(uint32_t a, uint32_t b) const
 {
 	TPoseWithCov r;
 	if (a == b) return r;
@@ -284,7 +284,7 @@ TPoseWithCov CStereoLocaliser::between(uint32_t a, uint32_t b) const
 	return r;
 }
 
-TKeyframePose CStereoLocaliser::chooseKeyframe(const TKeyframePose& pred) const
+TKeyframePose StereoLocaliser::chooseKeyframe(const TKeyframePose& pred) const
 {
 	const auto& o = m_opts;
 	const Eigen::Isometry3d T_map_pred = m_map.keyframe(pred.kf).T_map_kf * pred.T_kf_live;
@@ -329,7 +329,7 @@ TKeyframePose CStereoLocaliser::chooseKeyframe(const TKeyframePose& pred) const
 	return out;
 }
 
-std::vector<uint32_t> CStereoLocaliser::window(uint32_t ref, const Eigen::Isometry3d& T_map_pred) const
+std::vector<uint32_t> StereoLocaliser::window(uint32_t ref, const Eigen::Isometry3d& T_map_pred) const
 {
 	std::vector<uint32_t> w = {ref};
 	if (m_opts.kf_window_m <= 0 || m_opts.kf_window_max <= 1) return w;
@@ -363,7 +363,7 @@ bool intoReference(
 }
 }  // namespace
 
-void CStereoLocaliser::searchLocalMapByPatches(
+void StereoLocaliser::searchLocalMapByPatches(
 	const TLocaliserInput& in, uint32_t ref, const Eigen::Isometry3d& T_curr_ref, vo::TKeyframeMatchOutput& out,
 	std::vector<uint32_t>& keyframeOf) const
 {
@@ -404,7 +404,7 @@ void CStereoLocaliser::searchLocalMapByPatches(
 	}
 }
 
-void CStereoLocaliser::searchLocalMap(
+void StereoLocaliser::searchLocalMap(
 	const TLocaliserInput& in, uint32_t ref, const TKeyframePose& pred, double gateScale,
 	vo::TKeyframeMatchOutput& out, std::vector<uint32_t>& keyframeOf) const
 {
@@ -465,11 +465,11 @@ LocaliserStatus statusOf(AcceptanceVerdict v)
 }
 }  // namespace
 
-TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
+TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in)
 {
 	const auto t0 = std::chrono::steady_clock::now();
 	const auto& o = m_opts;
-	if (!in.meas) throw std::invalid_argument("CStereoLocaliser::localise: no measurements");
+	if (!in.meas) throw std::invalid_argument("StereoLocaliser::localise: no measurements");
 	TLocaliserResult r;
 	r.frame = in.frame;
 	r.timestamp = in.timestamp;
@@ -531,7 +531,7 @@ TLocaliserResult CStereoLocaliser::localise(const TLocaliserInput& in)
 	return r;
 }
 
-LocaliserStatus CStereoLocaliser::searchAndSolve(
+LocaliserStatus StereoLocaliser::searchAndSolve(
 	const TLocaliserInput& in, uint32_t ref, const TKeyframePose& pred, vo::TKeyframeMatchOutput& mo,
 	vo::TRelativePoseOutput& po, TLocaliserResult& r) const
 {
@@ -636,7 +636,7 @@ LocaliserStatus CStereoLocaliser::searchAndSolve(
 	return status;
 }
 
-Matrix6d CStereoLocaliser::solveCovariance(
+Matrix6d StereoLocaliser::solveCovariance(
 	const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
 	const vo::TRelativePoseOutput& po, uint32_t seed) const
 {
@@ -647,14 +647,14 @@ Matrix6d CStereoLocaliser::solveCovariance(
 		o.cov_scale, o.bootstrap_samples);
 }
 
-bool CStereoLocaliser::certain(const Matrix6d& cov) const
+bool StereoLocaliser::certain(const Matrix6d& cov) const
 {
 	const auto& o = m_opts;
 	return !(o.max_sigma_m > 0 && translationSigma(cov) > o.max_sigma_m) &&
 		   !(o.max_sigma_deg > 0 && rotationSigma(cov) > o.max_sigma_deg * kDeg);
 }
 
-void CStereoLocaliser::putNearestFirst(
+void StereoLocaliser::putNearestFirst(
 	const Eigen::Isometry3d& guess, std::vector<std::pair<int, uint32_t>>& candidates) const
 {
 	// The keyframe nearest the guessed camera, facing its way: near the
@@ -672,7 +672,7 @@ void CStereoLocaliser::putNearestFirst(
 	std::rotate(candidates.begin(), nearest, nearest + 1);
 }
 
-TGlobalPlace CStereoLocaliser::globalSearch(
+TGlobalPlace StereoLocaliser::globalSearch(
 	const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed) const
 {
 	std::vector<uint32_t> all(m_map.keyframeCount());
@@ -680,7 +680,7 @@ TGlobalPlace CStereoLocaliser::globalSearch(
 	return globalSearch(meas, calib, seed, all);
 }
 
-std::vector<std::pair<int, uint32_t>> CStereoLocaliser::placeVotes(
+std::vector<std::pair<int, uint32_t>> StereoLocaliser::placeVotes(
 	const features::TStereoFrame& meas, const std::vector<uint32_t>& among) const
 {
 	// One vote per live feature, to the nearest only: counting instead every
@@ -712,7 +712,7 @@ std::vector<std::pair<int, uint32_t>> CStereoLocaliser::placeVotes(
 	return votes;
 }
 
-std::optional<CStereoLocaliser::TVerifiedPlace> CStereoLocaliser::verifyPlace(
+std::optional<StereoLocaliser::TVerifiedPlace> StereoLocaliser::verifyPlace(
 	const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed, uint32_t k,
 	const std::optional<Eigen::Isometry3d>& guess, int& solves) const
 {
@@ -793,7 +793,7 @@ std::optional<CStereoLocaliser::TVerifiedPlace> CStereoLocaliser::verifyPlace(
 	return v;
 }
 
-TGlobalPlace CStereoLocaliser::bestPlace(
+TGlobalPlace StereoLocaliser::bestPlace(
 	const std::vector<TVerifiedPlace>& ver, const geometry::TStereoCalib& calib, uint32_t seed) const
 {
 	const auto& o = m_opts;
@@ -831,7 +831,7 @@ TGlobalPlace CStereoLocaliser::bestPlace(
 	return out;
 }
 
-TGlobalPlace CStereoLocaliser::globalSearch(
+TGlobalPlace StereoLocaliser::globalSearch(
 	const features::TStereoFrame& meas, const geometry::TStereoCalib& calib, uint32_t seed,
 	const std::vector<uint32_t>& among, const std::optional<Eigen::Isometry3d>& guess) const
 {

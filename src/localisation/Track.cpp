@@ -49,7 +49,7 @@ Matrix6d driftCovariance(double before, double step, double k_m, double k_deg)
 	return c;
 }
 
-TKeyframePose CTrack::predict(const TMotion& motion)
+TKeyframePose Track::predict(const TMotion& motion)
 {
 	const double step = motion.valid ? motion.T_prev_curr.translation().norm() : 0.0;
 	const Matrix6d drift = driftCovariance(m_distSinceFix, step, m_opts.drift_m_per_m, m_opts.drift_deg_per_m);
@@ -70,12 +70,12 @@ TKeyframePose CTrack::predict(const TMotion& motion)
 	return m_pred;
 }
 
-bool CTrack::confirmed() const
+bool Track::confirmed() const
 {
 	return m_confirmed && m_pred.valid && largestSigma(m_pred.cov) <= m_opts.confirmed_max_sigma_m;
 }
 
-void CTrack::fix(const TKeyframePose& f)
+void Track::fix(const TKeyframePose& f)
 {
 	m_est = f;
 	m_est.valid = true;
@@ -87,7 +87,7 @@ void CTrack::fix(const TKeyframePose& f)
 	m_distSinceFix = 0;
 }
 
-void CTrack::noFix(const std::vector<TKeyframePose>& seeds)
+void Track::noFix(const std::vector<TKeyframePose>& seeds)
 {
 	m_est = m_pred;
 	m_seed = TKeyframePose();
@@ -99,14 +99,14 @@ void CTrack::noFix(const std::vector<TKeyframePose>& seeds)
 	m_framesSinceFix++;
 }
 
-SearchScope CTrack::searchNeeded(bool allLost) const
+SearchScope Track::searchNeeded(bool allLost) const
 {
 	if (!m_est.valid || m_framesSinceFix > m_opts.global_search_after_frames) return SearchScope::Whole;
 	if (allLost || m_framesSinceFix >= m_opts.relocalise_after_frames) return SearchScope::Window;
 	return SearchScope::None;
 }
 
-Matrix6d CTrack::withPlaceSigma(const Matrix6d& cov) const
+Matrix6d Track::withPlaceSigma(const Matrix6d& cov) const
 {
 	const double sr = m_opts.global_sigma_deg * kDeg;
 	Matrix6d c = Matrix6d::Zero();
@@ -114,7 +114,7 @@ Matrix6d CTrack::withPlaceSigma(const Matrix6d& cov) const
 	return cov + c;	 // one frame's solve, unconfirmed
 }
 
-void CTrack::adoptPlace(const TKeyframePose& place)
+void Track::adoptPlace(const TKeyframePose& place)
 {
 	m_est = place;
 	m_est.valid = true;
@@ -126,7 +126,7 @@ void CTrack::adoptPlace(const TKeyframePose& place)
 	m_distSinceFix = 0;
 }
 
-PlaceOutcome CTrack::placeFound(const TKeyframePose& place, const PlaceTest& agreesWith, bool certain, int K)
+PlaceOutcome Track::placeFound(const TKeyframePose& place, const PlaceTest& agreesWith, bool certain, int K)
 {
 	const bool confirmedTrack = confirmed();
 	const bool agrees = agreesWith(m_est);

@@ -1048,7 +1048,7 @@ bool CKeyframeMap::internal_insertObservation(
 {
 	throw std::logic_error(
 		std::string(kClass) + "::insertObservation(" + obs.GetRuntimeClass()->className +
-		"): keyframes come from a VO chain; build maps with map::CSurveyBuilder (`shadyloc survey`)");
+		"): keyframes come from a VO chain; build maps with map::SurveyBuilder (`shadyloc survey`)");
 }
 
 double CKeyframeMap::internal_computeObservationLikelihood(

@@ -93,8 +93,8 @@ std::vector<int> countReobservations(
 {
 	std::vector<int> n(landmarks.size(), 0);
 	if (landmarks.empty()) return n;
-	const vo::CKeyframeMatcher matcher(m.matcher);
-	const vo::CRelativePoseEstimator estimator(m.pose);
+	const vo::KeyframeMatcher matcher(m.matcher);
+	const vo::RelativePoseEstimator estimator(m.pose);
 	for (const auto& f : frames)
 	{
 		if (!f.frame) throw std::invalid_argument("countReobservations: a frame without measurements");
@@ -120,18 +120,18 @@ std::vector<int> countReobservations(
 	return n;
 }
 
-CSurveyBuilder::CSurveyBuilder(CKeyframeMap& map, const std::string& runName, const vo::TStereoVOOptions& vo)
-	: mrpt::system::COutputLogger("CSurveyBuilder"),
+SurveyBuilder::SurveyBuilder(CKeyframeMap& map, const std::string& runName, const vo::TStereoVOOptions& vo)
+	: mrpt::system::COutputLogger("SurveyBuilder"),
 	  m_map(map),
 	  m_matching(TReobservationMatching::From(vo, map.options.reobservation_radius_px))
 {
 	map.options.validate();
-	if (map.channels().empty()) throw std::logic_error("CSurveyBuilder: set the map up (CKeyframeMap::setup) first");
+	if (map.channels().empty()) throw std::logic_error("SurveyBuilder: set the map up (CKeyframeMap::setup) first");
 	m_run = map.addRun(runName);
 	if (!map.keyframes().empty()) m_segment = map.keyframes().back().segment + 1;
 }
 
-bool CSurveyBuilder::offer(
+bool SurveyBuilder::offer(
 	const vo::TFrameResult& res, const std::vector<vo::TKeyframe>& voKfs, size_t voKfsBefore)
 {
 	m_pending.valid = false;
@@ -152,7 +152,7 @@ bool CSurveyBuilder::offer(
 	p.res = res;
 	const bool restart = res.status == vo::FrameStatus::First || res.status == vo::FrameStatus::Reinit;
 	const auto chain = vo::chainReference(res, voKfs, voKfsBefore);
-	if (!chain) throw std::logic_error("CSurveyBuilder::offer: inconsistent VO keyframe counts for a tracked frame");
+	if (!chain) throw std::logic_error("SurveyBuilder::offer: inconsistent VO keyframe counts for a tracked frame");
 	p.ref = chain->ref;
 	p.T_ref_f = chain->T_ref_f.T;
 	p.cov_ref_f = chain->T_ref_f.cov;
@@ -179,11 +179,11 @@ bool CSurveyBuilder::offer(
 	return true;
 }
 
-void CSurveyBuilder::addKeyframe(
+void SurveyBuilder::addKeyframe(
 	const std::vector<std::vector<features::TStereoMeasurement>>& perChannel,
 	const std::optional<Eigen::Isometry3d>& T_gt_kf)
 {
-	if (!m_pending.valid) throw std::logic_error("CSurveyBuilder::addKeyframe without an accepted offer()");
+	if (!m_pending.valid) throw std::logic_error("SurveyBuilder::addKeyframe without an accepted offer()");
 	const auto& p = m_pending;
 	map::TMapKeyframe kf;
 	kf.run = m_run;
@@ -225,7 +225,7 @@ void CSurveyBuilder::addKeyframe(
 	kf.predicted = m_predictedSegment;
 	if (perChannel.size() != m_map.channels().size())
 		throw std::invalid_argument(
-			"CSurveyBuilder::addKeyframe: " + std::to_string(perChannel.size()) + " channels of measurements, the map has " +
+			"SurveyBuilder::addKeyframe: " + std::to_string(perChannel.size()) + " channels of measurements, the map has " +
 			std::to_string(m_map.channels().size()));
 	m_segmentOpen = true;
 	m_lastRef = p.ref;
@@ -249,21 +249,21 @@ void CSurveyBuilder::addKeyframe(
 	flush(false);
 }
 
-bool CSurveyBuilder::bridgeable() const
+bool SurveyBuilder::bridgeable() const
 {
 	return m_pending.valid && m_pending.newSegment && m_segmentOpen && !m_pending.bridged;
 }
 
-void CSurveyBuilder::bridge(const geometry::TPoseWithCov& T_last_f)
+void SurveyBuilder::bridge(const geometry::TPoseWithCov& T_last_f)
 {
-	if (!bridgeable()) throw std::logic_error("CSurveyBuilder::bridge: no accepted frame opening a segment after a break");
+	if (!bridgeable()) throw std::logic_error("SurveyBuilder::bridge: no accepted frame opening a segment after a break");
 	m_pending.bridged = true;
 	m_pending.T_prev_f = T_last_f.T;
 	m_pending.cov_prev_f = T_last_f.cov;
 	m_bridged++;
 }
 
-bool CSurveyBuilder::needsFrames() const
+bool SurveyBuilder::needsFrames() const
 {
 	const auto& o = m_map.options;
 	// Keeping everything needs no score; a floor on it does.
@@ -271,15 +271,15 @@ bool CSurveyBuilder::needsFrames() const
 		   (o.landmarks_per_keyframe > 0 || o.min_reobservations > 0);
 }
 
-void CSurveyBuilder::addFrame(std::vector<features::TStereoFrame> perChannel)
+void SurveyBuilder::addFrame(std::vector<features::TStereoFrame> perChannel)
 {
 	if (!needsFrames() || !m_lastTracked) return;
 	if (perChannel.size() != m_map.channels().size())
 		throw std::invalid_argument(
-			"CSurveyBuilder::addFrame: " + std::to_string(perChannel.size()) + " channels of measurements, the map has " +
+			"SurveyBuilder::addFrame: " + std::to_string(perChannel.size()) + " channels of measurements, the map has " +
 			std::to_string(m_map.channels().size()));
 	if (!m_frames.empty() && m_frames.back().frame == m_lastFrame)
-		throw std::logic_error("CSurveyBuilder::addFrame: frame " + std::to_string(m_lastFrame) + " given twice");
+		throw std::logic_error("SurveyBuilder::addFrame: frame " + std::to_string(m_lastFrame) + " given twice");
 	TFrame f;
 	f.frame = m_lastFrame;
 	f.voSegment = m_voSegment;
@@ -290,9 +290,9 @@ void CSurveyBuilder::addFrame(std::vector<features::TStereoFrame> perChannel)
 	flush(false);
 }
 
-void CSurveyBuilder::finish() { flush(true); }
+void SurveyBuilder::finish() { flush(true); }
 
-void CSurveyBuilder::flush(bool all)
+void SurveyBuilder::flush(bool all)
 {
 	const double win = m_map.options.reobservation_window_m;
 	// In chain order: a keyframe is ready when the survey is past its window
@@ -322,7 +322,7 @@ void CSurveyBuilder::flush(bool all)
 	if (all) m_frames.clear();
 }
 
-void CSurveyBuilder::append(TWaiting w)
+void SurveyBuilder::append(TWaiting w)
 {
 	const auto& o = m_map.options;
 	auto& kf = w.kf;
@@ -360,7 +360,7 @@ void CSurveyBuilder::append(TWaiting w)
 	m_map.appendKeyframe(std::move(kf));
 }
 
-std::vector<double> CSurveyBuilder::meanKeptReobservations() const
+std::vector<double> SurveyBuilder::meanKeptReobservations() const
 {
 	std::vector<double> out;
 	for (size_t c = 0; c < m_keptSum.size(); c++) out.push_back(m_keptCount[c] > 0 ? m_keptSum[c] / m_keptCount[c] : 0.0);

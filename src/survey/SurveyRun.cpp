@@ -28,7 +28,7 @@ struct TSurveyChannel
 };
 }  // namespace
 
-struct CSurveyRun::TImpl
+struct SurveyRun::TImpl
 {
 	std::string inPath;
 	TSurveyRunOptions opts;
@@ -108,8 +108,8 @@ map::TChannelParams recordedParams(
 }
 }  // namespace
 
-CSurveyRun::CSurveyRun(const std::string& inPath, const mrpt::config::CConfigFileBase& cfg, const TSurveyRunOptions& o)
-	: mrpt::system::COutputLogger("CSurveyRun"), m_impl(std::make_unique<TImpl>())
+SurveyRun::SurveyRun(const std::string& inPath, const mrpt::config::CConfigFileBase& cfg, const TSurveyRunOptions& o)
+	: mrpt::system::COutputLogger("SurveyRun"), m_impl(std::make_unique<TImpl>())
 {
 	auto& I = *m_impl;
 	I.inPath = inPath;
@@ -149,11 +149,11 @@ CSurveyRun::CSurveyRun(const std::string& inPath, const mrpt::config::CConfigFil
 											  : "--run-name '" + m_runName + "'");
 }
 
-CSurveyRun::~CSurveyRun() = default;
+SurveyRun::~SurveyRun() = default;
 
-const CKeyframeMap& CSurveyRun::map() const { return *m_impl->map; }
+const CKeyframeMap& SurveyRun::map() const { return *m_impl->map; }
 
-void CSurveyRun::describe(std::ostream& out) const
+void SurveyRun::describe(std::ostream& out) const
 {
 	const auto& I = *m_impl;
 	out << "survey of " << I.inPath << "\n";
@@ -165,17 +165,17 @@ void CSurveyRun::describe(std::ostream& out) const
 	I.map->options.dumpToTextStream(out);
 }
 
-CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onFrame)
+CKeyframeMap::Ptr SurveyRun::run(const std::function<void(size_t, double)>& onFrame)
 {
 	auto& I = *m_impl;
-	if (I.ran) throw std::logic_error("CSurveyRun::run: called twice");
+	if (I.ran) throw std::logic_error("SurveyRun::run: called twice");
 	I.ran = true;
 	CKeyframeMap& kfmap = *I.map;
 	auto& channels = I.channels;
 	auto& voChain = *I.voChain;
 	voChain.setMinLoggingLevel(getMinLoggingLevel());
 	const std::string& inPath = I.inPath;
-	std::unique_ptr<CSurveyBuilder> builder;
+	std::unique_ptr<SurveyBuilder> builder;
 	size_t& nFrames = m_stats.frames;
 	std::optional<vo::TChainReference> bridgeAtLast;  // the last map keyframe as the bridge VO saw it
 
@@ -193,7 +193,7 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 			std::vector<map::TChannelParams> params;
 			for (const auto& c : channels) params.push_back(c.params);
 			kfmap.setup(m_stats.calib, fr.size.width, fr.size.height, params);
-			builder = std::make_unique<CSurveyBuilder>(kfmap, m_runName, I.voOptions);
+			builder = std::make_unique<SurveyBuilder>(kfmap, m_runName, I.voOptions);
 		}
 		const auto& calib = m_stats.calib;
 		const double t = fr.timestamp;
@@ -213,7 +213,7 @@ CKeyframeMap::Ptr CSurveyRun::run(const std::function<void(size_t, double)>& onF
 		else
 			res = voChain.process(f0.left, f0.right, calib, t);
 		// The bridge VO on its own channel: where the chain's VO breaks and
-		// it does not, its motion links the segment on (CSurveyBuilder::bridge).
+		// it does not, its motion links the segment on (SurveyBuilder::bridge).
 		std::optional<vo::TChainReference> bridgeNow;
 		if (I.voBridge)
 		{

@@ -43,9 +43,9 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v)
 void checkInput(const TKeyframeMatchInput& in)
 {
 	if (!in.landmarks || !in.frame)
-		throw std::invalid_argument("CKeyframeMatcher: input without landmarks or frame");
+		throw std::invalid_argument("KeyframeMatcher: input without landmarks or frame");
 	if (in.frame->left.type() != CV_8UC1 || in.frame->left.empty())
-		throw std::invalid_argument("CKeyframeMatcher: the frame's left image must be a non-empty CV_8UC1");
+		throw std::invalid_argument("KeyframeMatcher: the frame's left image must be a non-empty CV_8UC1");
 }
 
 /** Where is landmark lm's patch in img near (x0, y0): through the warp A
@@ -73,9 +73,9 @@ bool correspondenceOf(
 }
 }  // namespace
 
-CKeyframeMatcher::CKeyframeMatcher(const TOptions& o) : m_opts(o) {}
+KeyframeMatcher::KeyframeMatcher(const TOptions& o) : m_opts(o) {}
 
-bool CKeyframeMatcher::warpOf(
+bool KeyframeMatcher::warpOf(
 	const TKeyframeMatchInput& in, const features::TStereoMeasurement& lm, Eigen::Matrix2d& A) const
 {
 	if (!m_opts.warp || lm.normal.isZero()) return false;
@@ -84,7 +84,7 @@ bool CKeyframeMatcher::warpOf(
 		   features::warpDistortion(A) > m_opts.warp_min_distortion;
 }
 
-TPredictedMeasurement CKeyframeMatcher::predict(
+TPredictedMeasurement KeyframeMatcher::predict(
 	const geometry::TStereoCalib& calib, const Eigen::Isometry3d& T_curr_kf, const geometry::Matrix6d& cov_T,
 	const Eigen::Vector3d& P_kf, const Eigen::Matrix3d& cov_P, double sigma_px)
 {
@@ -104,7 +104,7 @@ TPredictedMeasurement CKeyframeMatcher::predict(
 	return pm;
 }
 
-Eigen::Matrix3d CKeyframeMatcher::gateMatrix(const Eigen::Matrix3d& S) const
+Eigen::Matrix3d KeyframeMatcher::gateMatrix(const Eigen::Matrix3d& S) const
 {
 	// An axis of {r : r^T G^-1 r <= chi2} has half-length sqrt(chi2 lambda).
 	const double chi2 = m_opts.gate_chi2;
@@ -116,7 +116,7 @@ Eigen::Matrix3d CKeyframeMatcher::gateMatrix(const Eigen::Matrix3d& S) const
 	return es.eigenvectors() * lam.asDiagonal() * es.eigenvectors().transpose();
 }
 
-int CKeyframeMatcher::searchDescriptors(
+int KeyframeMatcher::searchDescriptors(
 	const TKeyframeMatchInput& in, double radius, std::vector<int>& matchOf, TGateStats* gateStats) const
 {
 	checkInput(in);
@@ -193,7 +193,7 @@ int CKeyframeMatcher::searchDescriptors(
 		// Through the landmark's warp, the candidates' descriptors are made
 		// again with the warped tests (features/PatchWarp.h).
 		Eigen::Matrix2d A;
-		std::optional<features::CWarpedBriefPattern> warped;
+		std::optional<features::WarpedBriefPattern> warped;
 		// BRIEF tests only: ORB's are oriented, and a map says which it holds.
 		if (in.brief && !in.frame->smoothed.empty() && warpOf(in, kfm[j], A)) warped.emplace(*in.brief, A);
 		features::TBriefDescriptor wd;
@@ -250,7 +250,7 @@ int CKeyframeMatcher::searchDescriptors(
 	return static_cast<int>(std::count_if(matchOf.begin(), matchOf.end(), [](int i) { return i >= 0; }));
 }
 
-void CKeyframeMatcher::searchPatches(
+void KeyframeMatcher::searchPatches(
 	const TKeyframeMatchInput& in, const std::vector<uint8_t>& skip, cv::Mat& occupied, TKeyframeMatchOutput& out) const
 {
 	checkInput(in);
@@ -258,7 +258,7 @@ void CKeyframeMatcher::searchPatches(
 	const auto& kfm = *in.landmarks;
 	const auto& fr = *in.frame;
 	if (fr.right.empty() || skip.size() != kfm.size() || occupied.size() != fr.left.size() || occupied.type() != CV_8UC1)
-		throw std::invalid_argument("CKeyframeMatcher::searchPatches: no right image, or skip/occupied of the wrong size");
+		throw std::invalid_argument("KeyframeMatcher::searchPatches: no right image, or skip/occupied of the wrong size");
 	const int margin = features::kPatchSize + o.patch_search_radius_px + 8;
 	for (size_t j = 0; j < kfm.size(); j++)
 	{
@@ -294,7 +294,7 @@ void CKeyframeMatcher::searchPatches(
 	}
 }
 
-void CKeyframeMatcher::match(const TKeyframeMatchInput& in, TKeyframeMatchOutput& out) const
+void KeyframeMatcher::match(const TKeyframeMatchInput& in, TKeyframeMatchOutput& out) const
 {
 	checkInput(in);
 	const auto& o = m_opts;

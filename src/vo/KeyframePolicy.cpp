@@ -5,7 +5,7 @@
 
 namespace shadyloc::vo
 {
-bool CMotionKeyframePolicy::wantKeyframe(const TKeyframeQuery& q) const
+bool MotionKeyframePolicy::wantKeyframe(const TKeyframeQuery& q) const
 {
 	const auto& o = m_opts;
 	const double rotDeg = Eigen::AngleAxisd(q.T_kf_curr.linear()).angle() * 180.0 / M_PI;

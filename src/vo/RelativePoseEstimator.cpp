@@ -25,11 +25,11 @@ std::string toString(RelativePoseStatus s)
 	return "?";
 }
 
-CRelativePoseEstimator::CRelativePoseEstimator(const TOptions& o) : m_opts(o) {}
+RelativePoseEstimator::RelativePoseEstimator(const TOptions& o) : m_opts(o) {}
 
-void CRelativePoseEstimator::estimate(const TRelativePoseInput& in, TRelativePoseOutput& out) const
+void RelativePoseEstimator::estimate(const TRelativePoseInput& in, TRelativePoseOutput& out) const
 {
-	if (!in.corr) throw std::invalid_argument("CRelativePoseEstimator: input without correspondences");
+	if (!in.corr) throw std::invalid_argument("RelativePoseEstimator: input without correspondences");
 	const auto& o = m_opts;
 	const auto& corr = *in.corr;
 	const auto& calib = in.calib;

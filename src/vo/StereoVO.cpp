@@ -119,7 +119,7 @@ StereoVO::StereoVO(const TOptions& o, const features::TStereoFeatureOptions& fo)
 	  m_extractor(fo),
 	  m_matcher(matcherOptionsFrom(o)),
 	  m_poseEstimator(poseEstimatorOptionsFrom(o)),
-	  m_policy(std::make_shared<CMotionKeyframePolicy>(keyframePolicyOptionsFrom(o)))
+	  m_policy(std::make_shared<MotionKeyframePolicy>(keyframePolicyOptionsFrom(o)))
 {
 	m_opts.validate();
 }
@@ -134,7 +134,7 @@ void StereoVO::reset()
 	m_pending = TPending();
 }
 
-void StereoVO::setKeyframePolicy(CKeyframePolicy::Ptr p)
+void StereoVO::setKeyframePolicy(KeyframePolicy::Ptr p)
 {
 	ASSERTMSG_(p, "StereoVO::setKeyframePolicy: null policy");
 	m_policy = std::move(p);
@@ -246,7 +246,7 @@ TFrameResult StereoVO::trackMeasured(
 	}
 	if (static_cast<int>(res.stereo) < o.min_stereo) return fail(FrameStatus::FewFeatures);
 
-	// ---- matching to the keyframe (CKeyframeMatcher) ------------------------------
+	// ---- matching to the keyframe (KeyframeMatcher) ------------------------------
 	auto t0 = Clock::now();
 	const TKeyframe& kf = m_keyframes.back();
 	TKeyframeMatchInput mi;
@@ -262,7 +262,7 @@ TFrameResult StereoVO::trackMeasured(
 	res.ms.match = msSince(t0);
 	if (static_cast<int>(mo.corr.size()) < o.min_matches) return fail(FrameStatus::FewMatches);
 
-	// ---- relative pose (CRelativePoseEstimator) -------------------------------------
+	// ---- relative pose (RelativePoseEstimator) -------------------------------------
 	TRelativePoseInput pi;
 	pi.corr = &mo.corr;
 	pi.calib = calib;

@@ -21,7 +21,7 @@
 #include <shadyloc/Registration.h>
 #include <shadyloc/io/Trajectory.h>
 #include <shadyloc/map/CKeyframeMap.h>
-#include <shadyloc/sim/CStereoSimulator.h>
+#include <shadyloc/sim/StereoSimulator.h>
 
 #include <mrpt/poses/CPose3D.h>
 
@@ -149,7 +149,7 @@ int main(int argc, char** argv)
 	registerAllClasses();
 	const auto mapPtr = CKeyframeMap::LoadFromFile(argv[1]);
 	const CKeyframeMap& map = *mapPtr;
-	sim::CStereoSimulator simulator(sim::TSimOptions::FromFile(argv[2]));
+	sim::StereoSimulator simulator(sim::TSimOptions::FromFile(argv[2]));
 	const int step = std::max(1, std::atoi(argv[3]));
 	const size_t nch = map.channels().size();
 	CKeyframeMap oracle;

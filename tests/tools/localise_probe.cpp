@@ -87,8 +87,8 @@ int main(int argc, char** argv)
 		}
 		mrpt::config::CConfigFileMemory cfg(text);
 		auto map = CKeyframeMap::LoadFromFile(mapPath);
-		const auto setup = localisation::CLocalisationSystem::SetupFromConfig(cfg, {channel}, 1, "probe");
-		const localisation::CLocalisationSystem::TChannelSetup* cs = nullptr;
+		const auto setup = localisation::LocalisationSystem::SetupFromConfig(cfg, {channel}, 1, "probe");
+		const localisation::LocalisationSystem::TChannelSetup* cs = nullptr;
 		for (const auto& c : setup.channels)
 			if (c.channel.label == channel) cs = &c;
 		if (!cs) throw std::runtime_error("no channel '" + channel + "' in the config");
@@ -106,14 +106,14 @@ int main(int argc, char** argv)
 		// The ceiling as the localiser applied it before gate_landmark_max_px:
 		// every landmark whose gate exceeds gate_max_px counts as overflowing.
 		mo.gate_landmark_max_px = 0;
-		const vo::CKeyframeMatcher matcher(mo);
+		const vo::KeyframeMatcher matcher(mo);
 		// The same with the gate clamped to a wide ceiling: what BRIEF and the
 		// patch would find if the gate did not overflow.
 		vo::TKeyframeMatcherOptions moWide = mo;
 		moWide.gate_clamp = true;
 		moWide.gate_max_px = 150;
-		const vo::CKeyframeMatcher wideMatcher(moWide);
-		const vo::CRelativePoseEstimator estimator(localisation::estimatorOptionsFor(lo));
+		const vo::KeyframeMatcher wideMatcher(moWide);
+		const vo::RelativePoseEstimator estimator(localisation::estimatorOptionsFor(lo));
 		geometry::Matrix6d predCov = geometry::Matrix6d::Zero();
 		predCov.diagonal() << 0.01, 0.01, 0.01, kDeg * kDeg, kDeg * kDeg, kDeg * kDeg;
 
@@ -223,7 +223,7 @@ int main(int argc, char** argv)
 				{
 					withNormal++;
 					features::TBriefDescriptor wd;
-					const features::CWarpedBriefPattern wp(brief, A);
+					const features::WarpedBriefPattern wp(brief, A);
 					const int hw = wp.compute(meas.smoothed, static_cast<int>(near.uL), static_cast<int>(near.v), wd)
 									   ? features::hamming(lms[j].desc, wd)
 									   : 256;
@@ -310,7 +310,7 @@ int main(int argc, char** argv)
 			vo::TGateStats exactGate;
 			std::vector<int> exactOf;
 			matcher.searchDescriptors(miExact, 0, exactOf, &exactGate);
-			localisation::CStereoLocaliser loc(*map, channel, lo);
+			localisation::StereoLocaliser loc(*map, channel, lo);
 			localisation::TLocaliserInput in;
 			in.frame = fr.index;
 			in.timestamp = fr.timestamp;

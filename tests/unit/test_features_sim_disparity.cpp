@@ -4,7 +4,7 @@
  * (docs/vo.md, "The scale bias: far landmarks' disparity is biased high"). */
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/filters/Channel.h>
-#include <shadyloc/sim/CStereoSimulator.h>
+#include <shadyloc/sim/StereoSimulator.h>
 #include <shadyloc/sim/SimOptions.h>
 #include <shadyloc/vo/ChannelOptions.h>
 
@@ -21,7 +21,7 @@ TEST(FeaturesSimDisparity, NearDisparityUnbiasedAgainstRenderedDepth)
 {
 	auto o = sim::TSimOptions::FromFile(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
 	o.traversals = {o.traversal("noon")};
-	sim::CStereoSimulator s(o);
+	sim::StereoSimulator s(o);
 	s.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	mrpt::config::CConfigFile cfg(std::string(SHADYLOC_SOURCE_DIR) + "/config/vo_sim.ini");
 	const auto conv = filters::channelFromConfig(cfg, "mono", "config/vo_sim.ini");

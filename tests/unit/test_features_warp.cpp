@@ -104,7 +104,7 @@ TEST(FeaturesWarp, IdentityWarpGivesTheUnwarpedDescriptor)
 	cv::randu(img, 0, 255);
 	BriefExtractor::smooth(img, smoothed);
 	const BriefExtractor brief(32, 0x5ad710c);
-	const CWarpedBriefPattern same(brief, Eigen::Matrix2d::Identity());
+	const WarpedBriefPattern same(brief, Eigen::Matrix2d::Identity());
 	int compared = 0;
 	for (int y = 10; y < 110; y += 7)
 		for (int x = 10; x < 150; x += 9)
@@ -205,7 +205,7 @@ TEST(FeaturesWarp, NormalFromTheDisparityOfATiltedPlane)
 	EXPECT_TRUE(ms[0].normal.isZero());
 }
 
-// The localiser's second pass (CKeyframeMatcher::searchPatches): landmarks of
+// The localiser's second pass (KeyframeMatcher::searchPatches): landmarks of
 // a keyframe (its corners on the road surface) seen from half a lane aside
 // are found by their warped patches alone, with no live corner anywhere,
 // three quarters within 0.5 px in the left image and in the right one, all
@@ -249,7 +249,7 @@ TEST(VoKeyframeMatcher, PatchSearchFindsLandmarksWithoutCorners)
 	}
 	vo::TKeyframeMatcherOptions o;
 	o.warp = true;
-	const vo::CKeyframeMatcher matcher(o);
+	const vo::KeyframeMatcher matcher(o);
 	const BriefExtractor brief(32, 0x5ad710c);
 	vo::TKeyframeMatchInput in;
 	in.landmarks = &lms;

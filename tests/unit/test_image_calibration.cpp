@@ -11,7 +11,7 @@
 #include <shadyloc/filters/Filters.h>
 #include <shadyloc/image/InvariantCalibration.h>
 #include <shadyloc/image/ShadowMetrics.h>
-#include <shadyloc/sim/CStereoSimulator.h>
+#include <shadyloc/sim/StereoSimulator.h>
 #include <shadyloc/sim/Spectral.h>
 
 #include <opencv2/core.hpp>
@@ -377,13 +377,13 @@ struct SimData
 
 /** alpha (beta = 1 - alpha) minimising the variance of I, pooled over the
  * simulator's 20 material spectra, over the illuminants a point receives in
- * the given traversals: V max(0, n.s) E_sun + v E_sky (CStereoSimulator::shade)
+ * the given traversals: V max(0, n.s) E_sun + v E_sky (StereoSimulator::shade)
  * for direct-sun factors 0, 0.1, .., 1 and sky visibilities 0.5 (a wall) and
  * 1 (the road). Each group of traversals pools its lights (a same-view pair
  * sees two traversals); the groups' within-material covariances are summed.
  * Closed form as sim::blackBodyReferenceAlpha: sum cov(x, y) / sum var(x). */
 double sceneIlluminantAlpha(
-	shadyloc::sim::CStereoSimulator& sim, const std::vector<std::vector<shadyloc::sim::TTraversal>>& groups)
+	shadyloc::sim::StereoSimulator& sim, const std::vector<std::vector<shadyloc::sim::TTraversal>>& groups)
 {
 	using namespace shadyloc::sim;
 	double sumCov = 0, sumVar = 0;
@@ -478,7 +478,7 @@ SimData simulate(const CameraModel& cam)
 	d.referenceFlat = blackBodyReferenceAlpha(sens, opts.camera.grid);
 	d.peakFormula = InvariantParams::FromWavelengths(cam.peaks[0], cam.peaks[1], cam.peaks[2]).alpha;
 
-	CStereoSimulator sim(opts);
+	StereoSimulator sim(opts);
 	const TTraversal noon = opts.traversal("noon");
 	TTraversal noonTurned = noon;  // same light, sun from elsewhere: shadows move
 	noonTurned.sun_azimuth_deg += 100;
@@ -581,7 +581,7 @@ TEST(InvariantCalibrationSim, InvariantTextureOverNoiseFallsWithAlpha)
 {
 	using namespace shadyloc::sim;
 	const auto opts = TSimOptions::FromFile(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
-	CStereoSimulator sim(opts);
+	StereoSimulator sim(opts);
 	std::vector<std::pair<cv::Mat, cv::Mat>> shots;	 // the same frame, two noise seeds
 	std::vector<cv::Mat> first;
 	uint64_t seed = 100;
@@ -663,7 +663,7 @@ TEST(InvariantCalibrationSim, TwoRunsWithoutPosesAgreeWithAlignedSameView)
 {
 	using namespace shadyloc::sim;
 	const auto opts = TSimOptions::FromFile(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
-	CStereoSimulator sim(opts);
+	StereoSimulator sim(opts);
 	const TTraversal noon = opts.traversal("noon"), morning = opts.traversal("morning_low_sun");
 	uint64_t seed = 500;
 	const auto shoot = [&](const TTraversal& t, const mrpt::poses::CPose3D& pose) {

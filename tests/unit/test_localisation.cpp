@@ -63,7 +63,7 @@ CKeyframeMap::Ptr surveyCorridor(uint32_t seed, int nKf, double z0 = 2.0)
 	map->options.landmarks_per_keyframe = 200;
 	std::vector<map::TChannelParams> params;
 	std::vector<filters::TChannel> chans = {filters::defaultChannel("mono"), filters::defaultChannel("invariant")};
-	for (const auto& c : chans) params.push_back(CLocalisationSystem::liveParams(c, featureOptions(c.label)));
+	for (const auto& c : chans) params.push_back(LocalisationSystem::liveParams(c, featureOptions(c.label)));
 	map->setup(calib, co.width, co.height, params);
 	const uint16_t run = map->addRun("survey");
 	Eigen::Isometry3d prev = Eigen::Isometry3d::Identity(), T0 = Eigen::Isometry3d::Identity();
@@ -95,7 +95,7 @@ CKeyframeMap::Ptr surveyCorridor(uint32_t seed, int nKf, double z0 = 2.0)
 	return map;
 }
 
-std::unique_ptr<CLocalisationSystem> makeSystem(
+std::unique_ptr<LocalisationSystem> makeSystem(
 	const CKeyframeMap::Ptr& map, int threads, const std::string& extraIni = "")
 {
 	std::string ini =
@@ -105,7 +105,7 @@ std::unique_ptr<CLocalisationSystem> makeSystem(
 		"[localiser]\nmin_inliers = 15\n" +
 		extraIni;
 	mrpt::config::CConfigFileMemory cfg(ini);
-	return CLocalisationSystem::FromConfig(cfg, map, {}, threads, "test config");
+	return LocalisationSystem::FromConfig(cfg, map, {}, threads, "test config");
 }
 
 struct TLiveRun
@@ -116,7 +116,7 @@ struct TLiveRun
 
 /** A live run along the corridor, `lateral` metres off the survey's line,
  * frames every kStep metres. */
-TLiveRun liveRun(CLocalisationSystem& sys, uint32_t seed, int frames, double lateral, double z0 = 2.3)
+TLiveRun liveRun(LocalisationSystem& sys, uint32_t seed, int frames, double lateral, double z0 = 2.3)
 {
 	sim::TCorridorOptions co;
 	co.seed = seed;
@@ -287,7 +287,7 @@ TEST_F(LocalisationCorridor, FallbackVOCarriesThePredictionWhereTheVOChannelCann
 			"[features.invariant]\nfast_threshold = 5\npresmooth_sigma_px = 1.0\nmin_zncc_shifted = -1\n"
 			"[localiser]\nmin_inliers = 15\n" +
 			ini);
-		auto sys = CLocalisationSystem::FromConfig(cfg, s_map, localisers, 2, "test config");
+		auto sys = LocalisationSystem::FromConfig(cfg, s_map, localisers, 2, "test config");
 		const auto run = liveRun(*sys, 1, frames, 0.3);
 		fromInvariant = 0;
 		for (const auto& u : run.ups) fromInvariant += u.motion_from == "invariant";
@@ -342,7 +342,7 @@ TEST(LocalisationSystemSetup, RefusesOtherDescriptorParametersAndMissingChannels
 		"brief_seed = 7\n");
 	try
 	{
-		CLocalisationSystem::FromConfig(cfg, map, {}, 1, "cfg");
+		LocalisationSystem::FromConfig(cfg, map, {}, 1, "cfg");
 		FAIL() << "other descriptor parameters accepted";
 	}
 	catch (const std::runtime_error& e)
@@ -353,11 +353,11 @@ TEST(LocalisationSystemSetup, RefusesOtherDescriptorParametersAndMissingChannels
 	}
 	// A localiser of a channel the map does not have.
 	mrpt::config::CConfigFileMemory lin("[lin]\nclass = CFilterMonochrome\noutput_suffix = _lin\n");
-	EXPECT_ANY_THROW(CLocalisationSystem::FromConfig(lin, map, {"mono", "lin"}, 1, "cfg"));
+	EXPECT_ANY_THROW(LocalisationSystem::FromConfig(lin, map, {"mono", "lin"}, 1, "cfg"));
 	// An empty map.
 	auto empty = CKeyframeMap::Create();
 	mrpt::config::CConfigFileMemory none("");
-	EXPECT_THROW(CLocalisationSystem::FromConfig(none, empty, {}, 1, "cfg"), std::invalid_argument);
+	EXPECT_THROW(LocalisationSystem::FromConfig(none, empty, {}, 1, "cfg"), std::invalid_argument);
 }
 
 // ---- evaluation ---------------------------------------------------------------------------------
@@ -490,7 +490,7 @@ TEST(LocalisationSecondSearch, WiderGatesRescueARightButOverConfidentPrediction)
 		// The wider search alone: the patch pass at a sharp prediction would
 		// also reach a solve here (and, as here, an inconsistent one).
 		o.patch_search = false;
-		CStereoLocaliser loc(*map, "mono", o);
+		StereoLocaliser loc(*map, "mono", o);
 		return loc.localise(in);
 	};
 	const auto once = run(1.0);
@@ -527,7 +527,7 @@ TPlaceCount placesFoundAside(const CKeyframeMap& map, double lateral, double yaw
 	const Eigen::Isometry3d T0 = corridorPose(2.0, 0.0, 0.0);  // the map frame (keyframe 0)
 	TLocaliserOptions o;
 	o.min_inliers = 15;
-	const CStereoLocaliser loc(map, "mono", o);
+	const StereoLocaliser loc(map, "mono", o);
 	std::vector<uint32_t> all(map.keyframeCount());
 	for (uint32_t k = 0; k < all.size(); k++) all[k] = k;
 	TPlaceCount out;

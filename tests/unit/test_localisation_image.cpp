@@ -1,5 +1,5 @@
 /* ShadyLoc tests: the localiser's core for a single image against a stereo
- * keyframe (2D-3D, CMonoLocaliser): on the synthetic corridor with a live
+ * keyframe (2D-3D, MonocularLocaliser): on the synthetic corridor with a live
  * camera of other intrinsics, with and without a prediction, against a map of
  * another world; the map's refusal of other descriptor parameters; the
  * options; and the Middlebury check (a map of the Piano stereo pair localises
@@ -9,7 +9,7 @@
 #include <shadyloc/datasets/Middlebury.h>
 #include <shadyloc/filters/Channel.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
-#include <shadyloc/localisation/MonoLocaliser.h>
+#include <shadyloc/localisation/MonocularLocaliser.h>
 #include <shadyloc/sim/SyntheticCorridor.h>
 #include <shadyloc/vo/ChannelOptions.h>
 
@@ -62,7 +62,7 @@ CKeyframeMap::Ptr corridorKeyframeMap(const Eigen::Isometry3d& T_world_kf)
 	auto map = CKeyframeMap::Create();
 	std::vector<filters::TChannel> chans = {filters::defaultChannel("mono"), filters::defaultChannel("invariant")};
 	std::vector<map::TChannelParams> params;
-	for (const auto& c : chans) params.push_back(CLocalisationSystem::liveParams(c, corridorFeatures(c.label)));
+	for (const auto& c : chans) params.push_back(LocalisationSystem::liveParams(c, corridorFeatures(c.label)));
 	map->setup(calib, co.width, co.height, params);
 	map::TMapKeyframe kf;
 	kf.run = map->addRun("survey");
@@ -127,7 +127,7 @@ TEST_F(LocalisationImageCorridor, OtherIntrinsicsRecoverTheKnownPoseOnBothChanne
 		live.render(T_live, l, r, 2000);
 		for (const char* ch : {"mono", "invariant"})
 		{
-			const CMonoLocaliser loc(*s_map, filters::defaultChannel(ch), corridorFeatures(ch));
+			const MonocularLocaliser loc(*s_map, filters::defaultChannel(ch), corridorFeatures(ch));
 			const auto f = loc.features(l);
 			const auto res = loc.localise(f, calib, 0);
 			ASSERT_TRUE(res.accepted()) << ch << " at z=" << z << ": " << toString(res.status) << ", " << res.matches
@@ -166,7 +166,7 @@ TEST_F(LocalisationImageCorridor, PredictionGatesTheSearch)
 	const Eigen::Isometry3d truth = s_T_kf.inverse() * T_live;
 	cv::Mat l, r;
 	live.render(T_live, l, r, 3000);
-	const CMonoLocaliser loc(*s_map, filters::defaultChannel("mono"), corridorFeatures("mono"));
+	const MonocularLocaliser loc(*s_map, filters::defaultChannel("mono"), corridorFeatures("mono"));
 	const auto f = loc.features(l);
 	// A prediction 10 cm and 1 degree off, with a covariance that admits it.
 	TKeyframePose pred;
@@ -203,7 +203,7 @@ TEST_F(LocalisationImageCorridor, ImageOfAnotherWorldGivesNoFix)
 	const TPinholeCalib calib = TPinholeCalib::LeftOf(live.calib());
 	for (const char* ch : {"mono", "invariant"})
 	{
-		const CMonoLocaliser loc(*s_map, filters::defaultChannel(ch), corridorFeatures(ch));
+		const MonocularLocaliser loc(*s_map, filters::defaultChannel(ch), corridorFeatures(ch));
 		for (int i = 0; i < 4; i++)
 		{
 			cv::Mat l, r;
@@ -228,7 +228,7 @@ TEST_F(LocalisationImageCorridor, MrptObservationWithItsCameraParams)
 	obs.cameraParams.setIntrinsicParamsFromValues(lc.fx, lc.fy, lc.cx, lc.cy);
 	obs.cameraParams.ncols = static_cast<uint32_t>(lo.width);
 	obs.cameraParams.nrows = static_cast<uint32_t>(lo.height);
-	const CMonoLocaliser loc(*s_map, filters::defaultChannel("mono"), corridorFeatures("mono"));
+	const MonocularLocaliser loc(*s_map, filters::defaultChannel("mono"), corridorFeatures("mono"));
 	const auto res = loc.localise(obs, 0);
 	ASSERT_TRUE(res.accepted()) << toString(res.status);
 	EXPECT_LT(poseError(res.T_kf_live, s_T_kf.inverse() * T_live).first, 0.05);
@@ -248,7 +248,7 @@ TEST(LocalisationImageSetup, RefusesOnlyDescriptorDefiningDifferences)
 		else fo.presmooth_sigma = 1.5;
 		try
 		{
-			CMonoLocaliser loc(*map, filters::defaultChannel("invariant"), fo);
+			MonocularLocaliser loc(*map, filters::defaultChannel("invariant"), fo);
 			FAIL() << key << ": other descriptor parameters accepted";
 		}
 		catch (const std::runtime_error& e)
@@ -262,13 +262,13 @@ TEST(LocalisationImageSetup, RefusesOnlyDescriptorDefiningDifferences)
 	auto fo = corridorFeatures("mono");
 	fo.fast_threshold = 20;
 	fo.sigma_px = 0.8;
-	EXPECT_NO_THROW(CMonoLocaliser(*map, filters::defaultChannel("mono"), fo));
+	EXPECT_NO_THROW(MonocularLocaliser(*map, filters::defaultChannel("mono"), fo));
 	// A channel the map does not have: named with the map's channels.
 	filters::TChannel lin = filters::defaultChannel("mono");
 	lin.label = "lin";
 	try
 	{
-		CMonoLocaliser loc(*map, lin, fo);
+		MonocularLocaliser loc(*map, lin, fo);
 		FAIL() << "a channel the map lacks was accepted";
 	}
 	catch (const std::out_of_range& e)
@@ -279,7 +279,7 @@ TEST(LocalisationImageSetup, RefusesOnlyDescriptorDefiningDifferences)
 
 TEST(LocalisationImageOptions, DumpLoadsBackIdenticallyAndUnknownKeysFail)
 {
-	TMonoLocaliserOptions o;
+	TMonocularLocaliserOptions o;
 	o.match_ratio = 0.1 + 0.7;	// needs 17 digits
 	o.corners_per_cell = 33;
 	o.mutual = false;
@@ -287,7 +287,7 @@ TEST(LocalisationImageOptions, DumpLoadsBackIdenticallyAndUnknownKeysFail)
 	std::ostringstream d;
 	o.dump(d);
 	mrpt::config::CConfigFileMemory c("[localiser_2d]\n" + d.str() + "[localiser_2d.invariant]\nmin_inliers = 30\n");
-	const auto b = monoLocaliserOptionsFor(c, "mono");
+	const auto b = monocularLocaliserOptionsFor(c, "mono");
 	EXPECT_EQ(b.match_ratio, o.match_ratio);
 	EXPECT_EQ(b.corners_per_cell, 33);
 	EXPECT_FALSE(b.mutual);
@@ -295,12 +295,12 @@ TEST(LocalisationImageOptions, DumpLoadsBackIdenticallyAndUnknownKeysFail)
 	std::ostringstream d2;
 	b.dump(d2);
 	EXPECT_EQ(d2.str(), d.str());
-	EXPECT_EQ(monoLocaliserOptionsFor(c, "invariant").min_inliers, 30);
-	EXPECT_EQ(monoLocaliserOptionsFor(c, "invariant").corners_per_cell, 33);	// inherited
+	EXPECT_EQ(monocularLocaliserOptionsFor(c, "invariant").min_inliers, 30);
+	EXPECT_EQ(monocularLocaliserOptionsFor(c, "invariant").corners_per_cell, 33);	// inherited
 	mrpt::config::CConfigFileMemory bad("[localiser_2d]\nmin_inlier = 3\n");
 	try
 	{
-		monoLocaliserOptionsFor(bad, "mono");
+		monocularLocaliserOptionsFor(bad, "mono");
 		FAIL() << "unknown key accepted";
 	}
 	catch (const std::invalid_argument& e)
@@ -308,12 +308,12 @@ TEST(LocalisationImageOptions, DumpLoadsBackIdenticallyAndUnknownKeysFail)
 		EXPECT_NE(std::string(e.what()).find("min_inlier"), std::string::npos) << e.what();
 	}
 	mrpt::config::CConfigFileMemory range("[localiser_2d]\nmin_inliers = 3\n");
-	EXPECT_THROW(monoLocaliserOptionsFor(range, "mono"), std::invalid_argument);
+	EXPECT_THROW(monocularLocaliserOptionsFor(range, "mono"), std::invalid_argument);
 	// The shipped file loads and holds the defaults.
 	mrpt::config::CConfigFile shipped(std::string(SHADYLOC_SOURCE_DIR) + "/config/localise_image.ini");
 	std::ostringstream ds, dd;
-	monoLocaliserOptionsFor(shipped, "mono").dump(ds);
-	TMonoLocaliserOptions().dump(dd);
+	monocularLocaliserOptionsFor(shipped, "mono").dump(ds);
+	TMonocularLocaliserOptions().dump(dd);
 	EXPECT_EQ(ds.str(), dd.str());
 }
 
@@ -321,7 +321,7 @@ TEST(LocalisationImageOptions, DumpLoadsBackIdenticallyAndUnknownKeysFail)
 struct TMiddleburyCase
 {
 	std::string channel, live;
-	TMonoLocaliserResult res;
+	TMonocularLocaliserResult res;
 	double err_m = -1, err_deg = -1;
 };
 
@@ -371,7 +371,7 @@ TEST(LocalisationImageMiddlebury, PianoMapLocalisesTheRelitRightImageAtTheBaseli
 		fo.max_disparity = 55 + 5 + mc.doffs;
 		fo.max_depth = 1e3;
 		fos.push_back(fo);
-		params.push_back(CLocalisationSystem::liveParams(c, fo));
+		params.push_back(LocalisationSystem::liveParams(c, fo));
 	}
 	auto map = CKeyframeMap::Create();
 	map->setup(calib, im0.cols, im0.rows, params);
@@ -390,7 +390,7 @@ TEST(LocalisationImageMiddlebury, PianoMapLocalisesTheRelitRightImageAtTheBaseli
 	std::vector<TMiddleburyCase> cases;
 	for (size_t c = 0; c < chans.size(); c++)
 	{
-		const CMonoLocaliser loc(*map, chans[c], fos[c], monoLocaliserOptionsFor(li, chans[c].label));
+		const MonocularLocaliser loc(*map, chans[c], fos[c], monocularLocaliserOptionsFor(li, chans[c].label));
 		for (const auto& [name, img] : {std::pair{"Piano", im1}, std::pair{"PianoL", im1L}})
 		{
 			TMiddleburyCase k;
@@ -438,7 +438,7 @@ TEST(LocalisationImageMiddlebury, PianoMapLocalisesTheRelitRightImageAtTheBaseli
 	// camera's principal point (31 px off, Middlebury's doffs) moves the fix
 	// by about Z doffs / f along x.
 	{
-		const CMonoLocaliser loc(*map, chans[0], fos[0], monoLocaliserOptionsFor(li, "mono"));
+		const MonocularLocaliser loc(*map, chans[0], fos[0], monocularLocaliserOptionsFor(li, "mono"));
 		const auto bad = loc.localise(im1L, TPinholeCalib::LeftOf(calib), 0);
 		ASSERT_TRUE(bad.solved) << toString(bad.status);
 		const double e = poseError(bad.T_kf_live, truth).first;

@@ -76,7 +76,7 @@ TEST(LocalisationRelocalisation, TwentyStartsWithNoPoseAlongALiveRunNoneWrong)
 	for (int p = 0; p < kPlaces; p++)
 	{
 		const size_t start = static_cast<size_t>(p) * n / kPlaces;
-		auto sys = CLocalisationSystem::FromConfig(cfg, map, {}, 0, "config/vo_sim.ini + config/localise_sim.ini");
+		auto sys = LocalisationSystem::FromConfig(cfg, map, {}, 0, "config/vo_sim.ini + config/localise_sim.ini");
 		std::vector<TLocalisationUpdate> ups;
 		int after = -1;
 		for (size_t i = start; i < n && after < kAfterFirstFix; i++)

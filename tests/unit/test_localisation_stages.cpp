@@ -96,7 +96,7 @@ TEST(LocalisationStages, DriftGrowsInProportionToDistanceWhateverTheStep)
 	// Through the track: 30 steps of 0.8 m with (almost) exact VO; along the
 	// direction of travel (z) heading errors add nothing.
 	TTrackOptions o;
-	CTrack t(o);
+	Track t(o);
 	t.fix(poseAt(0, 1e-4));
 	TKeyframePose p;
 	for (int i = 0; i < 30; i++)
@@ -112,7 +112,7 @@ TEST(LocalisationStages, DriftGrowsInProportionToDistanceWhateverTheStep)
 // failed too.
 TEST(LocalisationStages, RejectedSolveIsNeverAReference)
 {
-	CFixAcceptance acc({22.46, 22.46, 2});
+	FixAcceptance acc({22.46, 22.46, 2});
 	const TMotion m = step(0.5);
 	auto predAt = [](double z) { return poseAt(z, 0.05); };
 	EXPECT_EQ(acc.judge(solveAt(1, 0.5), predAt(0.5), m, true, true, identityLink).verdict, AcceptanceVerdict::Fix);
@@ -135,7 +135,7 @@ TEST(LocalisationStages, RejectedSolveIsNeverAReference)
 TEST(LocalisationStages, ConfirmationIsOnlyForANewPlace)
 {
 	const TMotion m = step(0.5);
-	CFixAcceptance fresh({22.46, 22.46, 2});
+	FixAcceptance fresh({22.46, 22.46, 2});
 	std::vector<AcceptanceVerdict> v;
 	for (size_t f = 1; f <= 3; f++)
 		v.push_back(fresh.judge(solveAt(f, 0.5 * f), poseAt(0.5 * f, 0.05), m, false, true, identityLink).verdict);
@@ -143,18 +143,18 @@ TEST(LocalisationStages, ConfirmationIsOnlyForANewPlace)
 	EXPECT_EQ(v[1], AcceptanceVerdict::Unconfirmed);  // 1 of K
 	EXPECT_EQ(v[2], AcceptanceVerdict::Fix);  // K = 2
 
-	CFixAcceptance tracked({22.46, 22.46, 2});
+	FixAcceptance tracked({22.46, 22.46, 2});
 	EXPECT_EQ(tracked.judge(solveAt(1, 0.5), poseAt(0.5, 0.05), m, true, true, identityLink).verdict, AcceptanceVerdict::Fix);
 
 	// A verified place counts as the first consistent frame: the next
 	// consistent solve confirms it.
-	CFixAcceptance placed({22.46, 22.46, 2});
+	FixAcceptance placed({22.46, 22.46, 2});
 	placed.startFrom(7, poseAt(0.0, 0.05));
 	const auto a = placed.judge(solveAt(8, 0.5), poseAt(0.5, 0.1), m, false, true, identityLink);
 	EXPECT_GE(a.motion_d2, 0.0);
 	EXPECT_EQ(a.verdict, AcceptanceVerdict::Fix);
 	// ... and one that moved against VO is rejected.
-	CFixAcceptance placed2({22.46, 22.46, 2});
+	FixAcceptance placed2({22.46, 22.46, 2});
 	placed2.startFrom(7, poseAt(0.0, 0.02));
 	EXPECT_EQ(placed2.judge(solveAt(8, 1.5), poseAt(1.5, 1.0), m, false, true, identityLink).verdict,
 			  AcceptanceVerdict::MotionInconsistent);
@@ -166,7 +166,7 @@ TEST(LocalisationStages, ConfirmationIsOnlyForANewPlace)
 TEST(LocalisationStages, UnconfirmedSeedNarrowsTheSearchButNeverValidates)
 {
 	TTrackOptions o;
-	CTrack t(o);
+	Track t(o);
 	t.adoptPlace(poseAt(0, 0.3));  // a wide place
 	t.predict(step(0.5));
 	t.noFix({poseAt(5.0, 0.01)});  // a tight but wrong solve
@@ -187,7 +187,7 @@ TEST(LocalisationStages, TrackConfirmationAndRelocalisation)
 	o.global_search_after_frames = 10;
 	o.confirmed_max_sigma_m = 0.5;
 	o.drift_deg_per_m = 0;	// heading drift would add lateral error: here the distance alone
-	CTrack t(o);
+	Track t(o);
 	EXPECT_EQ(t.searchNeeded(false), SearchScope::Whole);  // no place yet
 	t.fix(poseAt(0, 0.01));
 	t.predict(step(0.8, 1e-6, 0));
@@ -282,7 +282,7 @@ TEST(LocalisationStages, AgreeingPlacesConfirmAHypothesisAsConsistentFramesDo)
 {
 	TTrackOptions o;
 	constexpr int K = 2;
-	CTrack t(o);
+	Track t(o);
 	const TKeyframePose first = poseAt(0.0, 0.03);
 	EXPECT_EQ(t.placeFound(first, judged(first), true, K), PlaceOutcome::Hypothesis);
 	EXPECT_EQ(t.hypothesisPlaces(), 1);
@@ -297,7 +297,7 @@ TEST(LocalisationStages, AgreeingPlacesConfirmAHypothesisAsConsistentFramesDo)
 	EXPECT_TRUE(placeAgrees(second, t.estimate(), identityLink, 16.81));
 	// Uncertain (beyond the fix bounds): it continues the hypothesis, no fix.
 	{
-		CTrack u = t;
+		Track u = t;
 		EXPECT_EQ(u.placeFound(second, judged(second), false, K), PlaceOutcome::Hypothesis);
 		EXPECT_EQ(u.hypothesisPlaces(), 2);
 	}
@@ -312,7 +312,7 @@ TEST(LocalisationStages, AgreeingPlacesConfirmAHypothesisAsConsistentFramesDo)
 	EXPECT_FALSE(placeAgrees(far, t.estimate(), identityLink, 16.81));
 	TTrackOptions unranked = o;
 	unranked.confirmed_track_outranks_places = false;
-	CTrack v(unranked);
+	Track v(unranked);
 	v.fix(poseAt(1.62, 0.03));
 	v.predict(step(0.8));
 	v.noFix({});
@@ -323,7 +323,7 @@ TEST(LocalisationStages, AgreeingPlacesConfirmAHypothesisAsConsistentFramesDo)
 	const TKeyframePose near = poseAt(2.45, 0.03);
 	EXPECT_EQ(t.placeFound(near, judged(near), true, K), PlaceOutcome::Fix);
 	// With K = 3 the second agreeing place is not yet a fix.
-	CTrack w(o);
+	Track w(o);
 	w.placeFound(first, judged(first), true, 3);
 	w.predict(step(0.8));
 	w.noFix({});
@@ -344,7 +344,7 @@ TEST(LocalisationStages, AConfirmedTrackOutranksALessCertainPlace)
 {
 	TTrackOptions o;
 	constexpr int K = 2;
-	CTrack t(o);
+	Track t(o);
 	t.fix(poseAt(0, 0.02));
 	t.predict(step(0.8));
 	t.noFix({});
@@ -363,7 +363,7 @@ TEST(LocalisationStages, AConfirmedTrackOutranksALessCertainPlace)
 	// A second place that agrees with the first outranked one through VO
 	// (one frame on) overturns the track: two places against one track.
 	{
-		CTrack u = t;
+		Track u = t;
 		u.fix(poseAt(0.8, 0.02));
 		u.predict(step(0.8));
 		u.noFix({});
@@ -405,7 +405,7 @@ TEST(LocalisationStages, APlaceAcrossAVoBreakOfTheMapIsJudgedNotThrown)
 	TLocaliserOptions o;
 	o.cross_segment_sigma_m = 2;
 	o.cross_segment_sigma_deg = 5;
-	const CStereoLocaliser loc(*m, "mono", o);
+	const StereoLocaliser loc(*m, "mono", o);
 	ASSERT_FALSE(m->sameSegment(14, 16));
 	EXPECT_ANY_THROW(m->relativePose(14, 16));
 	const auto link = loc.between(14, 16);

@@ -524,7 +524,7 @@ CKeyframeMap::Ptr buildAcrossABreak(bool bridge, std::vector<Eigen::Isometry3d>&
 	m->options.kf_spacing_m = 1.5;
 	const auto proto = test::makeSyntheticMap(1, 0, 0);
 	m->setup(proto->calibration(), 512, 384, proto->channels());
-	survey::CSurveyBuilder b(*m, "run");
+	survey::SurveyBuilder b(*m, "run");
 	auto at = [](double z) {
 		Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
 		T.translation().z() = z;

@@ -6,13 +6,15 @@
  * SHADYLOC_WRITE_DOCS=1 rewrites the docs' tables instead of comparing them. */
 #include <shadyloc/core/Options.h>
 #include <shadyloc/datasets/Common.h>
+#include <shadyloc/datasets/Folder.h>
 #include <shadyloc/datasets/Kitti.h>
 #include <shadyloc/features/StereoFeatures.h>
+#include <shadyloc/filters/Filters.h>
 #include <shadyloc/image/ColourTransforms.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/Localiser.h>
 #include <shadyloc/localisation/LocaliserAppKeys.h>
-#include <shadyloc/localisation/MonoLocaliser.h>
+#include <shadyloc/localisation/MonocularLocaliser.h>
 #include <shadyloc/localisation/StereoLocaliser.h>
 #include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/sim/SimOptions.h>
@@ -369,6 +371,67 @@ TSimFile simFile()
 	return f;
 }
 
+/** A filter's section as FilterPipeline reads and asIni() writes it: class,
+ * the common keys, its own keys (those the round trip changes). */
+template <typename T>
+void loadFilter(T& f, const mrpt::config::CConfigFileBase& c, const std::string& s)
+{
+	f.loadFromConfig(c, s);
+}
+template <typename T>
+void dumpFilter(const T& f, std::ostream& out)
+{
+	out << f.optionsAsIni();
+}
+template <typename T>
+TOptionsCase filterCase(const std::string& name, const std::string& section)
+{
+	return optionsCase<T>(name, section, loadFilter<T>, dumpFilter<T>);
+}
+
+/** The keys every filter has: their table shows no default suffix (each class has its own). */
+TOptionsCase filterCommonCase()
+{
+	using TCommon = CObservationFilter::TCommonOptions;
+	TOptionsCase c = optionsCase<TCommon>(
+		"filter", "filter", loadGeneric<TCommon>, dumpGeneric<TCommon>, std::function<TCommon()>([] {
+			TCommon o;
+			o.output_suffix = "_mono";
+			return o;
+		}));
+	c.table = [] { return core::keyTable(TCommon()); };
+	return c;
+}
+
+/** The folder calibration (a file of three sections) through its own load
+ * and dump, one section's keys changed: a camera's ([left]; [right] has the
+ * same declaration) or [stereo]'s. */
+template <bool Stereo>
+struct TCalibSection
+{
+	datasets::TFolderCalib c;
+	void keys(core::KeyVisitor& v)
+	{
+		if constexpr (Stereo)
+			c.stereoKeys().keys(v);
+		else
+			c.leftKeys().keys(v);
+	}
+	void validate() const { core::checkKeys(*this); }
+};
+template <bool Stereo>
+TOptionsCase calibCase(const std::string& name)
+{
+	using T = TCalibSection<Stereo>;
+	return optionsCase<T>(
+		name, "calib", [](T& o, const mrpt::config::CConfigFileBase& c, const std::string& s) { o.c.loadFromConfigFile(c, s); },
+		[](const T& o, std::ostream& out) { o.c.dumpToTextStream(out); }, std::function<T()>([] {
+			T o;
+			o.c = datasets::TFolderCalib::FromFile(std::string(SHADYLOC_SOURCE_DIR) + "/config/folder_calib_example.ini");
+			return o;
+		}));
+}
+
 TOptionsCase undocumented(TOptionsCase c)
 {
 	c.documented = false;
@@ -386,9 +449,9 @@ const std::vector<TOptionsCase>& optionsCases()
 		optionsCase<localisation::TLocaliserOptions>(
 			"localiser", "localiser", loadPlain<localisation::TLocaliserOptions>,
 			dumpPlain<localisation::TLocaliserOptions>),
-		optionsCase<localisation::TMonoLocaliserOptions>(
-			"localiser_2d", "localiser_2d", loadPlain<localisation::TMonoLocaliserOptions>,
-			dumpPlain<localisation::TMonoLocaliserOptions>),
+		optionsCase<localisation::TMonocularLocaliserOptions>(
+			"localiser_2d", "localiser_2d", loadPlain<localisation::TMonocularLocaliserOptions>,
+			dumpPlain<localisation::TMonocularLocaliserOptions>),
 		optionsCase<localisation::TSystemOptions>(
 			"localise", "localise", loadPlain<localisation::TSystemOptions>, dumpPlain<localisation::TSystemOptions>),
 		optionsCase<TAppKeys>("application", "application", loadGeneric<TAppKeys>, dumpGeneric<TAppKeys>),
@@ -413,6 +476,12 @@ const std::vector<TOptionsCase>& optionsCases()
 				t.end_s_m = 120;
 				return t;
 			}))),
+		filterCommonCase(),
+		filterCase<CFilterMonochrome>("CFilterMonochrome", "mono"),
+		filterCase<CFilterInvariant>("CFilterInvariant", "invariant"),
+		filterCase<CFilterLinearise>("CFilterLinearise", "lin"),
+		calibCase<false>("folder_calib.camera"),
+		calibCase<true>("folder_calib.stereo"),
 		// The whole simulator file: [sim] names the traversals, each read from its section.
 		optionsCase<TSimFile>("sim", "sim", loadCL<TSimFile>, dumpCL<TSimFile>, std::function<TSimFile()>(simFile)),
 	};

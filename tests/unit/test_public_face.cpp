@@ -98,7 +98,7 @@ CKeyframeMap::Ptr noonMap()
 	survey::TSurveyRunOptions o;
 	o.gt = io::readTum(dir + "/noon.tum");
 	mrpt::config::CConfigFileMemory cfg(test::fileContents(src("config/vo_sim.ini")));
-	return survey::CSurveyRun(dir + "/noon.rawlog", cfg, o).run();
+	return survey::SurveyRun(dir + "/noon.rawlog", cfg, o).run();
 }
 
 /** Metres and degrees between two poses. */
@@ -171,7 +171,7 @@ TEST(PublicFace, LocalisesFromFilteredChannelsAsFromColour)
 	const mrpt::config::CConfigFileMemory cfg(simLocaliseConfig());
 	opts.loadFromConfigFile(cfg, "");
 	Localiser fromColour(mrpt::maps::CMetricMap::Ptr(map), opts), fromChannels(mrpt::maps::CMetricMap::Ptr(map), opts);
-	const auto setup = localisation::CLocalisationSystem::SetupFromConfig(cfg, {}, 0, "sim configs");
+	const auto setup = localisation::LocalisationSystem::SetupFromConfig(cfg, {}, 0, "sim configs");
 	const auto& live = test::simSequence("overcast");
 	int localised = 0;
 	for (size_t i = 0; i < 10; i++)

@@ -3,7 +3,7 @@
 #include "../support/TestSupport.h"
 
 #include <shadyloc/io/Rawlog.h>
-#include <shadyloc/sim/CStereoSimulator.h>
+#include <shadyloc/sim/StereoSimulator.h>
 
 #include <gtest/gtest.h>
 
@@ -136,7 +136,7 @@ TEST(SimApp, EndByDistance)
 		0)
 		<< out;
 	auto o = shadyloc::sim::TSimOptions::FromFile(cfg);
-	shadyloc::sim::CStereoSimulator sim(o);
+	shadyloc::sim::StereoSimulator sim(o);
 	for (const std::string t : {"noon", "evening_warm"})
 	{
 		auto tr = o.traversal(t);

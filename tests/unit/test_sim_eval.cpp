@@ -15,7 +15,7 @@
  */
 #include "../support/TestSupport.h"
 
-#include <shadyloc/sim/CStereoSimulator.h>
+#include <shadyloc/sim/StereoSimulator.h>
 
 #include <gtest/gtest.h>
 
@@ -115,7 +115,7 @@ TEST(SimEvalFrozen, ConditionsAsSpecified)
 
 	o.camera.width = 64;  // frame counts and poses only: a small camera is enough
 	o.camera.height = 48;
-	CStereoSimulator sim(o);
+	StereoSimulator sim(o);
 	std::set<std::tuple<double, double, double, double, double, double, bool>> lights;
 	bool overcast = false, dappled = false, lowLeftAhead = false, lowRightBehind = false;
 	int otherLane = 0;
@@ -170,7 +170,7 @@ TEST(SimEvalFrozen, ConditionsAsSpecified)
 TEST(SimEvalFrozen, FirstFramesMatchCommittedHashes)
 {
 	const auto o = TSimOptions::FromFile(kConfig);
-	CStereoSimulator sim(o);
+	StereoSimulator sim(o);
 	std::ostringstream now;
 	now << "# config/sim_eval.ini, frozen (tests/unit/test_sim_eval.cpp): per traversal, FNV-1a 64 of its\n"
 		   "# options (camera, scene and its section as dumped), its frame count, FNV-1a 64 of its\n"

@@ -5,7 +5,7 @@
 
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/io/Tum.h>
-#include <shadyloc/sim/CStereoSimulator.h>
+#include <shadyloc/sim/StereoSimulator.h>
 
 #include <gtest/gtest.h>
 
@@ -71,7 +71,7 @@ TEST(SimGeometry, MarkersProjectWhereGroundTruthSays)
 	const std::vector<mrpt::math::TPoint3D> inCam = {{0.3, -0.1, 7.0}, {-1.5, -0.3, 12.0}, {1.0, -2.5, 20.0}};
 	std::vector<mrpt::math::TPoint3D> world;
 	{
-		CStereoSimulator probe(o);
+		StereoSimulator probe(o);
 		const auto T = probe.T_world_left(kFrame);
 		for (const auto& p : inCam)
 		{
@@ -81,7 +81,7 @@ TEST(SimGeometry, MarkersProjectWhereGroundTruthSays)
 		}
 	}
 	const std::string dir = shadyloc::test::tempDir("sim_geometry");
-	CStereoSimulator sim(o);
+	StereoSimulator sim(o);
 	sim.generate(dir + "/g.rawlog", dir + "/g.tum");
 
 	const auto tum = shadyloc::io::readTum(dir + "/g.tum");
@@ -191,7 +191,7 @@ TEST(SimGeometry, MarkersProjectWhereGroundTruthSays)
 TEST(SimGeometry, CameraMountAndConventions)
 {
 	auto o = smallOptions(64, 48);
-	CStereoSimulator sim(o);
+	StereoSimulator sim(o);
 	const auto T = sim.T_world_left(0);
 	EXPECT_NEAR(T.z(), 1.5, 1e-9);
 	// Camera z axis (forward) is the third rotation column; tilted down by
@@ -218,7 +218,7 @@ TEST(SimGeometry, CameraMountAndConventions)
 TEST(SimGeometry, DeterministicAndSeedsMatter)
 {
 	auto o = smallOptions(128, 96);
-	CStereoSimulator a(o), b(o);
+	StereoSimulator a(o), b(o);
 	auto t = o.traversal("noon");
 	t.start_s_m = 20;  // under the trees
 	a.setTraversal(t);
@@ -268,7 +268,7 @@ TEST(SimOptions, DefaultTraversalsCoverOneStretch)
 	o.camera.width = 64;  // no rendering here: a small camera builds quickly
 	o.camera.height = 48;
 	ASSERT_EQ(o.traversals.size(), 4u);
-	CStereoSimulator sim(o);
+	StereoSimulator sim(o);
 	const double start = o.traversals.front().start_s_m, end = o.traversals.front().end_s_m;
 	EXPECT_GE(end - start, 60.0) << "long enough to show failures and recoveries";
 	EXPECT_LE(end, o.scene.route_length_m) << "the default stretch lies on the route";

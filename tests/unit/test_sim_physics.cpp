@@ -2,7 +2,7 @@
  * dominates log-grey, in rendered frames and in the shading function itself;
  * the narrower the camera's sensitivities, the better. */
 #include <shadyloc/image/ColourTransforms.h>
-#include <shadyloc/sim/CStereoSimulator.h>
+#include <shadyloc/sim/StereoSimulator.h>
 
 #include <gtest/gtest.h>
 
@@ -50,7 +50,7 @@ SunShadeStats renderedSunShade(double sigma_nm)
 	auto o = smallOptions();
 	o.camera.spectral.sigma_nm = sigma_nm;
 	o.scene.texture_chroma = 0;	 // one spectrum for the asphalt: isolate the illuminant
-	CStereoSimulator sim(o);
+	StereoSimulator sim(o);
 	auto t = o.traversal("noon");
 	t.start_s_m = 20;  // under the avenue's trees: dappled and solid shadow on the road
 	sim.setTraversal(t);
@@ -99,7 +99,7 @@ TEST(SimPhysics, ShadingInvariantCancelsShadowAsSensorsNarrow)
 	for (double sigma : {80.0, 40.0, 20.0, 10.0, 2.0})
 	{
 		o.camera.spectral.sigma_nm = sigma;
-		CStereoSimulator sim(o);
+		StereoSimulator sim(o);
 		sim.setTraversal(trav);
 		const auto p = invParams(o.camera);
 		const V3 s = sim.sunDirection();
@@ -137,7 +137,7 @@ TEST(SimPhysics, PlanckianIlluminantsCancelForNarrowSensors)
 	o.camera.spectral.sigma_nm = 1.0;
 	o.camera.grid.step_nm = 1.0;
 	TTraversal sunOnly = o.traversal("evening_warm"), skyOnly = o.traversal("noon");
-	CStereoSimulator sim(o);
+	StereoSimulator sim(o);
 	const auto p = invParams(o.camera);
 	sim.setTraversal(sunOnly);
 	const Rgb a = sim.shade(kBrick, 0.3f, 1.0f, 1.0f, 0.0f);

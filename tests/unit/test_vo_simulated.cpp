@@ -4,7 +4,7 @@
  * configuration made for the simulator's camera (config/vo_sim.ini). */
 #include <shadyloc/eval/TrajectoryError.h>
 #include <shadyloc/filters/Channel.h>
-#include <shadyloc/sim/CStereoSimulator.h>
+#include <shadyloc/sim/StereoSimulator.h>
 #include <shadyloc/sim/SimOptions.h>
 #include <shadyloc/vo/ChannelOptions.h>
 #include <shadyloc/vo/StereoVO.h>

@@ -159,7 +159,7 @@ TEST(VoKeyframeMatcher, CircleFindsTrueMatchesAndRefinesToSubPixel)
 {
 	const auto s = makeScene(pose(0.05, -0.02, 0.3, 0.02), 6.0, 1);
 	ASSERT_GE(s.landmarks.size(), 20u);
-	vo::CKeyframeMatcher m;
+	vo::KeyframeMatcher m;
 	vo::TKeyframeMatchOutput o;
 	// The prediction is 3 cm off: a few pixels, well inside the 40 px circle.
 	m.match(inputFor(s, pose(0.08, -0.02, 0.3, 0.02)), o);
@@ -189,7 +189,7 @@ TEST(VoKeyframeMatcher, CircleWidensWhenTheFirstTryFindsTooFew)
 	vo::TKeyframeMatcherOptions opt;
 	opt.search_radius_px = 4;
 	opt.search_radius_lost_px = 30;
-	vo::CKeyframeMatcher m(opt);
+	vo::KeyframeMatcher m(opt);
 	vo::TKeyframeMatchOutput o;
 	// 0.15 m sideways at 5-7.5 m: 8-12 px off, outside the 4 px circle.
 	m.match(inputFor(s, pose(0.15, 0.0, 0.3, 0.0)), o);
@@ -211,12 +211,12 @@ TEST(VoKeyframeMatcher, GateFindsMatchesOutsideASmallCircleAndShrinksWithPoseCov
 	vo::TKeyframeMatcherOptions circle;
 	circle.search_radius_px = circle.search_radius_lost_px = 5;
 	vo::TKeyframeMatchOutput o;
-	vo::CKeyframeMatcher(circle).match(inputFor(s, T_pred), o);
+	vo::KeyframeMatcher(circle).match(inputFor(s, T_pred), o);
 	EXPECT_EQ(correctMatches(s, o), 0);
 
 	vo::TKeyframeMatcherOptions gate;
 	gate.region = vo::SearchRegion::Gate;
-	const vo::CKeyframeMatcher g(gate);
+	const vo::KeyframeMatcher g(gate);
 	// The prediction's translation uncertain by 0.1 m (1 sigma): 5-8 px at
 	// these depths, the gate (sqrt(11.34) = 3.4 sigma) holds the true match.
 	auto in = inputFor(s, T_pred);
@@ -225,7 +225,7 @@ TEST(VoKeyframeMatcher, GateFindsMatchesOutsideASmallCircleAndShrinksWithPoseCov
 	EXPECT_EQ(correctMatches(s, o), static_cast<int>(s.landmarks.size()));
 	EXPECT_EQ(o.corr.size(), s.landmarks.size());
 	// The gate is elongated: its extent along u exceeds the small circle.
-	const auto pm = vo::CKeyframeMatcher::predict(
+	const auto pm = vo::KeyframeMatcher::predict(
 		s.calib, T_pred, in.cov_T_curr_kf_pred, s.landmarks[0].P, s.landmarks[0].cov, gate.sigma_px);
 	ASSERT_TRUE(pm.ok);
 	const Eigen::Matrix3d G = g.gateMatrix(pm.S);
@@ -234,7 +234,7 @@ TEST(VoKeyframeMatcher, GateFindsMatchesOutsideASmallCircleAndShrinksWithPoseCov
 	// 100x smaller covariance: the gate shrinks (to its floor) and the true
 	// matches, 8-12 px away, fall outside.
 	in.cov_T_curr_kf_pred = poseCov(0.01, 0.0002);
-	const auto pm2 = vo::CKeyframeMatcher::predict(
+	const auto pm2 = vo::KeyframeMatcher::predict(
 		s.calib, T_pred, in.cov_T_curr_kf_pred, s.landmarks[0].P, s.landmarks[0].cov, gate.sigma_px);
 	const Eigen::Matrix3d G2 = g.gateMatrix(pm2.S);
 	EXPECT_LT(G2.determinant(), G.determinant());
@@ -257,7 +257,7 @@ TEST(VoKeyframeMatcher, GateAxesAreClampedToFloorAndCeiling)
 	opt.region = vo::SearchRegion::Gate;
 	opt.gate_min_px = 3;
 	opt.gate_max_px = 50;
-	const vo::CKeyframeMatcher g(opt);
+	const vo::KeyframeMatcher g(opt);
 	Eigen::Matrix3d S = Eigen::Vector3d(0.01, 1e4, 4.0).asDiagonal();
 	const Eigen::Matrix3d G = g.gateMatrix(S);
 	EXPECT_NEAR(std::sqrt(opt.gate_chi2 * G(0, 0)), 3.0, 1e-9);
@@ -298,28 +298,28 @@ TEST(VoKeyframeMatcher, SeenFromASideTheLandmarksOwnUncertaintyIsSearchedNotCoun
 	opt.gate_clamp = false;
 	vo::TKeyframeMatchOutput o;
 	// The whole gate under the ceiling (the VO's rule): every landmark overflows.
-	vo::CKeyframeMatcher(opt).match(in, o);
+	vo::KeyframeMatcher(opt).match(in, o);
 	EXPECT_EQ(o.gate.predicted, static_cast<int>(n));
 	EXPECT_EQ(o.gate.overflow, static_cast<int>(n));
 	EXPECT_EQ(correctMatches(s, o), 0);
 	EXPECT_GT(o.gate.median_axis_px, 45.0);
 	// The ceiling on the prediction's part: searched, all found, none lost.
 	opt.gate_landmark_max_px = 150;
-	vo::CKeyframeMatcher(opt).match(in, o);
+	vo::KeyframeMatcher(opt).match(in, o);
 	EXPECT_EQ(o.gate.overflow, 0);
 	EXPECT_EQ(o.gate.too_uncertain, 0);
 	EXPECT_EQ(correctMatches(s, o), static_cast<int>(n));
 	// ... but a landmark ceiling below the landmarks' gates leaves them out,
 	// counted apart from the overflows.
 	opt.gate_landmark_max_px = 41;
-	vo::CKeyframeMatcher(opt).match(in, o);
+	vo::KeyframeMatcher(opt).match(in, o);
 	EXPECT_EQ(o.gate.overflow, 0);
 	EXPECT_EQ(o.gate.too_uncertain, static_cast<int>(n));
 	EXPECT_EQ(correctMatches(s, o), 0);
 	// A prediction too uncertain to search still overflows (the localiser is lost).
 	opt.gate_landmark_max_px = 150;
 	in.cov_T_curr_kf_pred = poseCov(1.0, 0.05);
-	vo::CKeyframeMatcher(opt).match(in, o);
+	vo::KeyframeMatcher(opt).match(in, o);
 	EXPECT_EQ(o.gate.overflow, static_cast<int>(n));
 }
 
@@ -334,7 +334,7 @@ TEST(VoKeyframeMatcher, PredictedCovarianceMatchesMonteCarlo)
 	CT(0, 4) = CT(4, 0) = 1e-6;
 	const Eigen::Matrix3d CP = Eigen::Vector3d(1e-3, 1e-3, 2e-2).asDiagonal();
 	const double sigma = 0.5;
-	const auto pm = vo::CKeyframeMatcher::predict(c, T, CT, P0, CP, sigma);
+	const auto pm = vo::KeyframeMatcher::predict(c, T, CT, P0, CP, sigma);
 	ASSERT_TRUE(pm.ok);
 	std::mt19937 rng(7);
 	std::normal_distribution<double> N01;
@@ -403,7 +403,7 @@ TEST(VoRelativePoseEstimator, RecoversThePoseRejectsOutliersGivesCovariance)
 	{
 		vo::TRelativePoseOptions opt;
 		opt.two_view_ba = twoView;
-		const vo::CRelativePoseEstimator est(opt);
+		const vo::RelativePoseEstimator est(opt);
 		vo::TRelativePoseInput in;
 		in.corr = &corr;
 		in.calib = calib();
@@ -437,7 +437,7 @@ TEST(VoRelativePoseEstimator, WithoutThePriorTheLargestConsensusWins)
 	corr.insert(corr.end(), w.begin(), w.end());
 	vo::TRelativePoseOptions opt;
 	opt.ransac_prior_sigma_m = 0.08;
-	const vo::CRelativePoseEstimator est(opt);
+	const vo::RelativePoseEstimator est(opt);
 	vo::TRelativePoseInput in;
 	in.corr = &corr;
 	in.calib = calib();
@@ -460,7 +460,7 @@ TEST(VoRelativePoseEstimator, TooFewCorrespondencesAreReported)
 	in.corr = &corr;
 	in.calib = calib();
 	vo::TRelativePoseOutput out;
-	vo::CRelativePoseEstimator().estimate(in, out);  // min_inliers 10 > 8
+	vo::RelativePoseEstimator().estimate(in, out);  // min_inliers 10 > 8
 	EXPECT_EQ(out.status, vo::RelativePoseStatus::FewInliers);
 }
 
@@ -472,7 +472,7 @@ TEST(VoKeyframePolicy, MotionPolicyFollowsItsThresholds)
 	o.kf_rotation_deg = 10;
 	o.kf_min_tracked_fraction = 0.35;
 	o.kf_min_inliers = 40;
-	const vo::CMotionKeyframePolicy p(o);
+	const vo::MotionKeyframePolicy p(o);
 	vo::TKeyframeQuery q;
 	q.inliers = 100;
 	q.keyframe_landmarks = 200;
@@ -568,7 +568,7 @@ TEST(VoStereoVO, TwoChannelsShareOneKeyframeSchedule)
 	// A tighter policy shared by both: a keyframe every ~0.4 m.
 	vo::TMotionKeyframePolicyOptions po;
 	po.kf_translation = 0.4;
-	const auto policy = std::make_shared<vo::CMotionKeyframePolicy>(po);
+	const auto policy = std::make_shared<vo::MotionKeyframePolicy>(po);
 	mono.setKeyframePolicy(policy);
 	inv.setKeyframePolicy(policy);
 	for (size_t k = 0; k < f.monoL.size(); k++)

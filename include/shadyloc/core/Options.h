@@ -165,11 +165,14 @@ class KeyReader : public KeyVisitor
 	SettingsSection& m_r;
 };
 
-/** Writes every key (comment, then "key = value"). */
+/** Writes every key (comment, then "key = value") but those in leaveOut. */
 class KeyWriter : public KeyVisitor
 {
    public:
-	explicit KeyWriter(SettingsWriter& w) : m_w(w) {}
+	explicit KeyWriter(SettingsWriter& w, std::vector<std::string> leaveOut = {})
+		: m_w(w), m_leaveOut(std::move(leaveOut))
+	{
+	}
 
    protected:
 	void key(const KeyDef& k, Field v) override;
@@ -177,7 +180,10 @@ class KeyWriter : public KeyVisitor
 	void textKey(const KeyDef& k, std::string& t, const std::function<void(const std::string&)>& set) override;
 
    private:
+	bool leftOut(const KeyDef& k) const;
+
 	SettingsWriter& m_w;
+	std::vector<std::string> m_leaveOut;
 };
 
 /** Throws std::invalid_argument "key: must be ..." for the first value out

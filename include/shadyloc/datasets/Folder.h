@@ -3,6 +3,7 @@
  * right). Example calibration: config/folder_calib_example.ini. */
 #pragma once
 
+#include <shadyloc/core/Options.h>
 #include <shadyloc/datasets/Common.h>
 
 #include <mrpt/img/TCamera.h>
@@ -26,6 +27,24 @@ struct TFolderCalib : public mrpt::config::CLoadableOptions
 	double fx_r = 0, fy_r = 0, cx_r = 0, cy_r = 0;	//!< right intrinsics [px]
 	double baseline_m = 0;	//!< right camera at +baseline_m along the left x axis [m]
 	uint32_t width = 0, height = 0;	 //!< image size every image must have [px]
+
+	/** The keys of one camera's section, [left] or [right] (its intrinsics),
+	 * declared once (core/Options.h). */
+	struct TCameraKeys
+	{
+		double &fx, &fy, &cx, &cy;
+		void keys(core::KeyVisitor& v);
+	};
+	/** The keys of [stereo]. */
+	struct TStereoKeys
+	{
+		double& baseline_m;
+		uint32_t &width, &height;
+		void keys(core::KeyVisitor& v);
+	};
+	TCameraKeys leftKeys() { return {fx_l, fy_l, cx_l, cy_l}; }
+	TCameraKeys rightKeys() { return {fx_r, fy_r, cx_r, cy_r}; }
+	TStereoKeys stereoKeys() { return {baseline_m, width, height}; }
 
 	/** `section` is ignored (the file has its own sections); throws
 	 * core::SettingsError naming the file, section and key that is missing,

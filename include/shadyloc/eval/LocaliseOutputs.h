@@ -4,7 +4,7 @@
  * Written by `shadyloc localise` and by every pair job of the leave-one-out
  * evaluation, so a pair's files are exactly localise's; read back by the
  * commands that draw such folders (figures, render). The run itself is the
- * localisation library's (localisation::CLocaliseRun), which writes nothing.
+ * localisation library's (localisation::LocaliseRun), which writes nothing.
  */
 #pragma once
 

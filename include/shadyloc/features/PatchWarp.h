@@ -45,10 +45,10 @@ double warpDistortion(const Eigen::Matrix2d& A);
  * with it compares with the keyframe's. Integer offsets keep the cost of an
  * unwarped descriptor (the image is smoothed with sigma 2 first, so half a
  * pixel of rounding changes few tests). */
-class CWarpedBriefPattern
+class WarpedBriefPattern
 {
    public:
-	CWarpedBriefPattern(const BriefExtractor& brief, const Eigen::Matrix2d& A);
+	WarpedBriefPattern(const BriefExtractor& brief, const Eigen::Matrix2d& A);
 	/** The descriptor at integer (x, y) of a smoothed CV_8UC1 image; false when
 	 * a test falls outside the image. */
 	bool compute(const cv::Mat& smoothed8, int x, int y, TBriefDescriptor& d) const;

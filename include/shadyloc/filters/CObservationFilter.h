@@ -9,7 +9,7 @@
  */
 #pragma once
 
-#include <shadyloc/core/Settings.h>
+#include <shadyloc/core/Options.h>
 #include <shadyloc/io/BoundedReader.h>
 
 #include <mrpt/config/CConfigFileBase.h>
@@ -39,8 +39,20 @@ class CObservationFilter : public mrpt::serialization::CSerializable
 		/** Comma-separated sensor labels this filter applies to; empty = every
 		 * camera observation (CObservationImage, CObservationStereoImages). */
 		std::string sensor_labels;
+
+		void keys(core::KeyVisitor& v);	 //!< every key, declared once (core/Options.h)
+		/** Throws std::invalid_argument "output_suffix: ..." for an empty suffix. */
+		void validate() const;
 	};
 	TCommonOptions common;
+
+	/** The derived filter's own keys, declared once (core/Options.h); with
+	 * common's they drive loadFromConfig(), optionsAsIni(),
+	 * imageOptionsAsIni(), describe(), validate() and the docs' tables. */
+	virtual void keys(core::KeyVisitor&) = 0;
+	/** Throws std::invalid_argument "key: why" for a bad value of an own key
+	 * (default: the ranges and choices of keys()). */
+	virtual void validate() const;
 
 	/** Loads this filter's options from `section` strictly (core::SettingsSection:
 	 * missing keys keep their defaults; a bad value or a key no filter option
@@ -54,11 +66,11 @@ class CObservationFilter : public mrpt::serialization::CSerializable
 	/** The options that decide the images as canonical "key = value" lines
 	 * (core::SettingsWriter, no comments), leaving out what only changes the
 	 * speed (parallel_eyes) and values without effect (gamma unless
-	 * linearisation = gamma): loadFromConfig() reads them back to a filter
-	 * that makes the same images, and two filters with the same class and
-	 * the same text make the same images. A keyframe map records this of the
-	 * filter that made each channel. */
-	virtual std::string imageOptionsAsIni() const;
+	 * linearisation = gamma; keysNotDecidingImages()): loadFromConfig() reads
+	 * them back to a filter that makes the same images, and two filters with
+	 * the same class and the same text make the same images. A keyframe map
+	 * records this of the filter that made each channel. */
+	std::string imageOptionsAsIni() const;
 
 	/** One line: the options that decide the images (for logs and warnings). */
 	virtual std::string describe() const;
@@ -83,9 +95,13 @@ class CObservationFilter : public mrpt::serialization::CSerializable
 	virtual void transformImage(const cv::Mat& in, cv::Mat& out) const = 0;
 
    protected:
-	/** Reads the derived filter's keys from s (the caller finishes s). */
-	virtual void loadSpecificOptions(core::SettingsSection& s) = 0;
-	virtual void specificOptionsAsIni(std::ostream& out) const = 0;
+	/** Reads the derived filter's keys from s and validates them (the caller
+	 * finishes s). Default: keys(), then validate(). */
+	virtual void loadSpecificOptions(core::SettingsSection& s);
+	/** Own keys whose values do not change the images (left out of imageOptionsAsIni()). */
+	virtual std::vector<std::string> keysNotDecidingImages() const { return {}; }
+	/** The own keys' "key = value" lines (comments dropped, trimmed), but leaveOut. */
+	std::vector<std::string> specificOptionLines(const std::vector<std::string>& leaveOut = {}) const;
 	/** Called after options change (to rebuild tables and the like). */
 	virtual void onOptionsChanged() {}
 

@@ -17,10 +17,7 @@ class CFilterMonochrome : public CObservationFilter
 	CFilterMonochrome();
 	image::ChannelOrder order = image::ChannelOrder::BGR;  //!< of stored images
 	void transformImage(const cv::Mat& in, cv::Mat& out) const override;
-
-   protected:
-	void loadSpecificOptions(core::SettingsSection& s) override;
-	void specificOptionsAsIni(std::ostream& out) const override;
+	void keys(core::KeyVisitor& v) override;
 };
 
 /** RGB -> illumination-invariant (McManus et al. 2014, eq. 1), fast table
@@ -35,16 +32,23 @@ class CFilterInvariant : public CObservationFilter
 	bool parallel_eyes = true;	//!< transform left and right on two threads
 
 	std::string describe() const override { return m_params.asString(); }
-	std::string imageOptionsAsIni() const override;
 	/** Same class and InvariantParams::sameImageAs (parallel_eyes aside). */
 	bool sameImagesAs(const CObservationFilter& o) const override;
 
 	void transformImages(const std::vector<cv::Mat>& in, std::vector<cv::Mat>& out) const override;
 	void transformImage(const cv::Mat& in, cv::Mat& out) const override;
+	/** InvariantParams' keys, then parallel_eyes. */
+	void keys(core::KeyVisitor& v) override;
+	void validate() const override;
 
    protected:
+	/** As InvariantParams::readFrom (peak wavelengths instead of alpha and
+	 * beta; offset's default), then parallel_eyes. */
 	void loadSpecificOptions(core::SettingsSection& s) override;
-	void specificOptionsAsIni(std::ostream& out) const override;
+	/** parallel_eyes; gamma unless linearisation = gamma; the knees and tail
+	 * slopes without compressed tails (so that linear-mapping channels keep
+	 * the text that maps made before the tails existed recorded). */
+	std::vector<std::string> keysNotDecidingImages() const override;
 	void onOptionsChanged() override;
 
    private:
@@ -62,11 +66,13 @@ class CFilterLinearise : public CObservationFilter
 	image::Linearisation linearisation = image::Linearisation::SRGB;
 	double gamma = 2.2;	 //!< exponent when linearisation = gamma
 	void transformImage(const cv::Mat& in, cv::Mat& out) const override;
-	std::string imageOptionsAsIni() const override;
+	void keys(core::KeyVisitor& v) override;
+	/** gamma in (0, 10) with linearisation = gamma. */
+	void validate() const override;
 
    protected:
-	void loadSpecificOptions(core::SettingsSection& s) override;
-	void specificOptionsAsIni(std::ostream& out) const override;
+	/** gamma unless linearisation = gamma. */
+	std::vector<std::string> keysNotDecidingImages() const override;
 };
 
 }  // namespace shadyloc

@@ -22,6 +22,7 @@
 #include <cstdint>
 #include <iosfwd>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace mrpt::config
@@ -57,6 +58,9 @@ ChannelOrder parseChannelOrder(const std::string& s);  //!< "rgb" | "bgr"
 Linearisation parseLinearisation(const std::string& s);	 //!< "none" | "srgb" | "gamma"
 std::string toString(ChannelOrder o);
 std::string toString(Linearisation l);
+/** The values as settings name them (core::KeyVisitor::choice). */
+const std::vector<std::pair<std::string, ChannelOrder>>& channelOrderNames();
+const std::vector<std::pair<std::string, Linearisation>>& linearisationNames();
 
 /** Everything that defines the invariant image of an 8-bit colour image,
  * including its fixed quantisation to 8 bits: two images made with equal

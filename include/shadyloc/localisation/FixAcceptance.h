@@ -89,10 +89,10 @@ struct TAcceptance
 /** T_a_b with covariance between two map keyframes (the map's chain). */
 using KeyframeLink = std::function<geometry::TPoseWithCov(uint32_t a, uint32_t b)>;
 
-class CFixAcceptance
+class FixAcceptance
 {
    public:
-	explicit CFixAcceptance(const TAcceptanceOptions& o = {}) : m_opts(o) {}
+	explicit FixAcceptance(const TAcceptanceOptions& o = {}) : m_opts(o) {}
 
 	/** Judges a solve. `prediction` (in the solve's keyframe, may be invalid)
 	 * comes from the system's track; `trackConfirmed` tells whether that

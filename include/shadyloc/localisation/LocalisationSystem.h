@@ -1,7 +1,7 @@
 /* ShadyLoc — the combined localisation system (McManus et al. 2014,
  * Section III-B, Figure 4): live stereo VO on the monochrome channel predicts
  * for every localiser (the baseline's VO tells the invariant pipeline where
- * to look); the localisers (one CStereoLocaliser per channel, made from
+ * to look); the localisers (one StereoLocaliser per channel, made from
  * config) run in parallel threads on every frame; the policy takes the first
  * localiser in its order that has an accepted fix (monochrome, then
  * invariant), and when none has, dead-reckons on VO until one re-acquires.
@@ -9,7 +9,7 @@
  * switching beats fusing (the paper).
  *
  * Stages per frame: the channels' front end and the motion source
- * (frontEnd), the predictor and policy (CTrack, Track.h), the localisers,
+ * (frontEnd), the predictor and policy (Track, Track.h), the localisers,
  * relocalisation (searchPlace). Starting and recovering: with no known
  * place, and on a frame without a fix after relocalise_after_frames (or
  * when every localiser is lost), every localiser's global search runs on
@@ -132,7 +132,7 @@ struct TLocalisationUpdate
 std::vector<uint32_t> keyframesAroundDeadReckoning(
 	const CKeyframeMap& map, const TKeyframePose& deadReckoning, double window_m, double max_angle_deg);
 
-class CLocalisationSystem : public mrpt::system::COutputLogger
+class LocalisationSystem : public mrpt::system::COutputLogger
 {
    public:
 	/** A channel of the live frames. */
@@ -146,7 +146,7 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	/** Checks every channel's descriptor parameters against the map's
 	 * (throws naming both sets) and that the map has the localisers'
 	 * channels and keyframes. */
-	CLocalisationSystem(
+	LocalisationSystem(
 		CKeyframeMap::Ptr map, const std::vector<TChannelSetup>& channels, const vo::TStereoVOOptions& vo,
 		const TSystemOptions& o, const std::optional<vo::TStereoVOOptions>& voFallback = std::nullopt);
 
@@ -154,7 +154,7 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	 * [features] and their channel sections, the channel filter sections.
 	 * `localisers`, if not empty, replaces [localise] localisers. `what`
 	 * names the config in errors. */
-	static std::unique_ptr<CLocalisationSystem> FromConfig(
+	static std::unique_ptr<LocalisationSystem> FromConfig(
 		const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::vector<std::string>& localisers,
 		int threads, const std::string& what);
 
@@ -197,7 +197,7 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 		TLocalisationUpdate&, const std::vector<features::TStereoFrame>&, const geometry::TStereoCalib&)>;
 	void setFrameHook(FrameHook hook) { m_hook = std::move(hook); }
 	/** The localiser of a channel (nullptr: the channel only feeds the VO). */
-	const CStereoLocaliser* localiser(const std::string& label) const;
+	const StereoLocaliser* localiser(const std::string& label) const;
 
 	const CKeyframeMap& map() const { return *m_map; }
 	const TSystemOptions& options() const { return m_opts; }
@@ -214,7 +214,7 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 	{
 		TChannelSetup setup;
 		features::StereoFeatureExtractor extractor;
-		std::unique_ptr<CStereoLocaliser> localiser;  //!< null: the channel only feeds the VO
+		std::unique_ptr<StereoLocaliser> localiser;  //!< null: the channel only feeds the VO
 		int policyRank = -1;  //!< index in m_opts.localisers
 	};
 	/** One live VO and its previous frame. */
@@ -259,7 +259,7 @@ class CLocalisationSystem : public mrpt::system::COutputLogger
 
 	// State.
 	size_t m_frame = 0;
-	CTrack m_track;
+	Track m_track;
 	std::vector<uint32_t> m_searchAmong;  //!< keyframes a whole-map search looks at (empty: all)
 	FrameHook m_hook;
 	double m_distance = 0;

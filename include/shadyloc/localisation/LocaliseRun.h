@@ -32,7 +32,7 @@ void checkLocaliseSections(const mrpt::config::CConfigFileBase& cfg, const std::
 /** Loads every options struct a localisation run reads from cfg (the
  * system's, each channel's filter, features, localiser, the VO's) without a
  * map, so that a bad key or value is reported before any work. `localisers`
- * as in CLocalisationSystem::FromConfig. Throws like FromConfig. */
+ * as in LocalisationSystem::FromConfig. Throws like FromConfig. */
 void checkLocaliseConfig(
 	const mrpt::config::CConfigFileBase& cfg, const std::vector<std::string>& localisers, const std::string& what);
 
@@ -45,10 +45,10 @@ struct TLocaliseRunOptions
 	std::string configWhat = "(no config)";	 //!< names the config in errors
 };
 
-class COracle;
+class Oracle;
 
 /** One live run against one map. */
-class CLocaliseRun
+class LocaliseRun
 {
    public:
 	/** Checks the config's sections, makes the system (descriptor
@@ -56,19 +56,19 @@ class CLocaliseRun
 	 * source (each channel read from a filtered rawlog with the config's
 	 * filter record, or made from the colour pair) and reads its first
 	 * frame. Errors name the map, the config, the rawlog and frame. */
-	CLocaliseRun(
+	LocaliseRun(
 		const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::string& mapPath,
 		const std::string& livePath, const TLocaliseRunOptions& o);
 	/** The same with frames as they arrive (a live camera): colour stereo
 	 * observations from `feed`, channels made from them. Waits for the
 	 * first frame. */
-	CLocaliseRun(
+	LocaliseRun(
 		const mrpt::config::CConfigFileBase& cfg, CKeyframeMap::Ptr map, const std::string& mapPath,
 		filters::TObjectFeed feed, const TLocaliseRunOptions& o);
-	~CLocaliseRun();
+	~LocaliseRun();
 
-	CLocalisationSystem& system() { return *m_sys; }
-	const CLocalisationSystem& system() const { return *m_sys; }
+	LocalisationSystem& system() { return *m_sys; }
+	const LocalisationSystem& system() const { return *m_sys; }
 	const std::string& sensorLabel() const { return m_label; }
 
 	/** Every frame of the live rawlog; onFrame after each. Throws naming
@@ -90,8 +90,8 @@ class CLocaliseRun
 	/** From the rawlog m_livePath, or from `feed` when given. */
 	void openLive(const std::string& camera, filters::TObjectFeed* feed);
 
-	std::unique_ptr<CLocalisationSystem> m_sys;
-	std::unique_ptr<COracle> m_oracle;
+	std::unique_ptr<LocalisationSystem> m_sys;
+	std::unique_ptr<Oracle> m_oracle;
 	std::unique_ptr<filters::ChannelFrameSource> m_source;
 	std::optional<filters::TChannelFrame> m_first;	//!< read by the constructor
 	std::string m_livePath, m_label;

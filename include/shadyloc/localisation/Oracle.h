@@ -26,13 +26,13 @@ struct TOracleOptions
 	double kf_max_distance_m = 5.0, kf_max_angle_deg = 30.0;  //!< the nearest keyframe by truth, at most [m], [deg]
 };
 
-class COracle
+class Oracle
 {
    public:
 	/** Localisers as the system's (same channels, options, map); `gt` in the
 	 * map's ground-truth frame. */
-	COracle(const CLocalisationSystem& sys, const io::Trajectory& gt, const TOracleOptions& o = {});
-	~COracle();
+	Oracle(const LocalisationSystem& sys, const io::Trajectory& gt, const TOracleOptions& o = {});
+	~Oracle();
 
 	/** Fills u.oracle (per localiser, policy order: 1 a true single-shot fix,
 	 * 0 none, -1 no truth or no keyframe near it) from the frame's

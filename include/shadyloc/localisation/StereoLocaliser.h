@@ -11,7 +11,7 @@
  *      in that keyframe with the inter-keyframe covariance;
  *   2. active search: every landmark's predicted stereo measurement
  *      (uL, v, uR) with the covariance of the landmark, the pixel noise and
- *      the prediction (vo::CKeyframeMatcher::predict), a chi-square gate with
+ *      the prediction (vo::KeyframeMatcher::predict), a chi-square gate with
  *      a floor; when the gates grow past the ceiling the localiser declares
  *      itself lost (it never clips a gate); BRIEF inside, patch refinement;
  *      the same for the chosen keyframe's neighbours along the chain (the
@@ -20,7 +20,7 @@
  *      WITHOUT the motion prior (a RANSAC that favours the prediction would
  *      agree with it by construction, and the failure test would test
  *      nothing);
- *   4. acceptance (CFixAcceptance): too few inliers, too uncertain, the fix
+ *   4. acceptance (FixAcceptance): too few inliers, too uncertain, the fix
  *      against the track's prediction, the frame-to-frame motion against
  *      VO's; K consistent frames only for a new place.
  * Starting and recovering: globalSearch() votes with BRIEF over every
@@ -312,12 +312,12 @@ struct TGlobalPlace
 	bool certain = false;  //!< its covariance within the fix bounds (max_sigma_m, max_sigma_deg)
 };
 
-class CStereoLocaliser
+class StereoLocaliser
 {
    public:
 	/** `channel` names one of the map's channels (throws naming the map's
 	 * channels if absent). The map must outlive the localiser. */
-	CStereoLocaliser(const CKeyframeMap& map, const std::string& channel, const TLocaliserOptions& o);
+	StereoLocaliser(const CKeyframeMap& map, const std::string& channel, const TLocaliserOptions& o);
 
 	/** One frame (see the file comment). Keeps the state of the failure test. */
 	TLocaliserResult localise(const TLocaliserInput& in);
@@ -362,7 +362,7 @@ class CStereoLocaliser
 		vo::TKeyframeMatchOutput& out, std::vector<uint32_t>& keyframeOf) const;
 	/** The second pass at a solved pose T_curr_ref: the window's landmarks
 	 * not yet matched (keyframeOf / out.landmark) searched by projection with
-	 * their patches (CKeyframeMatcher::searchPatches); appends to out. */
+	 * their patches (KeyframeMatcher::searchPatches); appends to out. */
 	void searchLocalMapByPatches(
 		const TLocaliserInput& in, uint32_t ref, const Eigen::Isometry3d& T_curr_ref,
 		vo::TKeyframeMatchOutput& out, std::vector<uint32_t>& keyframeOf) const;
@@ -412,12 +412,12 @@ class CStereoLocaliser
 	const CKeyframeMap& m_map;
 	std::string m_channel;
 	TLocaliserOptions m_opts;
-	vo::CKeyframeMatcher m_matcher;	 //!< options.search's region
-	vo::CKeyframeMatcher m_gateMatcher;	 //!< global search, second pass
-	vo::CKeyframeMatcher m_placeMatcher;  //!< global search, first pass (window around the keyframe's view)
-	vo::CRelativePoseEstimator m_estimator;
+	vo::KeyframeMatcher m_matcher;	 //!< options.search's region
+	vo::KeyframeMatcher m_gateMatcher;	 //!< global search, second pass
+	vo::KeyframeMatcher m_placeMatcher;  //!< global search, first pass (window around the keyframe's view)
+	vo::RelativePoseEstimator m_estimator;
 	features::BriefExtractor m_brief;  //!< the map channel's BRIEF pattern (warped matching)
-	CFixAcceptance m_accept;  //!< the failure test and its state
+	FixAcceptance m_accept;  //!< the failure test and its state
 };
 
 }  // namespace shadyloc::localisation

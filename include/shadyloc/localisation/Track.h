@@ -106,10 +106,10 @@ enum class SearchScope
 	Whole  //!< the whole map (or the start keyframes)
 };
 
-class CTrack
+class Track
 {
    public:
-	explicit CTrack(const TTrackOptions& o = {}) : m_opts(o) {}
+	explicit Track(const TTrackOptions& o = {}) : m_opts(o) {}
 
 	/** The track propagated by VO's step (invalid when no place is known). */
 	TKeyframePose predict(const TMotion& motion);
@@ -147,7 +147,7 @@ class CTrack
 	const TKeyframePose& estimate() const { return m_est; }
 	int framesSinceFix() const { return m_framesSinceFix; }
 	double distanceSinceFix() const { return m_distSinceFix; }
-	void reset() { *this = CTrack(m_opts); }
+	void reset() { *this = Track(m_opts); }
 
    private:
 	/** A place's covariance as the track would hold it (global_sigma added). */

@@ -89,14 +89,14 @@ std::vector<int> countReobservations(
  * frames of its segment within the window before and after it, and thinned
  * by selectLandmarks with that score. Otherwise a keyframe is thinned by the
  * strongest corners and appended at once. */
-class CSurveyBuilder : public mrpt::system::COutputLogger
+class SurveyBuilder : public mrpt::system::COutputLogger
 {
    public:
 	/** The map must be set up (CKeyframeMap::setup); its options give the
 	 * keyframe spacing and the landmark selection. `vo`: the options of the
 	 * VO that makes the chain (its matcher and pose estimator re-find
 	 * landmarks for the reobserved selection). */
-	CSurveyBuilder(CKeyframeMap& map, const std::string& runName, const vo::TStereoVOOptions& vo = {});
+	SurveyBuilder(CKeyframeMap& map, const std::string& runName, const vo::TStereoVOOptions& vo = {});
 
 	/** After the chain's VO processed a frame: `res` its result,
 	 * `voKeyframes` the VO's keyframes now, `voKeyframesBefore` their count

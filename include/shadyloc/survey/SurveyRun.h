@@ -2,7 +2,7 @@
  * `shadyloc survey` does between reading its options and saving the map,
  * shared with the leave-one-out evaluation (`shadyloc eval`, which surveys
  * every run once). The channels' frame sources walk the rawlog in lockstep;
- * the first channel's VO makes the keyframe chain (CSurveyBuilder), and at
+ * the first channel's VO makes the keyframe chain (SurveyBuilder), and at
  * each map keyframe every channel's measurements are stored.
  */
 #pragma once
@@ -33,7 +33,7 @@ struct TSurveyRunOptions
 	std::optional<io::Trajectory> gt;  //!< stored beside the keyframes, associated within 10 ms
 	std::string gtName;	 //!< names the ground truth in errors
 	std::string configName = "(no config)";	 //!< names the config in messages
-	/** The channel whose VO bridges the chain VO's breaks (CSurveyBuilder::
+	/** The channel whose VO bridges the chain VO's breaks (SurveyBuilder::
 	 * bridge): "auto" is the second channel when there is one, "none" none. */
 	std::string bridgeChannel = "auto";
 };
@@ -51,13 +51,13 @@ struct TSurveyStats
 	std::vector<double> meanKeptReobservations;
 };
 
-class CSurveyRun : public mrpt::system::COutputLogger
+class SurveyRun : public mrpt::system::COutputLogger
 {
    public:
 	/** Opens the rawlog's channels (the map options from cfg's [map]);
 	 * throws naming the rawlog, the channel or the config at fault. */
-	CSurveyRun(const std::string& rawlog, const mrpt::config::CConfigFileBase& cfg, const TSurveyRunOptions& o);
-	~CSurveyRun() override;
+	SurveyRun(const std::string& rawlog, const mrpt::config::CConfigFileBase& cfg, const TSurveyRunOptions& o);
+	~SurveyRun() override;
 
 	/** What is surveyed how: the channels, where their frames come from,
 	 * the map options (what `shadyloc survey` prints before it starts). */

@@ -1,6 +1,6 @@
 /* ShadyLoc — a keyframe of the VO: a pose in its keyframe chain and the
  * stereo measurements of one image channel made there. The VO creates them
- * (one chain per channel run); the survey (CSurveyBuilder) turns the chain's
+ * (one chain per channel run); the survey (SurveyBuilder) turns the chain's
  * keyframes into the map's own records, so `vo` and `map` do not know each
  * other. Not stored as such: the map's format (docs/map.md) is the one codec. */
 #pragma once

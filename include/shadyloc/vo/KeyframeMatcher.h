@@ -38,7 +38,7 @@ enum class SearchRegion
 	Gate  //!< the chi-square gate of the predicted measurement's covariance
 };
 
-/** Options of CKeyframeMatcher (the VO fills them from TStereoVOOptions,
+/** Options of KeyframeMatcher (the VO fills them from TStereoVOOptions,
  * see matcherOptionsFrom()). */
 struct TKeyframeMatcherOptions
 {
@@ -164,11 +164,11 @@ struct TKeyframeMatchOutput
 
 /** The keyframe matcher (see the file comment). Stateless: one instance can
  * serve several threads. */
-class CKeyframeMatcher
+class KeyframeMatcher
 {
    public:
 	using TOptions = TKeyframeMatcherOptions;
-	explicit CKeyframeMatcher(const TOptions& o = TOptions());
+	explicit KeyframeMatcher(const TOptions& o = TOptions());
 
 	/** All four steps. */
 	void match(const TKeyframeMatchInput& in, TKeyframeMatchOutput& out) const;

@@ -32,16 +32,16 @@ struct TKeyframeQuery
 };
 
 /** A keyframe policy: stateless, so one instance can be shared. */
-class CKeyframePolicy
+class KeyframePolicy
 {
    public:
-	using Ptr = std::shared_ptr<const CKeyframePolicy>;
-	virtual ~CKeyframePolicy() = default;
+	using Ptr = std::shared_ptr<const KeyframePolicy>;
+	virtual ~KeyframePolicy() = default;
 	/** True if the tracked frame described by q should become a keyframe. */
 	virtual bool wantKeyframe(const TKeyframeQuery& q) const = 0;
 };
 
-/** Options of CMotionKeyframePolicy (TStereoVOOptions' kf_* keys). */
+/** Options of MotionKeyframePolicy (TStereoVOOptions' kf_* keys). */
 struct TMotionKeyframePolicyOptions
 {
 	double kf_translation = 1.0;  //!< beyond this distance from the keyframe [m]
@@ -52,11 +52,11 @@ struct TMotionKeyframePolicyOptions
 
 /** The VO's default policy: a new keyframe when the motion from the keyframe
  * is large or the overlap with it small. */
-class CMotionKeyframePolicy : public CKeyframePolicy
+class MotionKeyframePolicy : public KeyframePolicy
 {
    public:
 	using TOptions = TMotionKeyframePolicyOptions;
-	explicit CMotionKeyframePolicy(const TOptions& o = TOptions()) : m_opts(o) {}
+	explicit MotionKeyframePolicy(const TOptions& o = TOptions()) : m_opts(o) {}
 	bool wantKeyframe(const TKeyframeQuery& q) const override;
 	const TOptions& options() const { return m_opts; }
 

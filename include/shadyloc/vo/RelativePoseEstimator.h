@@ -25,7 +25,7 @@
 
 namespace shadyloc::vo
 {
-/** Options of CRelativePoseEstimator (the VO fills them from TStereoVOOptions,
+/** Options of RelativePoseEstimator (the VO fills them from TStereoVOOptions,
  * see poseEstimatorOptionsFrom()). */
 struct TRelativePoseOptions
 {
@@ -80,11 +80,11 @@ struct TRelativePoseOutput
 };
 
 /** The relative-pose estimator (see the file comment). Stateless. */
-class CRelativePoseEstimator
+class RelativePoseEstimator
 {
    public:
 	using TOptions = TRelativePoseOptions;
-	explicit CRelativePoseEstimator(const TOptions& o = TOptions());
+	explicit RelativePoseEstimator(const TOptions& o = TOptions());
 
 	void estimate(const TRelativePoseInput& in, TRelativePoseOutput& out) const;
 

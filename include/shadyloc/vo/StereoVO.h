@@ -4,13 +4,13 @@
  *
  * StereoVO composes stages that the localisers reuse:
  *   features::StereoFeatureExtractor  stereo measurements of the frame;
- *   CKeyframeMatcher (vo/KeyframeMatcher.h)  the keyframe's landmarks
+ *   KeyframeMatcher (vo/KeyframeMatcher.h)  the keyframe's landmarks
  *       projected with the pose predicted by the motion model (constant
  *       velocity, or the caller's prior), BRIEF in a region around each,
  *       sub-pixel patch refinement;
- *   CRelativePoseEstimator (vo/RelativePoseEstimator.h)  RANSAC with the
+ *   RelativePoseEstimator (vo/RelativePoseEstimator.h)  RANSAC with the
  *       prediction as a hypothesis, robust solve, re-selection, covariance;
- *   CKeyframePolicy (vo/KeyframePolicy.h)  whether a tracked frame becomes a
+ *   KeyframePolicy (vo/KeyframePolicy.h)  whether a tracked frame becomes a
  *       keyframe; the caller may override it (track() + commit()).
  * StereoVO itself keeps the state: keyframes, the motion model, the count of
  * untracked frames. Frames that cannot be tracked are reported (status), get
@@ -171,7 +171,7 @@ class StereoVO : public mrpt::system::COutputLogger
 {
    public:
 	using TOptions = TStereoVOOptions;
-	/** With the policy CMotionKeyframePolicy(keyframePolicyOptionsFrom(o)). */
+	/** With the policy MotionKeyframePolicy(keyframePolicyOptionsFrom(o)). */
 	StereoVO(const TOptions& o = TOptions(), const features::TStereoFeatureOptions& fo = {});
 
 	/** One rectified grey stereo pair (CV_8UC1, equal sizes): track() then
@@ -202,14 +202,14 @@ class StereoVO : public mrpt::system::COutputLogger
 	TFrameResult commit(KeyframeDecision d = KeyframeDecision::Policy);
 
 	/** Replaces the keyframe policy (shared: a policy is stateless). */
-	void setKeyframePolicy(CKeyframePolicy::Ptr p);
-	const CKeyframePolicy& keyframePolicy() const { return *m_policy; }
+	void setKeyframePolicy(KeyframePolicy::Ptr p);
+	const KeyframePolicy& keyframePolicy() const { return *m_policy; }
 
 	const std::vector<TKeyframe>& keyframes() const { return m_keyframes; }
 	const TOptions& options() const { return m_opts; }
 	const features::StereoFeatureExtractor& extractor() const { return m_extractor; }
-	const CKeyframeMatcher& matcher() const { return m_matcher; }
-	const CRelativePoseEstimator& poseEstimator() const { return m_poseEstimator; }
+	const KeyframeMatcher& matcher() const { return m_matcher; }
+	const RelativePoseEstimator& poseEstimator() const { return m_poseEstimator; }
 	/** Last frame-to-frame motion estimate (the constant-velocity model). */
 	const Eigen::Isometry3d& lastMotion() const { return m_velocity; }
 	void reset();
@@ -224,9 +224,9 @@ class StereoVO : public mrpt::system::COutputLogger
 
 	TOptions m_opts;
 	features::StereoFeatureExtractor m_extractor;
-	CKeyframeMatcher m_matcher;
-	CRelativePoseEstimator m_poseEstimator;
-	CKeyframePolicy::Ptr m_policy;
+	KeyframeMatcher m_matcher;
+	RelativePoseEstimator m_poseEstimator;
+	KeyframePolicy::Ptr m_policy;
 	std::vector<TKeyframe> m_keyframes;
 	geometry::TStereoCalib m_kfCalib;  //!< calibration of the frame m_keyframes.back() was made from
 	size_t m_frame = 0;

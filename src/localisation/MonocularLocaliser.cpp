@@ -1,9 +1,9 @@
 /* ShadyLoc — the localiser's core for a single image (2D-3D) against a
- * stereo keyframe (include/shadyloc/localisation/MonoLocaliser.h). */
+ * stereo keyframe (include/shadyloc/localisation/MonocularLocaliser.h). */
 #include <shadyloc/core/Options.h>
 #include <shadyloc/core/Units.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
-#include <shadyloc/localisation/MonoLocaliser.h>
+#include <shadyloc/localisation/MonocularLocaliser.h>
 
 #include <mrpt/img/TCamera.h>
 #include <mrpt/obs/CObservationImage.h>
@@ -67,7 +67,7 @@ struct TLandmarkMatches
  * passes the distance bound and the ratio test. */
 template <typename Admit>
 void bestFeature(
-	const features::TStereoMeasurement& lm, const TImageFeatures& f, const TMonoLocaliserOptions& o, Admit&& consider,
+	const features::TStereoMeasurement& lm, const TImageFeatures& f, const TMonocularLocaliserOptions& o, Admit&& consider,
 	int& feature, int& distance)
 {
 	int b1 = 257, b2 = 257, bi = -1;
@@ -84,7 +84,7 @@ void bestFeature(
 /** Without a prediction every feature is a candidate: ratio test on the
  * landmark's side, then (option) mutual. */
 void matchEverywhere(
-	const std::vector<features::TStereoMeasurement>& lms, const TImageFeatures& f, const TMonoLocaliserOptions& o,
+	const std::vector<features::TStereoMeasurement>& lms, const TImageFeatures& f, const TMonocularLocaliserOptions& o,
 	TLandmarkMatches& m)
 {
 	const size_t nF = f.feats.size();
@@ -132,7 +132,7 @@ void oneLandmarkPerFeature(size_t nFeatures, TLandmarkMatches& m)
  * gates overflow. */
 bool matchInGates(
 	const std::vector<features::TStereoMeasurement>& lms, const TImageFeatures& f, const TPinholeCalib& calib,
-	const TKeyframePose& prediction, const TMonoLocaliserOptions& o, TLandmarkMatches& m, vo::TGateStats& gate)
+	const TKeyframePose& prediction, const TMonocularLocaliserOptions& o, TLandmarkMatches& m, vo::TGateStats& gate)
 {
 	const Eigen::Isometry3d T_live_kf = prediction.T_kf_live.inverse();
 	const Matrix6d covT = geometry::invertCovariance(prediction.T_kf_live, prediction.cov);
@@ -182,7 +182,7 @@ bool matchInGates(
 /** Each matched landmark's keyframe patch located to sub-pixel in the image;
  * `descriptorMatches` counts the matches tried. */
 std::vector<TImageCorrespondence> refineMatches(
-	const std::vector<features::TStereoMeasurement>& lms, const TImageFeatures& f, const TMonoLocaliserOptions& o,
+	const std::vector<features::TStereoMeasurement>& lms, const TImageFeatures& f, const TMonocularLocaliserOptions& o,
 	const TLandmarkMatches& m, int& descriptorMatches)
 {
 	std::vector<TImageCorrespondence> corr;
@@ -204,7 +204,7 @@ std::vector<TImageCorrespondence> refineMatches(
 /** OpenCV's PnP RANSAC (AP3P): T_curr_ref, or none (also for degenerate
  * sets); `use` marks its inliers, `inliers` counts them. */
 std::optional<Eigen::Isometry3d> pnpRansac(
-	const std::vector<TImageCorrespondence>& corr, const TPinholeCalib& calib, const TMonoLocaliserOptions& o,
+	const std::vector<TImageCorrespondence>& corr, const TPinholeCalib& calib, const TMonocularLocaliserOptions& o,
 	std::vector<uint8_t>& use, int& inliers)
 {
 	std::vector<cv::Point3d> obj;
@@ -326,7 +326,7 @@ void extractImageFeatures(
 }
 
 // ---- options ---------------------------------------------------------------------------------------
-void TMonoLocaliserOptions::keys(core::KeyVisitor& v)
+void TMonocularLocaliserOptions::keys(core::KeyVisitor& v)
 {
 	using core::Range;
 	v("corners_per_cell", corners_per_cell, "", Range::closed(1, 10000), "FAST corners kept per grid bucket");
@@ -354,20 +354,20 @@ void TMonoLocaliserOptions::keys(core::KeyVisitor& v)
 	v("max_sigma_deg", max_sigma_deg, "deg", Range::above(0), "");
 }
 
-void TMonoLocaliserOptions::load(const mrpt::config::CConfigFileBase& c, const std::string& s) { core::loadKeys(*this, c, s); }
+void TMonocularLocaliserOptions::load(const mrpt::config::CConfigFileBase& c, const std::string& s) { core::loadKeys(*this, c, s); }
 
-void TMonoLocaliserOptions::dump(std::ostream& out) const { core::dumpKeys(*this, out); }
+void TMonocularLocaliserOptions::dump(std::ostream& out) const { core::dumpKeys(*this, out); }
 
-void TMonoLocaliserOptions::validate() const
+void TMonocularLocaliserOptions::validate() const
 {
 	core::checkKeys(*this);
 	if (!(gate_min_px <= gate_max_px)) throw std::invalid_argument("gate_min_px: must be <= gate_max_px");
 }
 
-TMonoLocaliserOptions monoLocaliserOptionsFor(
+TMonocularLocaliserOptions monocularLocaliserOptionsFor(
 	const mrpt::config::CConfigFileBase& cfg, const std::string& channel, const std::string& section)
 {
-	TMonoLocaliserOptions o;
+	TMonocularLocaliserOptions o;
 	if (cfg.sectionExists(section)) o.load(cfg, section);
 	const std::string over = section + "." + channel;
 	if (cfg.sectionExists(over)) o.load(cfg, over);
@@ -453,19 +453,19 @@ geometry::TPoseSolution solveImagePose(
 }
 
 // ---- the localiser ---------------------------------------------------------------------------------
-CMonoLocaliser::CMonoLocaliser(
+MonocularLocaliser::MonocularLocaliser(
 	const CKeyframeMap& map, const filters::TChannel& channel, const features::TStereoFeatureOptions& fo,
-	const TMonoLocaliserOptions& o)
+	const TMonocularLocaliserOptions& o)
 	: m_map(map), m_channel(channel), m_fo(fo), m_opts(o)
 {
-	if (!channel.filter) throw std::invalid_argument("CMonoLocaliser: channel '" + channel.label + "' has no filter");
+	if (!channel.filter) throw std::invalid_argument("MonocularLocaliser: channel '" + channel.label + "' has no filter");
 	m_opts.validate();
 	fo.validate();
 	map.channelIndex(channel.label);  // throws naming the map's channels
-	map.checkCompatible(CLocalisationSystem::liveParams(channel, fo));
+	map.checkCompatible(LocalisationSystem::liveParams(channel, fo));
 }
 
-TImageFeatures CMonoLocaliser::features(const cv::Mat& image) const
+TImageFeatures MonocularLocaliser::features(const cv::Mat& image) const
 {
 	cv::Mat grey;
 	m_channel.convert(image, grey);
@@ -474,7 +474,7 @@ TImageFeatures CMonoLocaliser::features(const cv::Mat& image) const
 	return f;
 }
 
-TMonoLocaliserResult CMonoLocaliser::localise(
+TMonocularLocaliserResult MonocularLocaliser::localise(
 	const cv::Mat& image, const TPinholeCalib& calib, uint32_t kf, const std::optional<TKeyframePose>& prediction) const
 {
 	const auto t0 = std::chrono::steady_clock::now();
@@ -483,7 +483,7 @@ TMonoLocaliserResult CMonoLocaliser::localise(
 	return r;
 }
 
-TMonoLocaliserResult CMonoLocaliser::localise(
+TMonocularLocaliserResult MonocularLocaliser::localise(
 	const mrpt::obs::CObservationImage& obs, uint32_t kf, const std::optional<TKeyframePose>& prediction) const
 {
 	if (obs.image.isEmpty())
@@ -491,22 +491,22 @@ TMonoLocaliserResult CMonoLocaliser::localise(
 	return localise(obs.image.asCvMatRef(), TPinholeCalib::FromCamera(obs.cameraParams), kf, prediction);
 }
 
-TMonoLocaliserResult CMonoLocaliser::localise(
+TMonocularLocaliserResult MonocularLocaliser::localise(
 	const TImageFeatures& f, const TPinholeCalib& calib, uint32_t kf, const std::optional<TKeyframePose>& prediction) const
 {
 	const auto t0 = std::chrono::steady_clock::now();
 	const auto& o = m_opts;
-	TMonoLocaliserResult r;
+	TMonocularLocaliserResult r;
 	r.channel = m_channel.label;
 	r.kf_id = kf;
 	r.features = static_cast<int>(f.feats.size());
 	if (kf >= m_map.keyframeCount())
 		throw std::out_of_range(
-			"CMonoLocaliser: keyframe " + std::to_string(kf) + " is not in the map (" +
+			"MonocularLocaliser: keyframe " + std::to_string(kf) + " is not in the map (" +
 			std::to_string(m_map.keyframeCount()) + " keyframes)");
 	if (prediction && prediction->valid && prediction->kf != kf)
 		throw std::invalid_argument(
-			"CMonoLocaliser: the prediction is relative to keyframe " + std::to_string(prediction->kf) + ", not " +
+			"MonocularLocaliser: the prediction is relative to keyframe " + std::to_string(prediction->kf) + ", not " +
 			std::to_string(kf));
 	const auto& lms = m_map.measurements(kf, m_channel.label);
 	const auto done = [&](LocaliserStatus s) {

@@ -15,7 +15,7 @@
  *      landmark's and the prediction's covariance and the pixel noise
  *      propagated to first order, with a floor; a gate longer than the
  *      ceiling is not searched and too many of them make the localiser lost,
- *      as in CStereoLocaliser); the keyframe's stored patch is then located
+ *      as in StereoLocaliser); the keyframe's stored patch is then located
  *      to sub-pixel in the image (ZNCC climb, parabola, Gauss-Newton with
  *      gain and offset: features::refinePatch2D);
  *   3. PnP RANSAC (OpenCV's solvePnPRansac, AP3P minimal sets) for an
@@ -26,7 +26,7 @@
  *      T_kf_live from the inverse of the information at the solution;
  *      inliers re-selected at the refined pose and solved once more;
  *   5. the fix is rejected with too few inliers or a standard deviation
- *      above the bounds (as CStereoLocaliser's uncertain).
+ *      above the bounds (as StereoLocaliser's uncertain).
  * The map refuses the live channel only when its descriptor-defining
  * parameters differ (CKeyframeMap::checkCompatible); the image size and
  * intrinsics may differ from the map's camera (they enter only through the
@@ -111,7 +111,7 @@ void extractImageFeatures(
 
 /** Options of the 2D-3D localiser ([localiser_2d], then the keys of
  * [localiser_2d.<channel>] override). */
-struct TMonoLocaliserOptions
+struct TMonocularLocaliserOptions
 {
 	int corners_per_cell = 60;	//!< FAST corners kept per grid bucket of the image
 	// ---- matching
@@ -136,7 +136,7 @@ struct TMonoLocaliserOptions
 	double huber_k = 1.0;  //!< Huber threshold on the whitened residual norm [sigmas]
 	int max_iterations = 20;  //!< Gauss-Newton iterations of the refinement
 	/** The solver's covariance is scaled by this (correlated errors, model
-	 * error; as CStereoLocaliser's cov_scale) [-]. */
+	 * error; as StereoLocaliser's cov_scale) [-]. */
 	double cov_scale = 4.0;
 	int min_matches = 12;  //!< fewer refined matches: few_matches
 	int min_inliers = 15;  //!< fewer inliers: few_inliers
@@ -151,11 +151,11 @@ struct TMonoLocaliserOptions
 };
 
 /** Options for `channel`: [section], then [section.<channel>]. */
-TMonoLocaliserOptions monoLocaliserOptionsFor(
+TMonocularLocaliserOptions monocularLocaliserOptionsFor(
 	const mrpt::config::CConfigFileBase& cfg, const std::string& channel, const std::string& section = "localiser_2d");
 
 /** The result of one image against one keyframe. */
-struct TMonoLocaliserResult
+struct TMonocularLocaliserResult
 {
 	std::string channel;
 	LocaliserStatus status = LocaliserStatus::NoKeyframe;
@@ -175,7 +175,7 @@ struct TMonoLocaliserResult
 	double ms = 0;	//!< time [ms]
 };
 
-class CMonoLocaliser
+class MonocularLocaliser
 {
    public:
 	/** `channel` and `fo` are the live run's channel and feature options:
@@ -183,9 +183,9 @@ class CMonoLocaliser
 	 * descriptor-defining parameters (throws std::runtime_error naming both
 	 * sets, or std::out_of_range naming the map's channels). The map must
 	 * outlive the localiser. */
-	CMonoLocaliser(
+	MonocularLocaliser(
 		const CKeyframeMap& map, const filters::TChannel& channel, const features::TStereoFeatureOptions& fo,
-		const TMonoLocaliserOptions& o = {});
+		const TMonocularLocaliserOptions& o = {});
 
 	/** The channel's image from a live image (colour BGR, or grey for a
 	 * channel that takes grey), then its features. */
@@ -195,27 +195,27 @@ class CMonoLocaliser
 	 * std::out_of_range naming it if the map has none such), with the live
 	 * camera `calib`; with a prediction (its kf must be `kf`), the gated
 	 * search around it. Const: one instance may serve several threads. */
-	TMonoLocaliserResult localise(
+	TMonocularLocaliserResult localise(
 		const TImageFeatures& f, const TPinholeCalib& calib, uint32_t kf,
 		const std::optional<TKeyframePose>& prediction = std::nullopt) const;
 	/** The same from a live image. */
-	TMonoLocaliserResult localise(
+	TMonocularLocaliserResult localise(
 		const cv::Mat& image, const TPinholeCalib& calib, uint32_t kf,
 		const std::optional<TKeyframePose>& prediction = std::nullopt) const;
 	/** The same from an MRPT monocular observation (its image loaded and
 	 * undistorted, its cameraParams the intrinsics). */
-	TMonoLocaliserResult localise(
+	TMonocularLocaliserResult localise(
 		const mrpt::obs::CObservationImage& obs, uint32_t kf,
 		const std::optional<TKeyframePose>& prediction = std::nullopt) const;
 
 	const std::string& channel() const { return m_channel.label; }
-	const TMonoLocaliserOptions& options() const { return m_opts; }
+	const TMonocularLocaliserOptions& options() const { return m_opts; }
 
    private:
 	const CKeyframeMap& m_map;
 	filters::TChannel m_channel;
 	features::TStereoFeatureOptions m_fo;
-	TMonoLocaliserOptions m_opts;
+	TMonocularLocaliserOptions m_opts;
 };
 
 /** A 2D-3D correspondence: a landmark in the reference frame and its pixel

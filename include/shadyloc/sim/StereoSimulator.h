@@ -68,11 +68,11 @@ struct TSimFrame
 	double route_s_m = 0;  //!< route arc length of the vehicle (m)
 };
 
-class CStereoSimulator : public mrpt::system::COutputLogger
+class StereoSimulator : public mrpt::system::COutputLogger
 {
    public:
 	/** Builds the scene; selects the first traversal (if any). */
-	explicit CStereoSimulator(const TSimOptions& opts);
+	explicit StereoSimulator(const TSimOptions& opts);
 
 	const TSimOptions& options() const { return m_opts; }
 	Scene& scene() { return m_scene; }

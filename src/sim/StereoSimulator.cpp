@@ -3,7 +3,7 @@
 #include <shadyloc/io/OutputTransaction.h>
 #include <shadyloc/io/Rawlog.h>
 #include <shadyloc/io/Tum.h>
-#include <shadyloc/sim/CStereoSimulator.h>
+#include <shadyloc/sim/StereoSimulator.h>
 #include <shadyloc/sim/Noise.h>
 
 #include <mrpt/math/CMatrixFixed.h>
@@ -30,8 +30,8 @@ constexpr double kSpeedPeriod_s = 20.0;	 // slow speed oscillation
 constexpr double kWeavePeriod_s = 13.0;	 // slow lateral weave
 }  // namespace
 
-CStereoSimulator::CStereoSimulator(const TSimOptions& opts)
-	: mrpt::system::COutputLogger("CStereoSimulator"), m_opts(opts), m_scene(opts.scene)
+StereoSimulator::StereoSimulator(const TSimOptions& opts)
+	: mrpt::system::COutputLogger("StereoSimulator"), m_opts(opts), m_scene(opts.scene)
 {
 	m_opts.camera.validate();
 	if (!m_opts.traversals.empty())
@@ -44,7 +44,7 @@ CStereoSimulator::CStereoSimulator(const TSimOptions& opts)
 	}
 }
 
-void CStereoSimulator::setTraversal(const TTraversal& t)
+void StereoSimulator::setTraversal(const TTraversal& t)
 {
 	t.validate();
 	m_trav = t;
@@ -85,7 +85,7 @@ void CStereoSimulator::setTraversal(const TTraversal& t)
 }
 
 // ------------------------------------------------------------------ geometry
-mrpt::img::TCamera CStereoSimulator::leftCamera() const
+mrpt::img::TCamera StereoSimulator::leftCamera() const
 {
 	const auto& c = m_opts.camera;
 	mrpt::img::TCamera cam;
@@ -96,7 +96,7 @@ mrpt::img::TCamera CStereoSimulator::leftCamera() const
 	return cam;
 }
 
-mrpt::poses::CPose3D CStereoSimulator::T_vehicle_left() const
+mrpt::poses::CPose3D StereoSimulator::T_vehicle_left() const
 {
 	const double p = m_opts.camera.pitch_deg * M_PI / 180;
 	// Columns: camera x (right), y (down), z (forward, tilted down by p) in
@@ -117,14 +117,14 @@ mrpt::poses::CPose3D CStereoSimulator::T_vehicle_left() const
 	return mrpt::poses::CPose3D(R, t);
 }
 
-mrpt::poses::CPose3D CStereoSimulator::T_left_right() const
+mrpt::poses::CPose3D StereoSimulator::T_left_right() const
 {
 	return mrpt::poses::CPose3D(m_opts.camera.baseline_m, 0, 0, 0, 0, 0);
 }
 
-double CStereoSimulator::timestamp(int frame) const { return m_trav.start_time + frame / m_opts.camera.fps; }
+double StereoSimulator::timestamp(int frame) const { return m_trav.start_time + frame / m_opts.camera.fps; }
 
-double CStereoSimulator::routePosition(int frame) const
+double StereoSimulator::routePosition(int frame) const
 {
 	// s(t) = s0 + v0 t + integral of v0 a sin(w t + phi): closed form.
 	const double t = frame / m_opts.camera.fps, v0 = m_trav.speed_mps, a = m_trav.speed_variation;
@@ -132,7 +132,7 @@ double CStereoSimulator::routePosition(int frame) const
 	return m_trav.start_s_m + v0 * t - v0 * a / w * (std::cos(w * t + m_phaseSpeed) - std::cos(m_phaseSpeed));
 }
 
-int CStereoSimulator::frameCount() const
+int StereoSimulator::frameCount() const
 {
 	if (!m_trav.endsByDistance()) return m_trav.frames;
 	constexpr int kMaxFrames = 1000000;
@@ -143,7 +143,7 @@ int CStereoSimulator::frameCount() const
 		std::to_string(m_trav.speed_mps));
 }
 
-mrpt::poses::CPose3D CStereoSimulator::T_world_vehicle(int frame) const
+mrpt::poses::CPose3D StereoSimulator::T_world_vehicle(int frame) const
 {
 	const double t = frame / m_opts.camera.fps;
 	const double s = routePosition(frame);
@@ -159,9 +159,9 @@ mrpt::poses::CPose3D CStereoSimulator::T_world_vehicle(int frame) const
 }
 
 // ------------------------------------------------------------------ light
-V3 CStereoSimulator::sunDirection() const { return m_sun; }
+V3 StereoSimulator::sunDirection() const { return m_sun; }
 
-Rgb CStereoSimulator::shade(int m, float mix, float b, float sunF, float skyV) const
+Rgb StereoSimulator::shade(int m, float mix, float b, float sunF, float skyV) const
 {
 	Rgb out;
 	const float sf = sunF * m_sunOn;
@@ -171,7 +171,7 @@ Rgb CStereoSimulator::shade(int m, float mix, float b, float sunF, float skyV) c
 	return out;
 }
 
-Rgb CStereoSimulator::skyRadiance(const V3& d) const
+Rgb StereoSimulator::skyRadiance(const V3& d) const
 {
 	const float up = std::max(d.z, 0.0f);
 	Rgb out;
@@ -193,7 +193,7 @@ Rgb CStereoSimulator::skyRadiance(const V3& d) const
 }
 
 // ------------------------------------------------------------------ rendering
-void CStereoSimulator::renderLinear(const mrpt::poses::CPose3D& T_world_left, cv::Mat& left, cv::Mat& right,
+void StereoSimulator::renderLinear(const mrpt::poses::CPose3D& T_world_left, cv::Mat& left, cv::Mat& right,
 	TRenderAux* auxL, TRenderAux* auxR) const
 {
 	const auto& c = m_opts.camera;
@@ -266,7 +266,7 @@ void CStereoSimulator::renderLinear(const mrpt::poses::CPose3D& T_world_left, cv
 	});
 }
 
-double CStereoSimulator::exposureGain(const cv::Mat& lin) const
+double StereoSimulator::exposureGain(const cv::Mat& lin) const
 {
 	std::vector<float> y;
 	y.reserve(static_cast<size_t>(lin.rows * lin.cols / 4 + 1));
@@ -284,7 +284,7 @@ double CStereoSimulator::exposureGain(const cv::Mat& lin) const
 	return m_opts.camera.exposure_target / ref;
 }
 
-void CStereoSimulator::expose(const cv::Mat& lin, double gain, uint64_t seed, cv::Mat& out8) const
+void StereoSimulator::expose(const cv::Mat& lin, double gain, uint64_t seed, cv::Mat& out8) const
 {
 	const auto& c = m_opts.camera;
 	out8.create(lin.rows, lin.cols, CV_8UC3);
@@ -318,7 +318,7 @@ void CStereoSimulator::expose(const cv::Mat& lin, double gain, uint64_t seed, cv
 	});
 }
 
-TSimFrame CStereoSimulator::renderFrame(int frame, TRenderAux* auxL, TRenderAux* auxR)
+TSimFrame StereoSimulator::renderFrame(int frame, TRenderAux* auxL, TRenderAux* auxR)
 {
 	TSimFrame f;
 	f.index = frame;
@@ -341,7 +341,7 @@ TSimFrame CStereoSimulator::renderFrame(int frame, TRenderAux* auxL, TRenderAux*
 	return f;
 }
 
-mrpt::obs::CObservationStereoImages::Ptr CStereoSimulator::makeObservation(const TSimFrame& f) const
+mrpt::obs::CObservationStereoImages::Ptr StereoSimulator::makeObservation(const TSimFrame& f) const
 {
 	auto obs = mrpt::obs::CObservationStereoImages::Create();
 	obs->sensorLabel = "CAMERA";
@@ -358,7 +358,7 @@ mrpt::obs::CObservationStereoImages::Ptr CStereoSimulator::makeObservation(const
 	return obs;
 }
 
-void CStereoSimulator::generate(const std::string& rawlogPath, const std::string& tumPath, int frames,
+void StereoSimulator::generate(const std::string& rawlogPath, const std::string& tumPath, int frames,
 	const std::function<void(const TSimFrame&)>& onFrame, io::OutputTransaction* outputs)
 {
 	const int n = frames > 0 ? frames : frameCount();
