@@ -230,6 +230,12 @@ TRansacResult ransacStereoPose(
 	return res;
 }
 
+Eigen::Vector3d measurementVariances(const TPoseSolverOptions& o)
+{
+	const double s2 = o.sigma_px * o.sigma_px;
+	return {s2, s2, s2 + o.sigma_disparity_px * o.sigma_disparity_px};
+}
+
 namespace
 {
 /** One correspondence's robust normal-equation terms at T (the residual's
@@ -242,7 +248,7 @@ bool normalTerms(
 	Eigen::Vector3d r;
 	Matrix36d J;
 	if (!stereoResidual(calib, T, c.P_ref, c.z_curr, r, &J)) return false;
-	Eigen::Matrix3d S = o.sigma_px * o.sigma_px * Eigen::Matrix3d::Identity();
+	Eigen::Matrix3d S = measurementVariances(o).asDiagonal();
 	if (o.use_landmark_covariance)
 	{
 		const Eigen::Matrix3d JP = J.leftCols<3>() * T.linear();  // d r / d P_ref

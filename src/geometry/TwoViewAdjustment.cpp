@@ -47,6 +47,18 @@ TPoseSolution solveStereoPoseTwoView(
 {
 	TPoseSolution sol;
 	const double sinv = 1.0 / o.sigma_px, s2inv = sinv * sinv;
+	// uR weighs less by uRcut of its sigma_px weight where the disparity is
+	// noisier (sigma_disparity_px); written as a correction so that without
+	// it every sum is the isotropic one, to the bit.
+	const Eigen::Vector3d var = measurementVariances(o);
+	const double uRcut = 1.0 - var(0) / var(2);
+	const auto whitenedNorm = [&](const Eigen::Vector3d& r) {
+		return std::sqrt(r.squaredNorm() - uRcut * r(2) * r(2)) * sinv;
+	};
+	// w A^T diag(1, 1, 1 - uRcut) B (w: Huber weight / sigma_px^2).
+	const auto weighted = [&](double w, const auto& A, const auto& B) {
+		return ((w * A.transpose() * B).eval() - ((w * uRcut) * A.row(2).transpose() * B.row(2)).eval()).eval();
+	};
 	std::vector<TLandmarkBlock> L;
 	L.reserve(c.size());
 	for (size_t i = 0; i < c.size(); i++)
@@ -77,10 +89,10 @@ TPoseSolution solveStereoPoseTwoView(
 		{
 			if (!(X[k].z() > 1e-3)) return HUGE_VAL;
 			const Eigen::Vector3d rr = L[k].calib_ref->project(X[k]) - L[k].z_ref;
-			f += huberCost(rr.norm() * sinv, o.huber_k);
+			f += huberCost(whitenedNorm(rr), o.huber_k);
 			Eigen::Vector3d r;
 			if (!stereoResidual(calib, T, X[k], c[L[k].idx].z_curr, r)) return HUGE_VAL;
-			f += huberCost(r.norm() * sinv, o.huber_k);
+			f += huberCost(whitenedNorm(r), o.huber_k);
 			ss += r.squaredNorm();
 			n++;
 		}
@@ -110,13 +122,13 @@ TPoseSolution solveStereoPoseTwoView(
 			Matrix36d Jc;
 			stereoResidual(calib, T, X[k], c[b.idx].z_curr, rc, &Jc);
 			const Eigen::Matrix3d JcX = Jc.leftCols<3>() * T.linear();
-			const double wk = huberWeight(rk.norm() * sinv, o.huber_k) * s2inv;
-			const double wc = huberWeight(rc.norm() * sinv, o.huber_k) * s2inv;
-			Hpp += wc * Jc.transpose() * Jc;
-			gp += wc * Jc.transpose() * rc;
-			b.Hpx = wc * Jc.transpose() * JcX;
-			b.Hxx = wk * Jk.transpose() * Jk + wc * JcX.transpose() * JcX;
-			b.gx = wk * Jk.transpose() * rk + wc * JcX.transpose() * rc;
+			const double wk = huberWeight(whitenedNorm(rk), o.huber_k) * s2inv;
+			const double wc = huberWeight(whitenedNorm(rc), o.huber_k) * s2inv;
+			Hpp += weighted(wc, Jc, Jc);
+			gp += weighted(wc, Jc, rc);
+			b.Hpx = weighted(wc, Jc, JcX);
+			b.Hxx = weighted(wk, Jk, Jk) + weighted(wc, JcX, JcX);
+			b.gx = weighted(wk, Jk, rk) + weighted(wc, JcX, rc);
 		}
 	};
 	// Schur complement with Levenberg-Marquardt damping (1 + lambda) on the

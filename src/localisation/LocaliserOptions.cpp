@@ -52,6 +52,8 @@ void TLocaliserOptions::keys(core::KeyVisitor& v)
 	v("ransac_threshold_px", ransac_threshold_px, "px", Range::above(0), "");
 	v("ransac_iterations", ransac_iterations, "", Range::above(0), "");
 	v("sigma_px", sigma_px, "px", Range::above(0), "");
+	v("sigma_disparity_px", sigma_disparity_px, "px", Range::atLeast(0),
+	  "the disparity's noise beyond sigma_px: uR weighs less in the solve (a channel with poorer stereo)");
 	v("huber_k", huber_k, "sigmas", Range::above(0), "");
 	v("two_view_ba", two_view_ba, "", Range::any(), "");
 	v("min_matches", min_matches, "", Range::atLeast(3), "");

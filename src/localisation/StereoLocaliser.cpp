@@ -37,6 +37,16 @@ vo::TKeyframeMatcherOptions placeMatcherOptions(const TLocaliserOptions& o)
 	return m;
 }
 
+/** The localiser's measurement model for the pose solver. */
+geometry::TPoseSolverOptions solverOptionsFor(const TLocaliserOptions& o)
+{
+	geometry::TPoseSolverOptions so;
+	so.sigma_px = o.sigma_px;
+	so.sigma_disparity_px = o.sigma_disparity_px;
+	so.huber_k = o.huber_k;
+	return so;
+}
+
 /** A posteriori variance factor of a solve (Foerstner and Wrobel,
  * "Photogrammetric Computer Vision", 2016, Sec. 4.2.3): the inliers' squared
  * residuals whitened by their a priori covariance (pixel noise plus the map
@@ -47,7 +57,7 @@ vo::TKeyframeMatcherOptions placeMatcherOptions(const TLocaliserOptions& o)
  * pose worse than their covariance allows. */
 double varianceFactor(
 	const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
-	const std::vector<uint8_t>& inlier, const Eigen::Isometry3d& T_curr_ref, double sigma_px)
+	const std::vector<uint8_t>& inlier, const Eigen::Isometry3d& T_curr_ref, const geometry::TPoseSolverOptions& so)
 {
 	double sum = 0;
 	int n = 0;
@@ -58,7 +68,8 @@ double varianceFactor(
 		geometry::Matrix36d J;
 		if (!geometry::stereoResidual(calib, T_curr_ref, corr[i].P_ref, corr[i].z_curr, r, &J)) continue;
 		const Eigen::Matrix3d JP = J.leftCols<3>() * T_curr_ref.linear();
-		const Eigen::Matrix3d S = sigma_px * sigma_px * Eigen::Matrix3d::Identity() + JP * corr[i].cov_ref * JP.transpose();
+		const Eigen::Matrix3d S =
+			Eigen::Matrix3d(geometry::measurementVariances(so).asDiagonal()) + JP * corr[i].cov_ref * JP.transpose();
 		sum += r.dot(S.ldlt().solve(r));
 		n++;
 	}
@@ -88,9 +99,7 @@ Matrix6d bootstrapCovariance(
 	if (in.size() < 4 || o.bootstrap_samples < 2) return C;
 	std::mt19937 rng(seed);
 	std::uniform_int_distribution<size_t> pick(0, in.size() - 1);
-	geometry::TPoseSolverOptions so;
-	so.sigma_px = o.sigma_px;
-	so.huber_k = o.huber_k;
+	geometry::TPoseSolverOptions so = solverOptionsFor(o);
 	so.max_iterations = 5;
 	const Eigen::Isometry3d T_ref_curr = T_curr_ref.inverse();
 	// Every resample starts at the solve: its first linearisation is shared,
@@ -201,6 +210,7 @@ vo::TRelativePoseOptions estimatorOptionsFor(const TLocaliserOptions& o)
 	p.ransac_threshold_px = o.ransac_threshold_px;
 	p.ransac_iterations = o.ransac_iterations;
 	p.sigma_px = o.sigma_px;
+	p.sigma_disparity_px = o.sigma_disparity_px;
 	p.huber_k = o.huber_k;
 	p.two_view_ba = o.two_view_ba;
 	// Solved without the motion prior: see the file comment of StereoLocaliser.h.
@@ -508,7 +518,7 @@ TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in)
 	const LocaliserStatus searchStatus = searchAndSolve(in, matchKf, pred, mo, po, r);
 	if (searchStatus != LocaliserStatus::Ok) return fail(searchStatus);
 	r.solved = true;
-	r.var_factor = varianceFactor(in.calib, mo.corr, po.inlier, po.T_curr_ref, o.sigma_px);
+	r.var_factor = varianceFactor(in.calib, mo.corr, po.inlier, po.T_curr_ref, solverOptionsFor(o));
 	r.T_kf_live = po.T_curr_ref.inverse();
 	const uint32_t seed = static_cast<uint32_t>(in.frame * 2654435761u + 7) ^ 0x9e3779b9u;
 	r.cov = solveCovariance(in.calib, mo.corr, po, seed);

@@ -66,6 +66,7 @@ void RelativePoseEstimator::estimate(const TRelativePoseInput& in, TRelativePose
 	const auto solve = o.two_view_ba ? geometry::solveStereoPoseTwoView : geometry::solveStereoPose;
 	geometry::TPoseSolverOptions so;
 	so.sigma_px = o.sigma_px;
+	so.sigma_disparity_px = o.sigma_disparity_px;
 	so.huber_k = o.huber_k;
 	auto sol = solve(calib, corr, rs.inlier, rs.T_curr_ref, so);
 	if (sol.ok)

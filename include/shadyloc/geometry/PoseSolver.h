@@ -101,10 +101,18 @@ struct TPoseSolverOptions
 {
 	int max_iterations = 15;  //!< Gauss-Newton iterations
 	double sigma_px = 0.5;	//!< measurement noise per pixel coordinate [px]
+	/** Noise of the disparity beyond sigma_px: uR = uL - d, and a channel
+	 * whose stereo matching is poorer (the invariant image) measures d worse
+	 * than it places a corner; it adds to uR's variance only [px]. */
+	double sigma_disparity_px = 0;
 	double huber_k = 2.0;  //!< Huber threshold on the whitened residual norm [sigmas]
 	double convergence = 1e-7;	//!< stop when |dxi| falls below this
 	bool use_landmark_covariance = true;  //!< add the projected cov_ref to each residual's covariance
 };
+
+/** Variances of one stereo measurement's (uL, v, uR), independent: sigma_px
+ * on each, and sigma_disparity_px more on uR [px^2]. */
+Eigen::Vector3d measurementVariances(const TPoseSolverOptions& o);
 
 struct TPoseSolution
 {

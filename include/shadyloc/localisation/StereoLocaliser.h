@@ -147,6 +147,7 @@ struct TLocaliserOptions
 	double ransac_threshold_px = 3.0;  //!< inlier bound on |(duL, dv, duR)| [px]
 	int ransac_iterations = 300;  //!< RANSAC upper bound
 	double sigma_px = 0.5;	//!< measurement noise of the solve [px]
+	double sigma_disparity_px = 0;	//!< the disparity's extra noise in the solve [px]
 	double huber_k = 1.0;  //!< Huber threshold [sigmas]
 	bool two_view_ba = true;  //!< two-view bundle adjustment (else fixed landmarks)
 	int min_matches = 15;  //!< fewer matches after refinement: few_matches

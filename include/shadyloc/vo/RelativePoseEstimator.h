@@ -32,6 +32,7 @@ struct TRelativePoseOptions
 	double ransac_threshold_px = 4.0;  //!< inlier bound on |(duL, dv, duR)| [px]
 	int ransac_iterations = 200;  //!< RANSAC upper bound
 	double sigma_px = 0.5;	//!< measurement noise of the solve [px]
+	double sigma_disparity_px = 0;	//!< the disparity's extra noise (geometry::TPoseSolverOptions) [px]
 	double huber_k = 1.0;  //!< Huber threshold [sigmas]
 	bool two_view_ba = true;  //!< solve by two-view bundle adjustment (else fixed landmarks)
 	/** Score the input's prediction as a RANSAC hypothesis (if it has one). */
