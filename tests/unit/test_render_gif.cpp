@@ -1,6 +1,6 @@
 /* ShadyLoc tests: animated GIFs (render/AnimatedGif.h) read back through
  * giflib's decoder, the quantiser's error bounds, a failed write leaving
- * nothing. */
+ * nothing; `shadyloc localise`'s picture options refused with clear errors. */
 #include "../support/GifFrames.h"
 #include "../support/TestSupport.h"
 
@@ -169,5 +169,39 @@ TEST(RenderGif, FailedWriteLeavesNoPartialOutput)
 		EXPECT_THROW(w.close(), std::runtime_error);  // no frame
 	}
 	EXPECT_THROW(AnimatedGifWriter(dir + "/no/such/dir/x.gif", 48, 32, 10), std::runtime_error);
+	expectNoTemporaries(dir);
+}
+
+// `shadyloc localise`'s picture options: each misuse refused naming the
+// option, before any work and with nothing written.
+TEST(GifApp, BadPictureOptionsNameTheOption)
+{
+	const std::string dir = shadyloc::test::tempDir("gif_app");
+	{
+		std::ofstream(dir + "/map.gif") << "not a map";
+		std::ofstream(dir + "/live.rawlog") << "not a rawlog";
+	}
+	const std::string base =
+		shadyloc::test::appPath() + " localise -q -m " + dir + "/map.gif -i " + dir + "/live.rawlog -o " + dir + "/out";
+	const std::vector<std::pair<std::string, std::string>> cases = {
+		{" --gif-every 2", "--gif-every and --gif-fps go with --gif"},
+		{" --gif " + dir + "/a.gif --gif-every 0", "--gif-every: 0 is out of range"},
+		{" --gif " + dir + "/a.gif --gif-fps 0.5", "--gif-fps: 0.5 is out of range"},
+		{" --gif " + dir + "/a.png", "--gif: '" + dir + "/a.png' is not a .gif file name"},
+		{" --view-images", "--view-images goes with --view N"},
+		{" --frame-width 320", "--frame-width goes with --gif or --view-images"},
+		{" --gif " + dir + "/map.gif", "--gif"},
+		{" --gif " + dir + "/out/a.gif", "--gif"},
+		{" --gif " + dir + "/missing/a.gif", "--gif"},
+	};
+	for (const auto& [args, message] : cases)
+	{
+		std::string out;
+		EXPECT_NE(shadyloc::test::runCommand(base + args, &out), 0) << args;
+		EXPECT_NE(out.find(message), std::string::npos) << args << "\n" << out;
+	}
+	EXPECT_EQ(shadyloc::test::fileContents(dir + "/map.gif"), "not a map");
+	EXPECT_FALSE(fs::exists(dir + "/out"));
+	EXPECT_FALSE(fs::exists(dir + "/a.gif"));
 	expectNoTemporaries(dir);
 }
