@@ -12,7 +12,9 @@
 #  6. the leave-one-out evaluation (shadyloc eval): every traversal localised
 #     against the map of every other, baseline (mono) alone and combined, against
 #     ground truth: the paper's Table I, Figures 7-9 (build/demo/eval/figures/);
-#  7. one localised pair rendered offscreen, coloured by localiser.
+#  7. one localised pair rendered offscreen, coloured by localiser;
+#  8. the same pair as an animated GIF: each channel's live image with its
+#     matches against the map above the top-down view (docs/figures.md).
 # Everything goes to build/demo/.
 set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -77,6 +79,12 @@ echo "== 7. one pair of the evaluation rendered offscreen: 'overcast' against th
 "$app" render --title "overcast live run on the noon map, by localiser" \
   -m "$out/eval/jobs/map_noon/map.kfmap:noon map" --localised "$out/eval/pairs/overcast__noon__combined:overcast" \
   --gt "$data/overcast.tum" --width 1000 --height 600 -o "$out/overcast_on_noon.png"
+
+echo
+echo "== 8. the same pair as the localiser sees it, an animated GIF (shadyloc localise --gif): every third frame,"
+echo "      each channel's live image with its matches against the map, above the top-down view"
+"$app" localise -q -m "$out/noon.kfmap" -i "$data/overcast.rawlog" --gt "$data/overcast.tum" -c "$vo_cfg" -c "$loc_cfg" \
+  -o "$out/overcast_on_noon" --gif "$out/overcast_on_noon.gif" --gif-every 3 --gif-fps 3.3 --view 42 --view-images | tail -n 1
 
 echo
 echo "Done. Results in $out/ (Table I: $out/eval/table1.md, figures: $out/eval/figures/)"

@@ -19,6 +19,7 @@ packages=(
   libegl-mesa0 libgl1-mesa-dri   # headless offscreen rendering (EGL/Mesa)
   zlib1g-dev                     # checked gzip reading of rawlogs
   libjpeg-dev                    # libjpeg's fatal errors as exceptions (src/io/JpegErrors.cpp)
+  libgif-dev                     # giflib: shadyloc localise --gif's animation (src/render/AnimatedGif.cpp)
   clang libclang-rt-14-dev       # sanitizer build and libFuzzer targets (scripts/ci-hardening.sh)
   slurm-wlm munge                # one-node Slurm cluster of the eval smoke test (scripts/slurm-smoke.sh)
 )

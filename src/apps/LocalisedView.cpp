@@ -1,6 +1,7 @@
 /* ShadyLoc — a localisation run over its map, offscreen (LocalisedView.h). */
 #include "LocalisedView.h"
 
+#include <cstdio>
 #include <iomanip>
 #include <sstream>
 
@@ -20,6 +21,13 @@ mrpt::img::TColor colourOfUsed(const std::string& used)
 	return used == "mono" ? kMonoColour : (used == "invariant" ? kInvariantColour : kNoneColour);
 }
 
+std::string viewFileName(size_t frame)
+{
+	char name[32];
+	std::snprintf(name, sizeof(name), "frame_%06zu.png", frame);
+	return name;
+}
+
 TrajectoryLayer keyframesLayer(const CKeyframeMap& map, const std::string& name)
 {
 	TrajectoryLayer k;
@@ -36,9 +44,8 @@ TrajectoryLayer keyframesLayer(const CKeyframeMap& map, const std::string& name)
 	return k;
 }
 
-void renderLocalisedView(
-	const CKeyframeMap& map, const std::vector<localisation::TLocalisationUpdate>& ups, const SnapshotOptions& opts,
-	const std::string& pngPath)
+std::vector<TrajectoryLayer> localisedViewLayers(
+	const CKeyframeMap& map, const std::vector<localisation::TLocalisationUpdate>& ups)
 {
 	TrajectoryLayer live;
 	live.name = "live";
@@ -69,7 +76,14 @@ void renderLocalisedView(
 			layers.push_back(now);
 			break;
 		}
-	renderTrajectories(layers, opts, pngPath);
+	return layers;
+}
+
+void renderLocalisedView(
+	const CKeyframeMap& map, const std::vector<localisation::TLocalisationUpdate>& ups, const SnapshotOptions& opts,
+	const std::string& pngPath)
+{
+	renderTrajectories(localisedViewLayers(map, ups), opts, pngPath);
 }
 
 }  // namespace shadyloc::apps

@@ -27,6 +27,14 @@ mrpt::img::TColor colourOfUsed(const std::string& used);
  * drawing is blue and orange, the localisers' colours here). */
 render::TrajectoryLayer keyframesLayer(const CKeyframeMap& map, const std::string& name);
 
+/** The name of frame `frame`'s picture in a --view folder: frame_NNNNNN.png. */
+std::string viewFileName(size_t frame);
+
+/** The layers of renderLocalisedView: the map's keyframes, the live path
+ * coloured by who held it, the latest pose's heading. */
+std::vector<render::TrajectoryLayer> localisedViewLayers(
+	const CKeyframeMap& map, const std::vector<localisation::TLocalisationUpdate>& ups);
+
 /** The live path of the updates so far where the place was known, and a
  * short arrow of the last pose's heading. Throws std::runtime_error (via
  * render::renderTrajectories) if there is nothing to draw; the PNG is written

@@ -2,6 +2,7 @@
  * with the combined system (docs/localisation.md). */
 #include "Command.h"
 #include "CommandLine.h"
+#include "LocalisedFrame.h"
 #include "LocalisedView.h"
 
 #include <shadyloc/core/ConfigLocation.h>
@@ -18,7 +19,7 @@
 #include <mrpt/config/CConfigFileMemory.h>
 
 #include <algorithm>
-#include <cstdio>
+#include <cctype>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -83,10 +84,62 @@ void writeView(const CKeyframeMap::Ptr& map, const std::vector<TLocalisationUpda
 	o.width = 800;
 	o.height = 600;
 	o.title = "frame " + std::to_string(u.frame) + ": " + (u.localised() ? u.used + " fix" : std::string("no fix"));
-	char name[32];
-	std::snprintf(name, sizeof(name), "frame_%06zu.png", u.frame);
-	apps::renderLocalisedView(*map, ups, o, (dir / "view" / name).string());
+	apps::renderLocalisedView(*map, ups, o, (dir / "view" / apps::viewFileName(u.frame)).string());
 }
+
+/** The options of --gif's pictures: --gif and its companions, --view-images
+ * (--view N's pictures made as --gif's frames), --frame-width. */
+struct TPictureArgs
+{
+	TCLAP::SwitchArg viewImages;
+	TCLAP::ValueArg<std::string> gif;
+	shadyloc::apps::NumberArg<int> gifEvery;
+	shadyloc::apps::NumberArg<double> gifFps;
+	shadyloc::apps::NumberArg<int> frameWidth;
+
+	explicit TPictureArgs(shadyloc::apps::CommandLine& cli)
+		: viewImages(
+			  "", "view-images",
+			  "with --view: the pictures are --gif's frames (each localiser's live image with its matches, above "
+			  "the top-down view)",
+			  cli.cmd()),
+		  gif("", "gif",
+			  "an animated GIF of the run: each localiser channel's live left image with its matches against the "
+			  "map (green: inliers of its solve, red: the others) above the top-down view of the map and the live "
+			  "path; written atomically, outside OUTDIR",
+			  false, "", "OUT.gif", cli.cmd()),
+		  gifEvery(cli, "", "gif-every", "with --gif: every N-th frame", 1, "N", 1, 1000000),
+		  gifFps(cli, "", "gif-fps", "with --gif: frames shown per second", 8.0, "Hz", 1.0, 50.0),
+		  frameWidth(cli, "", "frame-width", "width of --gif's frames and --view-images' pictures", 480, "px", 160, 1920)
+	{
+	}
+
+	/** --gif's companions only with it, --view-images only with --view N,
+	 * --frame-width only with either, a .gif name. */
+	void check(bool view)
+	{
+		if (!gif.isSet() && (gifEvery.isSet() || gifFps.isSet()))
+			throw std::runtime_error("--gif-every and --gif-fps go with --gif OUT.gif only");
+		if (!view && viewImages.isSet()) throw std::runtime_error("--view-images goes with --view N only");
+		if (frameWidth.isSet() && !gif.isSet() && !viewImages.isSet())
+			throw std::runtime_error("--frame-width goes with --gif or --view-images only");
+		std::string ext = fs::path(gif.getValue()).extension().string();
+		std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+		if (gif.isSet() && ext != ".gif") throw std::runtime_error("--gif: '" + gif.getValue() + "' is not a .gif file name");
+	}
+
+	/** The recorder of the pictures asked for (null: none); the GIF goes to
+	 * gifTmp, the stills to viewDir every viewEvery frames. */
+	std::unique_ptr<apps::LocalisedFrameRecorder> recorder(
+		LocalisationSystem& sys, const std::string& gifTmp, const fs::path& viewDir, int viewEvery)
+	{
+		if (!gif.isSet() && !viewImages.isSet()) return nullptr;
+		return std::make_unique<apps::LocalisedFrameRecorder>(
+			sys, apps::TFrameRecording{
+					 gifTmp, gifEvery.getValue(), gifFps.getValue(), viewDir.string(),
+					 viewImages.getValue() ? viewEvery : 0, frameWidth.getValue()});
+	}
+};
 
 /** -i or --live, and --live's companions only with it. */
 void checkLiveArguments(bool rawlog, bool live, bool camera, bool liveOnly)
@@ -224,6 +277,7 @@ int run(int argc, char** argv)
 		cli, "", "view",
 		"every N frames, a top-down picture of the map and the live path so far (offscreen) in OUTDIR/view/", 0, "N", 0,
 		1000000);
+	TPictureArgs pictureArgs(cli);
 	TCLAP::SwitchArg quiet("q", "quiet", "no progress output", cmd);
 	TCLAP::SwitchArg debug(
 		"", "debug",
@@ -235,6 +289,7 @@ int run(int argc, char** argv)
 	const std::string mapPath = mapArg.getValue(), livePath = in.isSet() ? in.getValue() : liveArg.getValue();
 	const bool live = liveArg.isSet();
 	checkLiveArguments(in.isSet(), live, cameraArg.isSet(), liveRight.isSet() || fpsArg.isSet() || realtime.isSet() || queueArg.isSet());
+	pictureArgs.check(viewArg.getValue() > 0);
 	if (!fs::exists(mapPath)) throw std::runtime_error("map '" + mapPath + "' does not exist");
 	if (!live && !fs::exists(livePath)) throw std::runtime_error("live rawlog '" + livePath + "' does not exist");
 	std::string cfgText, cfgWhat;
@@ -273,6 +328,7 @@ int run(int argc, char** argv)
 	if (gtArg.isSet()) outputs.addInput(gtArg.getValue(), "ground truth");
 	for (const auto& c : cfgArgs.getValue()) outputs.addInput(c, "config");
 	const fs::path dir = outputs.addDirectory(out.getValue(), "output folder", "shadyloc localise output");
+	const std::string gifTmp = pictureArgs.gif.isSet() ? outputs.addFile(pictureArgs.gif.getValue(), "--gif") : "";
 
 	const CKeyframeMap::Ptr map = loadMap(mapPath);
 
@@ -314,8 +370,11 @@ int run(int argc, char** argv)
 	size_t droppedShown = 0;
 	const int viewEvery = viewArg.getValue();
 	if (viewEvery > 0) fs::create_directories(dir / "view");
+	const auto pictures = pictureArgs.recorder(sys, gifTmp, dir / "view", viewEvery);
 	const auto& ups = lrun.run([&](const TLocalisationUpdate& u) {
-		if (viewEvery > 0 && u.frame % size_t(viewEvery) == 0) writeView(map, lrun.updates(), dir);
+		if (pictures) pictures->onFrame(*map, lrun.updates());
+		if (viewEvery > 0 && !pictureArgs.viewImages.getValue() && u.frame % size_t(viewEvery) == 0)
+			writeView(map, lrun.updates(), dir);
 		if (!talk || u.frame % 50 != 0) return;
 		std::cout << "frame " << u.frame << ": " << (u.localised() ? u.used : std::string("none"));
 		if (capture && capture->dropped() > droppedShown)
@@ -340,15 +399,18 @@ int run(int argc, char** argv)
 	prov.startKf = startKf.getValue();
 	if (capture) recordLiveCapture(*capture, prov);
 	eval::writeLocaliseOutputs(dir.string(), ups, ev, *map, sys.options(), prov);
+	if (pictures) pictures->finish();
 	outputs.commit();
 
 	printResult(ups, ev, gt.has_value(), capture.get(), out.getValue());
+	if (pictureArgs.gif.isSet())
+		std::cout << "gif: " << pictures->gifFrames() << " frames -> " << pictureArgs.gif.getValue() << "\n";
 	return 0;
 }
 
 shadyloc::apps::RegisterCommand reg(
 	"localise",
 	{"a live run against a keyframe map, combined system (-m MAP -i live.rawlog -o OUTDIR [-c ini] [--gt live.tum] "
-	 "[--localisers mono,invariant])",
+	 "[--localisers mono,invariant] [--view N [--view-images]] [--gif OUT.gif [--gif-every N] [--gif-fps F]])",
 	 run});
 }  // namespace

@@ -473,6 +473,17 @@ LocaliserStatus statusOf(AcceptanceVerdict v)
 	}
 	return LocaliserStatus::SolverFailed;
 }
+
+/** The correspondences' live pixels, marked where the solve kept them (a
+ * solve of another search than mo's, after a retry, marks none). */
+std::vector<TLiveMatch> liveMatchesOf(const vo::TKeyframeMatchOutput& mo, const vo::TRelativePoseOutput& po)
+{
+	const bool marked = po.inlier.size() == mo.corr.size();
+	std::vector<TLiveMatch> out(mo.corr.size());
+	for (size_t i = 0; i < out.size(); i++)
+		out[i] = {float(mo.corr[i].z_curr.x()), float(mo.corr[i].z_curr.y()), marked && po.inlier[i] != 0};
+	return out;
+}
 }  // namespace
 
 TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in)
@@ -516,6 +527,7 @@ TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in)
 	vo::TKeyframeMatchOutput mo;
 	vo::TRelativePoseOutput po;
 	const LocaliserStatus searchStatus = searchAndSolve(in, matchKf, pred, mo, po, r);
+	r.live_matches = liveMatchesOf(mo, po);
 	if (searchStatus != LocaliserStatus::Ok) return fail(searchStatus);
 	r.solved = true;
 	r.var_factor = varianceFactor(in.calib, mo.corr, po.inlier, po.T_curr_ref, solverOptionsFor(o));

@@ -73,7 +73,11 @@ void snapshotSceneToPng(
 	mrpt::opengl::COpenGLScene& scene, unsigned width, unsigned height, const std::string& pngPath,
 	const TSceneCamera& cam)
 {
-	const mrpt::img::CImage img = snapshotScene(scene, width, height, cam);
+	writePngAtomically(snapshotScene(scene, width, height, cam), pngPath);
+}
+
+void writePngAtomically(const mrpt::img::CImage& img, const std::string& pngPath)
+{
 	io::writeAtomically(pngPath, [&](const std::string& tmp) {
 		if (!img.saveToFile(tmp)) throw std::runtime_error("'" + pngPath + "': cannot write PNG");
 	});

@@ -210,22 +210,38 @@ void legendLine(mrpt::opengl::COpenGLViewport& vp, const TFraming& f, size_t li,
 	font.vfont_scale = 16;
 	vp.addTextMessage(0.01, f.top - f.lineH * double(li + 1), "-- " + text, 10 + li, font);
 }
+
+/** The legend: each drawn layer's lines, then the object layers'. */
+void drawLegend(
+	mrpt::opengl::COpenGLViewport& vp, const TFraming& f, const std::vector<TrajectoryLayer>& layers,
+	const std::vector<TObjectLayer>& objects)
+{
+	size_t li = 0;
+	for (const auto& l : layers)
+	{
+		if (l.points.size() < 2) continue;
+		if (l.legend.empty()) legendLine(vp, f, li++, l.name, l.colour);
+		for (const auto& [text, colour] : l.legend) legendLine(vp, f, li++, text, colour);
+	}
+	for (const auto& l : objects)
+		for (const auto& [text, colour] : l.legend) legendLine(vp, f, li++, text, colour);
+}
 }  // namespace
 
-void renderTrajectories(
-	const std::vector<TrajectoryLayer>& layers, const SnapshotOptions& o, const std::string& pngPath,
-	const std::vector<TObjectLayer>& objects)
+mrpt::img::CImage renderTrajectoriesImage(
+	const std::vector<TrajectoryLayer>& layers, const SnapshotOptions& o, const std::vector<TObjectLayer>& objects,
+	const std::string& what)
 {
 	std::vector<std::vector<mrpt::math::TPoint3D>> sets;
 	for (const auto& l : layers) sets.push_back(l.points);
 	for (const auto& l : objects) sets.push_back(l.extent);
 	size_t n = 0;
 	for (const auto& s : sets) n += s.size();
-	if (n < 2) throw std::runtime_error("'" + pngPath + "': nothing to draw (fewer than two points)");
+	if (n < 2) throw std::runtime_error(what + ": nothing to draw (fewer than two points)");
 	const Projection proj = chooseProjection(sets, o.upAxis);
 	size_t lines = o.title.empty() ? 0 : 1;
-	for (const auto& l : layers) lines += l.points.size() < 2 ? 0 : (l.legend.empty() ? 1 : l.legend.size());
-	for (const auto& l : objects) lines += l.legend.size();
+	for (const auto& l : layers) lines += l.points.size() < 2 || !o.legend ? 0 : (l.legend.empty() ? 1 : l.legend.size());
+	for (const auto& l : objects) lines += o.legend ? l.legend.size() : 0;
 	const TFraming f = frameContent(sets, proj, lines, o);
 
 	mrpt::opengl::COpenGLScene scene;
@@ -241,12 +257,9 @@ void renderTrajectories(
 	{
 		if (l.points.size() < 2) continue;
 		// Over the objects; later layers on top.
-		scene.insert(pathTriangles(l, proj, f.mPerPx, float(zTop + 0.01 * double(li))));
-		if (l.legend.empty()) legendLine(*vp, f, li++, l.name, l.colour);
-		for (const auto& [text, colour] : l.legend) legendLine(*vp, f, li++, text, colour);
+		scene.insert(pathTriangles(l, proj, f.mPerPx, float(zTop + 0.01 * double(li++))));
 	}
-	for (const auto& l : objects)
-		for (const auto& [text, colour] : l.legend) legendLine(*vp, f, li++, text, colour);
+	if (o.legend) drawLegend(*vp, f, layers, objects);
 	if (!o.title.empty())
 	{
 		mrpt::opengl::TFontParams font;
@@ -264,7 +277,14 @@ void renderTrajectories(
 	// In orthographic mode MRPT 2.5 shows a vertical extent of half the zoom
 	// distance (measured: a 48 m tall view at zoom 95 m).
 	cam.zoom_distance = 2.0 * f.mPerPx * o.height;
-	snapshotSceneToPng(scene, o.width, o.height, pngPath, cam);
+	return snapshotScene(scene, o.width, o.height, cam);
+}
+
+void renderTrajectories(
+	const std::vector<TrajectoryLayer>& layers, const SnapshotOptions& o, const std::string& pngPath,
+	const std::vector<TObjectLayer>& objects)
+{
+	writePngAtomically(renderTrajectoriesImage(layers, o, objects, "'" + pngPath + "'"), pngPath);
 }
 
 }  // namespace shadyloc::render

@@ -12,6 +12,7 @@
  *    localises exactly as its colour original;
  *  - `--live`: the same frames as an image sequence through OpenCV's
  *    VideoCapture localise exactly as the rawlog does; bad live input. */
+#include "../support/GifFrames.h"
 #include "../support/Sequences.h"
 #include "../support/TestSupport.h"
 
@@ -514,4 +515,50 @@ TEST(LocalisationApp, OutputFolderReplacedOnlyIfAnEarlierLocaliseOutput)
 	EXPECT_FALSE(fs::exists(again + "/stale.txt"));
 	EXPECT_TRUE(fs::is_regular_file(again + "/summary.json"));
 	expectNoStagedLeftovers(again);
+}
+
+/** Pixels of exactly this BGR colour in `img`. */
+int countColour(const cv::Mat& img, const cv::Vec3b& bgr)
+{
+	int n = 0;
+	for (auto it = img.begin<cv::Vec3b>(); it != img.end<cv::Vec3b>(); ++it) n += *it == bgr;
+	return n;
+}
+
+// --gif and --view N --view-images (issue #25, "Watch it"): the animation
+// decodes through giflib with one frame per --gif-every frames, of the
+// layout's size (two channel panels at the camera's aspect over a top-down
+// view a third as tall as wide), with inlier matches drawn; the stills are
+// the same pictures; the run's results are those of a run without pictures.
+TEST(LocalisationApp, GifAndStillsOfTheRun)
+{
+	const auto& d = dataset();
+	const std::string plain = d.dir + "/pictures_plain", withPictures = d.dir + "/pictures_out", gif = d.dir + "/run.gif";
+	std::string out;
+	ASSERT_EQ(test::runCommand(localiseCmd(d.map, d.overcast, plain), &out), 0) << out;
+	ASSERT_EQ(
+		test::runCommand(
+			localiseCmd(d.map, d.overcast, withPictures, " --gif " + gif + " --gif-every 3 --frame-width 320 --view 10 --view-images"),
+			&out),
+		0)
+		<< out;
+	EXPECT_EQ(test::fileContents(withPictures + "/frames.csv"), test::fileContents(plain + "/frames.csv"));
+	const auto g = test::decodeGif(gif);
+	EXPECT_EQ(g.frames.size(), size_t((test::kSimFixtureFrames + 2) / 3)) << out;
+	EXPECT_EQ(g.width, 320);
+	EXPECT_EQ(g.height, 120 + 107);
+	EXPECT_TRUE(g.loops);
+	EXPECT_EQ(g.delays.front(), 13);  // 8 frames per second
+	// The last frame's channel panels (the top 120 rows) show inliers.
+	const cv::Vec3b inlierGreen(0, 204, 0);
+	EXPECT_GT(countColour(g.frames.back()(cv::Rect(0, 0, 160, 120)), inlierGreen), 20);
+	EXPECT_GT(countColour(g.frames.back()(cv::Rect(160, 0, 160, 120)), inlierGreen), 20);
+	for (const char* f : {"frame_000000.png", "frame_000010.png", "frame_000020.png"})
+	{
+		const cv::Mat png = cv::imread(withPictures + "/view/" + f);
+		EXPECT_EQ(png.cols, 320) << f;
+		EXPECT_EQ(png.rows, 227) << f;
+	}
+	EXPECT_FALSE(fs::exists(withPictures + "/view/frame_000001.png"));
+	expectNoStagedLeftovers(gif);
 }

@@ -258,6 +258,13 @@ enum class LocaliserStatus
 };
 std::string toString(LocaliserStatus s);
 
+/** A correspondence's live measurement, as a picture of the frame draws it. */
+struct TLiveMatch
+{
+	float u = 0, v = 0;	 //!< in the live left image [px]
+	bool inlier = false;  //!< kept by the final solve
+};
+
 /** One localiser's result for one frame (shaped like MOLA's localisation
  * update: timestamp, reference, relative pose, covariance, quality). */
 struct TLocaliserResult
@@ -298,6 +305,9 @@ struct TLocaliserResult
 	int consistent = 0;	 //!< consecutive consistent frames so far
 	vo::TGateStats gate;
 	double ms = 0;	//!< time of this localiser on this frame [ms]
+	/** The last search's correspondences, inliers of its solve marked (none
+	 * without a search): what `shadyloc localise --gif` draws. */
+	std::vector<TLiveMatch> live_matches;
 };
 
 /** A place found by the global search. */

@@ -44,4 +44,7 @@ void snapshotSceneToPng(
 	mrpt::opengl::COpenGLScene& scene, unsigned width, unsigned height, const std::string& pngPath,
 	const TSceneCamera& cam = {});
 
+/** An image written to a PNG atomically; throws naming the file. */
+void writePngAtomically(const mrpt::img::CImage& img, const std::string& pngPath);
+
 }  // namespace shadyloc::render

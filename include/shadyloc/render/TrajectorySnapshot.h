@@ -3,6 +3,7 @@
  * (render/SceneSnapshot.h: CFBORender, EGL/Mesa, no window system needed). */
 #pragma once
 
+#include <mrpt/img/CImage.h>
 #include <mrpt/img/TColor.h>
 #include <mrpt/math/TPoint3D.h>
 #include <mrpt/opengl/CSetOfObjects.h>
@@ -59,6 +60,9 @@ struct SnapshotOptions
 	double marginFraction = 0.08;  //!< empty border around the paths
 	bool grid = true;  //!< a metric grid under the paths
 	std::string title;	//!< text at the top left
+	/** The legend lines under the title (off: the picture alone, e.g. a
+	 * small frame captioned by its own means). */
+	bool legend = true;
 	/** Keep the band the title and legend take at the top free of content
 	 * (the view frames the content in the rest of the picture). */
 	bool legendBand = true;
@@ -72,5 +76,11 @@ struct SnapshotOptions
 void renderTrajectories(
 	const std::vector<TrajectoryLayer>& layers, const SnapshotOptions& opts, const std::string& pngPath,
 	const std::vector<TObjectLayer>& objects = {});
+
+/** The same picture as an image (e.g. a frame of an animation); `what`
+ * names it in errors. */
+mrpt::img::CImage renderTrajectoriesImage(
+	const std::vector<TrajectoryLayer>& layers, const SnapshotOptions& opts, const std::vector<TObjectLayer>& objects,
+	const std::string& what);
 
 }  // namespace shadyloc::render
