@@ -57,7 +57,9 @@ TPoseSolution solveStereoPoseTwoView(
 	};
 	// w A^T diag(1, 1, 1 - uRcut) B (w: Huber weight / sigma_px^2).
 	const auto weighted = [&](double w, const auto& A, const auto& B) {
-		return ((w * A.transpose() * B).eval() - ((w * uRcut) * A.row(2).transpose() * B.row(2)).eval()).eval();
+		auto out = (w * A.transpose() * B).eval();
+		if (uRcut > 0) out -= (w * uRcut) * A.row(2).transpose() * B.row(2);
+		return out;
 	};
 	std::vector<TLandmarkBlock> L;
 	L.reserve(c.size());
