@@ -23,32 +23,49 @@ std::string fmt(double v, int prec)
 	return s.str();
 }
 
-/** Sums of clamped |steps| of I across the lines of each phase (mod 16):
- * phase q is the line between pixels q-1 and q. */
-struct TPhaseSums
+/** Mean clamped |step| of I across each line of an image: lines[q] is the
+ * line between columns (or rows) q-1 and q, for q in [1, size). */
+std::vector<double> lineSteps(const cv::Mat& I, bool columns)
 {
-	std::array<double, kGridPeriod> sum{};
-	std::array<double, kGridPeriod> count{};
-	void add(int phase, float a, float b)
-	{
-		sum[size_t(phase)] += std::min(double(std::abs(a - b)), kMaxStep);
-		count[size_t(phase)] += 1;
-	}
-	double mean(int phase) const { return count[size_t(phase)] > 0 ? sum[size_t(phase)] / count[size_t(phase)] : 0; }
-};
-
-void addStepsOf(const cv::Mat& I, TPhaseSums& s)
-{
+	const int n = columns ? I.cols : I.rows, along = columns ? I.rows : I.cols;
+	std::vector<double> lines(size_t(n), 0.0);
 	for (int y = 0; y < I.rows; y++)
 	{
 		const float* row = I.ptr<float>(y);
-		const float* below = y + 1 < I.rows ? I.ptr<float>(y + 1) : nullptr;
+		const float* above = y > 0 ? I.ptr<float>(y - 1) : nullptr;
 		for (int x = 0; x < I.cols; x++)
 		{
-			if (x + 1 < I.cols) s.add((x + 1) % kGridPeriod, row[x + 1], row[x]);
-			if (below) s.add((y + 1) % kGridPeriod, below[x], row[x]);
+			if (columns && x > 0) lines[size_t(x)] += std::min(double(std::abs(row[x] - row[x - 1])), kMaxStep);
+			if (!columns && above) lines[size_t(y)] += std::min(double(std::abs(row[x] - above[x])), kMaxStep);
 		}
 	}
+	for (auto& l : lines) l /= along;
+	return lines;
+}
+
+/** For every line at phase `phase` (mod 16) with 7 lines on each side: its
+ * step over the mean step of the lines around it (within 8,
+ * none at a multiple of 8). Per line, so that a scene edge that happens to
+ * lie on the grid moves one ratio, not the figure: JPEG blocks raise them all. */
+void addLineRatios(const std::vector<double>& lines, int phase, std::vector<double>& ratios)
+{
+	// Line 0 is the image's edge: the first line of the phase is the one at 8 or 16.
+	for (size_t at = size_t(phase > 0 ? phase : kGridPeriod); at + 8 <= lines.size(); at += kGridPeriod)
+	{
+		double around = 0;
+		int n = 0;
+		for (size_t k = at - 7; k <= at + 7; k++)
+			if (k % 8 != 0) around += lines[k], n++;
+		around /= n;
+		if (around > 1e-6) ratios.push_back(lines[at] / around);
+	}
+}
+
+double median(std::vector<double> v)
+{
+	if (v.empty()) return 1.0;
+	std::nth_element(v.begin(), v.begin() + long(v.size() / 2), v.end());
+	return v[v.size() / 2];
 }
 
 /** The float invariant I of an 8-bit colour image through one log table per code. */
@@ -88,15 +105,16 @@ void judgeGrid(const TSuitabilityEvidence& e, const TSuitabilityLimits& l, TSuit
 	if (!e.gridMeasured) return;
 	const double g = std::max(e.grid.ratio16, e.grid.ratio8);
 	v.checks.push_back(
-		"block grid in the invariant: steps across 16-px lines x" + fmt(e.grid.ratio16, 2) + ", across 8-px lines x" +
-		fmt(e.grid.ratio8, 2) + " the others' (1 = none; doubtful from " + fmt(l.gridDoubtful, 2) + ", unsuitable from " +
-		fmt(l.gridUnsuitable, 2) + ")");
+		"block grid in the invariant: the step across a 16-px line is x" + fmt(e.grid.ratio16, 2) +
+		" the steps around it, across an 8-px line x" + fmt(e.grid.ratio8, 2) + " (medians over the lines; 1 = none; " +
+		"doubtful from " + fmt(l.gridDoubtful, 2) + ", unsuitable from " + fmt(l.gridUnsuitable, 2) + ")");
 	const auto sev = against(g, l.gridDoubtful, l.gridUnsuitable);
 	if (sev != Suitability::Suitable)
 		v.add(
 			"block-grid", sev,
-			"the invariant shows a JPEG block grid (steps across the 16-px lines x" + fmt(e.grid.ratio16, 2) +
-				" the others'): features pile up on it; lossless or raw images, or chroma_handling = prefilter");
+			"the invariant shows a JPEG block grid (steps across its lines x" + fmt(g, 2) +
+				" those around them): features pile up on it; use lossless or raw images (chroma_handling = prefilter "
+				"removes the grid, not the loss)");
 }
 
 void judgeSubsampling(const TSuitabilityEvidence& e, TSuitabilityVerdict& v)
@@ -179,25 +197,20 @@ TBlockGrid blockGridOf(const std::vector<cv::Mat>& images, const InvariantParams
 	p.validate();
 	std::array<float, 256> L{};
 	for (int v = 0; v < 256; v++) L[size_t(v)] = float(std::log(linearise(v, p.linearisation, p.gamma)));
-	TPhaseSums s;
+	std::vector<double> at16, at8;
 	for (const auto& img : images)
 	{
 		if (img.type() != CV_8UC3) throw std::invalid_argument("block grid: needs 8-bit colour images");
-		cv::Mat colour = chromaInput(img, p);
-		cv::Mat I = invariantOf(colour, p, L);
+		cv::Mat I = invariantOf(chromaInput(img, p), p, L);
 		chromaToInputSize(I, img.size(), p);
-		addStepsOf(I, s);
+		for (const bool columns : {true, false})
+		{
+			const auto lines = lineSteps(I, columns);
+			addLineRatios(lines, 0, at16);
+			addLineRatios(lines, 8, at8);
+		}
 	}
-	double others = 0;
-	int n = 0;
-	for (int q = 0; q < kGridPeriod; q++)
-		if (q % 8 != 0) others += s.mean(q), n++;
-	others /= n;
-	TBlockGrid g;
-	if (!(others > 0)) return g;  // flat images: no grid to see
-	g.ratio16 = s.mean(0) / others;
-	g.ratio8 = s.mean(8) / others;
-	return g;
+	return {median(at16), median(at8)};
 }
 
 double saturatedShare(const std::vector<cv::Mat>& images, const TCalibrationInput& in)

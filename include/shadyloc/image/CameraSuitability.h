@@ -20,11 +20,14 @@
 
 namespace shadyloc::image
 {
-/** How strongly the invariant shows a JPEG block grid: the mean |step| of
- * I (log units, clamped at 0.5 so that a few strong edges do not decide)
- * across the lines between pixels 16k-1 and 16k (4:2:0 chroma blocks) and
- * across those at odd multiples of 8 (luma blocks), each over the mean
- * |step| across every other line, rows and columns pooled. 1 = no grid. */
+/** How strongly the invariant shows a JPEG block grid. Per line between
+ * pixels 16k-1 and 16k (4:2:0 chroma blocks), rows and columns: the mean
+ * |step| of I across it (log units, clamped at 0.5 so that a few strong
+ * edges do not decide) over the mean across the lines within 8 px that lie
+ * on no multiple of 8; ratio16 is the median of those ratios over every line
+ * of every image, ratio8 the same for the lines at odd multiples of 8
+ * (luma blocks). Per line and the median: a scene edge that happens to lie
+ * on the grid moves one ratio, while JPEG blocks raise them all. 1 = no grid. */
 struct TBlockGrid
 {
 	double ratio16 = 1, ratio8 = 1;
@@ -67,11 +70,12 @@ std::string toString(Suitability s);  //!< "suitable" | "doubtful" | "unsuitable
 /** Where a verdict turns: each limit is argued in docs/calibration.md. */
 struct TSuitabilityLimits
 {
-	/** Block grid ratio: the simulator's linear frames measure 0.95-1.05
-	 * per frame, the UIUC JPEGs 1.3-5.7. */
+	/** Block grid ratio: the simulator's linear frames measure 0.98-0.99,
+	 * the same frames as JPEG 1.40 (quality 90) and 1.58 (75), the UIUC
+	 * JPEGs 2.72. */
 	double gridDoubtful = 1.15, gridUnsuitable = 1.5;
 	/** Share of saturated pixels: the simulator's frames (blown sky and
-	 * sunlit walls) reach 29 %; beyond a third the channel is undefined on
+	 * sunlit walls) have 16-25 %, and suit the channel; beyond a third the channel is undefined on
 	 * much of the image, beyond half on most of it. */
 	double clippedDoubtful = 1.0 / 3.0, clippedUnsuitable = 0.5;
 	/** The stated curve's drift over the other's: the data follow the other
