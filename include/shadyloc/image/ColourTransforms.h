@@ -150,7 +150,7 @@ struct InvariantParams
 	 * alpha and beta, or peak_wavelength_{blue,green,red}_nm (then beta =
 	 * 1 - alpha), channel_order, linearisation, gamma, scale and offset
 	 * (absent: defaultOffset() of the new alpha, beta), knee_low, knee_high,
-	 * tail_slope_low, tail_slope_high. Absent keys keep their
+	 * tail_slope_low, tail_slope_high, chroma_handling, chroma_sigma_px. Absent keys keep their
 	 * values; validates. Declares its keys known in `s`; the caller finishes it. */
 	void readFrom(core::SettingsSection& s);
 	/** Writes every key readFrom() reads back to these exact values. */
