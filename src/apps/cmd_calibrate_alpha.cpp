@@ -5,6 +5,7 @@
 
 #include <shadyloc/eval/Figures.h>
 #include <shadyloc/filters/Filters.h>
+#include <shadyloc/image/CameraSuitability.h>
 #include <shadyloc/image/InvariantCalibration.h>
 #include <shadyloc/io/ImageFile.h>
 #include <shadyloc/io/OutputTransaction.h>
@@ -56,14 +57,21 @@ bool isImageFile(const fs::path& p)
 	return e == ".png" || e == ".jpg" || e == ".jpeg" || e == ".ppm" || e == ".bmp" || e == ".tif" || e == ".tiff";
 }
 
-/** <stem>_free.<ext> with <stem>_shadow*.<ext> beside it. */
-std::vector<TShadowPair> pairsInDir(const std::string& dir)
+/** The image files of a folder, sorted. */
+std::vector<fs::path> imageFilesIn(const std::string& dir)
 {
-	if (!fs::is_directory(dir)) throw std::runtime_error("--pairs '" + dir + "': not a directory");
 	std::vector<fs::path> files;
 	for (const auto& e : fs::directory_iterator(dir))
 		if (e.is_regular_file() && isImageFile(e.path())) files.push_back(e.path());
 	std::sort(files.begin(), files.end());
+	return files;
+}
+
+/** <stem>_free.<ext> with <stem>_shadow*.<ext> beside it. */
+std::vector<TShadowPair> pairsInDir(const std::string& dir)
+{
+	if (!fs::is_directory(dir)) throw std::runtime_error("--pairs '" + dir + "': not a directory");
+	const std::vector<fs::path> files = imageFilesIn(dir);
 	const std::regex re("(.+)_shadow[^.]*");
 	std::vector<TShadowPair> pairs;
 	for (const auto& f : files)
@@ -244,10 +252,7 @@ struct TInputs
 std::vector<cv::Mat> imagesOfDir(const std::string& dir)
 {
 	if (!fs::is_directory(dir)) throw std::runtime_error("--images '" + dir + "': not a directory");
-	std::vector<fs::path> files;
-	for (const auto& e : fs::directory_iterator(dir))
-		if (e.is_regular_file() && isImageFile(e.path())) files.push_back(e.path());
-	std::sort(files.begin(), files.end());
+	const std::vector<fs::path> files = imageFilesIn(dir);
 	if (files.empty()) throw std::runtime_error("--images '" + dir + "': no image files");
 	std::vector<cv::Mat> out;
 	for (const auto& f : files) out.push_back(readColour(f.string()));
@@ -318,6 +323,56 @@ TInputs readInputs(const TInputArgs& a, const TCalibrationInput& in)
 	return out;
 }
 
+/** Every image file the command line names, folders listed: what the JPEG
+ * header check reads (rawlog frames have no file of their own). */
+std::vector<std::string> imageFilesGiven(const TInputArgs& a)
+{
+	std::vector<std::string> out;
+	for (const auto* dir : {&a.pairsDir, &a.imagesDir})
+		if (!dir->empty())
+			for (const auto& f : imageFilesIn(*dir)) out.push_back(f.string());
+	for (const auto& [opt, list] : {std::pair{"--pair", &a.pairs}, {"--same-view", &a.sameView}})
+		for (const auto& s : *list)
+		{
+			const auto [x, y] = splitComma(s, opt);
+			out.push_back(x), out.push_back(y);
+		}
+	out.insert(out.end(), a.images.begin(), a.images.end());
+	return out;
+}
+
+/** The suitability verdict (CameraSuitability.h) on the images at p's alpha and beta. */
+TSuitabilityVerdict judgeInputs(
+	const TInputArgs& a, const TInputs& data, const std::vector<cv::Mat>& all, const TCalibrationInput& in,
+	const InvariantParams& p, const std::vector<TAlphaCurve>& curves, const TAlphaCurve* chosen,
+	const TAlphaSearch& search)
+{
+	TSuitabilityEvidence e;
+	e.gridMeasured = true;
+	e.grid = blockGridOf(all, p);
+	e.saturated = saturatedShare(all, in);
+	if (!data.shadowPairs.empty()) e.tone = toneCurveDrifts(data.shadowPairs, in);
+	for (const auto& f : imageFilesGiven(a))
+	{
+		const std::string sub = jpegChromaSubsampling(f);
+		if (sub.empty()) continue;
+		e.jpegFiles++;
+		if (sub != "4:4:4") e.subsampledFiles.push_back(fs::path(f).filename().string() + " " + sub);
+	}
+	e.curves = curves;
+	e.chosenMethod = chosen ? chosen->method : "";
+	e.search = search;
+	return judgeSuitability(e);
+}
+
+void printSuitability(const TSuitabilityVerdict& v)
+{
+	std::cout << "\nsuitability of these images for the invariant channel (docs/calibration.md):\n";
+	for (const auto& c : v.checks) std::cout << "  " << c << "\n";
+	for (const auto& r : v.reasons)
+		std::cout << "reason: " << r.code << " (" << toString(r.severity) << "): " << r.text << "\n";
+}
+
 /** Every method's curve that has data; the first is the preferred one (auto). */
 std::vector<TAlphaCurve> estimateCurves(
 	const TInputs& data, const std::vector<cv::Mat>& all, const TCalibrationInput& in, const TAlphaSearch& search,
@@ -370,14 +425,18 @@ std::string mappingShape(const InvariantParams& p, double minSpan)
  * mapping at the same alpha and beta and the paper's; returns p's. */
 TMappingStats reportMapping(
 	const std::vector<cv::Mat>& all, const InvariantParams& p, const InvariantParams& pDefault,
-	const TCalibrationInput& in, double minSpan)
+	const TCalibrationInput& in, double minSpan, Suitability verdict)
 {
 	const auto stCal = mappingStats(all, p, in.stride);
 	const auto stDef = mappingStats(all, pDefault, in.stride);
 	auto pPaper = InvariantParams::FromAlphaBeta(0.4800, 0.5065);
 	pPaper.order = in.order, pPaper.linearisation = in.linearisation, pPaper.gamma = in.gamma;
 	const auto stPaper = mappingStats(all, pPaper, in.stride);
-	std::cout << "\nresult: alpha = " << fmt(p.alpha) << ", beta = 1 - alpha = " << fmt(p.beta)
+	// Never a confident number from data that do not suit the model.
+	std::cout << (verdict == Suitability::Suitable
+					  ? "\nresult: alpha = "
+					  : "\nresult, NOT a confident estimate (verdict " + toString(verdict) + ", reasons above): alpha = ")
+			  << fmt(p.alpha) << ", beta = 1 - alpha = " << fmt(p.beta)
 			  << "\n  wavelength form: 1/l2 = alpha/l1 + beta/l3, e.g. green peak "
 			  << fmt(equivalentGreenPeak(p.alpha, 470, 620), 1) << " nm for blue 470 / red 620 nm"
 			  << "\n  8-bit mapping: scale = " << fmt(p.scale, 3) << " grey levels per log unit, offset = "
@@ -398,7 +457,8 @@ TMappingStats reportMapping(
 
 /** OUT.ini: an [invariant] section, with where its values came from. */
 std::string iniText(
-	const InvariantParams& p, const TAlphaCurve* chosen, const TCalibrationInput& in, size_t images, double clipped)
+	const InvariantParams& p, const TAlphaCurve* chosen, const TCalibrationInput& in, size_t images, double clipped,
+	const TSuitabilityVerdict& verdict)
 {
 	shadyloc::CFilterInvariant filter;
 	filter.setParams(p);
@@ -412,6 +472,10 @@ std::string iniText(
 			<< images << " images.\n";
 	ini << "# Input linearisation: " << toString(in.linearisation)
 		<< ". Clipping over the calibration images: " << fmt(100 * clipped, 2) << " %.\n"
+		<< "# Suitability verdict: " << toString(verdict.verdict);
+	for (const auto& r : verdict.reasons) ini << (&r == &verdict.reasons.front() ? " (" : ", ") << r.code;
+	ini << (verdict.reasons.empty() ? "" : ")")
+		<< (verdict.verdict == Suitability::Suitable ? ".\n" : ": not a confident calibration.\n")
 		<< "# The 8-bit mapping (scale, offset, knees, tail slopes) defines the descriptors: keep it equal for map "
 		   "and live data.\n"
 		<< "[invariant]\n"
@@ -442,7 +506,9 @@ int run(int argc, char** argv)
 		"from shadow/no-shadow pairs, from same-view pairs under different light, from two runs of one route under "
 		"different light, or unsupervised from ordinary "
 		"images/a rawlog (entropy minimisation); then the 8-bit mapping (scale, offset). Writes OUT.ini (an "
-		"[invariant] section for config/filters.ini), OUT_curve.csv and OUT_curve.png.");
+		"[invariant] section for config/filters.ini), OUT_curve.csv and OUT_curve.png. Says whether the images suit the "
+		"invariant channel (JPEG block grid, chroma subsampling, clipping, estimates at a search bound or apart): last "
+		"line 'verdict: suitable|doubtful|unsuitable', exit status 0, 3 or 4 (docs/calibration.md).");
 	auto& cmd = cli.cmd();
 	TCLAP::ValueArg<std::string> pairsDir(
 		"", "pairs", "directory of <name>_free.<ext> / <name>_shadow*.<ext> pairs of one view", false, "", "dir", cmd);
@@ -550,11 +616,11 @@ int run(int argc, char** argv)
 	const std::string csvTmp = withCurve ? outputs.addFile(csvPath, "-o (curve csv)") : "";
 	const std::string pngTmp = withCurve && !noPlot.getValue() ? outputs.addFile(pngPath, "-o (curve png)") : "";
 
-	const TInputs data = readInputs(
-		{pairsDir.isSet() ? pairsDir.getValue() : "", pair.getValue(), sameView.getValue(), runs.getValue(),
-		 images.getValue(), imagesDir.isSet() ? imagesDir.getValue() : "", rawlog.getValue(), sensor.getValue(),
-		 maxFrames.getValue(), every.getValue()},
-		in);
+	const TInputArgs inputArgs{
+		pairsDir.isSet() ? pairsDir.getValue() : "", pair.getValue(), sameView.getValue(), runs.getValue(),
+		images.getValue(), imagesDir.isSet() ? imagesDir.getValue() : "", rawlog.getValue(), sensor.getValue(),
+		maxFrames.getValue(), every.getValue()};
+	const TInputs data = readInputs(inputArgs, in);
 	std::cout << "input: linearisation " << toString(in.linearisation)
 			  << (in.linearisation == Linearisation::Gamma ? " (gamma " + fmt(in.gamma, 2) + ")" : "")
 			  << ", channel order " << toString(in.order) << "; " << data.shadowPairs.size() << " shadow pair(s), "
@@ -579,13 +645,17 @@ int run(int argc, char** argv)
 		p = in.params(chosen->best);
 	}
 
+	// ---- suitability
+	const TSuitabilityVerdict verdict = judgeInputs(inputArgs, data, all, in, p, curves, chosen, search);
+	printSuitability(verdict);
+
 	// ---- mapping
 	const InvariantParams pDefault = p;	 // the default mapping at the same alpha and beta
 	p = calibrateMapping(all, p, tail.getValue(), in.stride, minSpan.getValue());
-	const auto stCal = reportMapping(all, p, pDefault, in, minSpan.getValue());
+	const auto stCal = reportMapping(all, p, pDefault, in, minSpan.getValue(), verdict.verdict);
 
 	// ---- outputs
-	const std::string ini = iniText(p, chosen, in, all.size(), stCal.clipped());
+	const std::string ini = iniText(p, chosen, in, all.size(), stCal.clipped(), verdict);
 	writeText(iniTmp, ini);
 	if (withCurve)
 	{
@@ -597,7 +667,9 @@ int run(int argc, char** argv)
 	outputs.commit();
 	std::cout << "\nwrote " << iniPath << (withCurve ? ", " + csvPath : "")
 			  << (withCurve && !noPlot.getValue() ? ", " + pngPath : "") << "\n\n" << ini;
-	return 0;
+	// Machine-readable: this last line, and the exit status (0 suitable, 3 doubtful, 4 unsuitable).
+	std::cout << "\nverdict: " << toString(verdict.verdict) << "\n";
+	return verdict.exitCode();
 }
 shadyloc::apps::RegisterCommand reg(
 	"calibrate-alpha",

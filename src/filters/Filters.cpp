@@ -127,18 +127,22 @@ std::vector<std::string> CFilterInvariant::keysNotDecidingImages() const
 	if (m_params.linearisation != image::Linearisation::Gamma) out.push_back("gamma");
 	if (!m_params.hasCompressedTails())
 		out.insert(out.end(), {"knee_low", "knee_high", "tail_slope_low", "tail_slope_high"});
+	// As for the tails: maps made before the chroma handling keep their recorded text.
+	if (m_params.chroma_handling == image::ChromaHandling::None) out.push_back("chroma_handling");
+	if (m_params.chroma_handling != image::ChromaHandling::Prefilter) out.push_back("chroma_sigma_px");
 	return out;
 }
 
-// 0: no compressed tails; 1: knees and tail slopes after parallel_eyes.
-uint8_t CFilterInvariant::serializeGetVersion() const { return 1; }
+// 0: no compressed tails; 1: knees and tail slopes after parallel_eyes;
+// 2: chroma handling and its sigma after the tail slopes.
+uint8_t CFilterInvariant::serializeGetVersion() const { return 2; }
 void CFilterInvariant::serializeTo(mrpt::serialization::CArchive& out) const
 {
 	serializeCommon(out);
 	out << m_params.alpha << m_params.beta << static_cast<uint8_t>(m_params.order)
 		<< static_cast<uint8_t>(m_params.linearisation) << m_params.gamma << m_params.scale
 		<< m_params.offset << parallel_eyes << m_params.knee_low << m_params.knee_high << m_params.tail_slope_low
-		<< m_params.tail_slope_high;
+		<< m_params.tail_slope_high << static_cast<uint8_t>(m_params.chroma_handling) << m_params.chroma_sigma_px;
 }
 void CFilterInvariant::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version)
 {
@@ -146,6 +150,7 @@ void CFilterInvariant::serializeFrom(mrpt::serialization::CArchive& in, uint8_t 
 	{
 		case 0:
 		case 1:
+		case 2:
 		{
 			auto r = boundedReader(in, version);
 			deserializeCommon(r);
@@ -164,6 +169,11 @@ void CFilterInvariant::serializeFrom(mrpt::serialization::CArchive& in, uint8_t 
 				r.read(p.knee_high, "knee_high");
 				r.read(p.tail_slope_low, "tail_slope_low");
 				r.read(p.tail_slope_high, "tail_slope_high");
+			}
+			if (version >= 2)
+			{
+				p.chroma_handling = readEnum(r, "chroma_handling", image::ChromaHandling::ChromaResolution);
+				r.read(p.chroma_sigma_px, "chroma_sigma_px");
 			}
 			try
 			{

@@ -58,6 +58,13 @@ Linearisation parseLinearisation(const std::string& s)
 	throw std::invalid_argument("linearisation must be 'none', 'srgb' or 'gamma', got '" + s + "'");
 }
 
+std::string toString(ChromaHandling c)
+{
+	for (const auto& [name, value] : chromaHandlingNames())
+		if (value == c) return name;
+	return "?";
+}
+
 std::string toString(ChannelOrder o) { return o == ChannelOrder::BGR ? "bgr" : "rgb"; }
 std::string toString(Linearisation l)
 {
@@ -110,6 +117,8 @@ std::string InvariantParams::asString() const
 	  << " linearisation=" << toString(linearisation);
 	if (linearisation == Linearisation::Gamma) s << " gamma=" << gamma;
 	s << " scale=" << scale << " offset=" << offset;
+	if (chroma_handling != ChromaHandling::None) s << " chroma_handling=" << toString(chroma_handling);
+	if (chroma_handling == ChromaHandling::Prefilter) s << " chroma_sigma_px=" << chroma_sigma_px;
 	if (hasCompressedTails())
 		s << " knee_low=" << knee_low << " knee_high=" << knee_high << " tail_slope_low=" << tail_slope_low
 		  << " tail_slope_high=" << tail_slope_high;
@@ -121,7 +130,9 @@ bool InvariantParams::sameImageAs(const InvariantParams& o) const
 	const auto eq = [](double a, double b) { return std::abs(a - b) <= 1e-9; };
 	return eq(alpha, o.alpha) && eq(beta, o.beta) && order == o.order && linearisation == o.linearisation &&
 		   (linearisation != Linearisation::Gamma || eq(gamma, o.gamma)) && eq(scale, o.scale) &&
-		   eq(offset, o.offset) && hasCompressedTails() == o.hasCompressedTails() &&
+		   eq(offset, o.offset) && chroma_handling == o.chroma_handling &&
+		   (chroma_handling != ChromaHandling::Prefilter || eq(chroma_sigma_px, o.chroma_sigma_px)) &&
+		   hasCompressedTails() == o.hasCompressedTails() &&
 		   (!hasCompressedTails() || (eq(knee_low, o.knee_low) && eq(knee_high, o.knee_high) &&
 									  eq(tail_slope_low, o.tail_slope_low) && eq(tail_slope_high, o.tail_slope_high)));
 }
@@ -139,10 +150,38 @@ double linearise(int code, Linearisation lin, double gamma)
 	return v;
 }
 
-cv::Mat invariantReferenceFloat(const cv::Mat& colour8, const InvariantParams& p)
+cv::Mat chromaInput(const cv::Mat& colour8, const InvariantParams& p)
 {
-	requireColour8(colour8, "invariant (reference)");
+	cv::Mat out;
+	switch (p.chroma_handling)
+	{
+		case ChromaHandling::None: return colour8;
+		case ChromaHandling::Prefilter: cv::GaussianBlur(colour8, out, cv::Size(), p.chroma_sigma_px); return out;
+		case ChromaHandling::ChromaResolution:
+			// INTER_AREA at exactly half is the 2x2 mean: one value per 4:2:0 chroma sample.
+			cv::resize(colour8, out, cv::Size((colour8.cols + 1) / 2, (colour8.rows + 1) / 2), 0, 0, cv::INTER_AREA);
+			return out;
+	}
+	return colour8;
+}
+
+void chromaToInputSize(cv::Mat& invariant, const cv::Size& inputSize, const InvariantParams& p)
+{
+	if (p.chroma_handling != ChromaHandling::ChromaResolution) return;
+	cv::Mat full;
+	cv::resize(invariant, full, inputSize, 0, 0, cv::INTER_LINEAR);
+	invariant = full;
+}
+
+namespace
+{
+/** The reference float invariant of the image the logarithm sees
+ * (chromaInput()): half size with chroma_resolution. */
+cv::Mat referenceFloatOfChromaInput(const cv::Mat& colour8In, const InvariantParams& p)
+{
+	requireColour8(colour8In, "invariant (reference)");
 	p.validate();
+	const cv::Mat colour8 = chromaInput(colour8In, p);
 	const auto ci = indices(p.order);
 	cv::Mat out(colour8.size(), CV_32F);
 	for (int y = 0; y < colour8.rows; y++)
@@ -159,10 +198,18 @@ cv::Mat invariantReferenceFloat(const cv::Mat& colour8, const InvariantParams& p
 	}
 	return out;
 }
+}  // namespace
+
+cv::Mat invariantReferenceFloat(const cv::Mat& colour8, const InvariantParams& p)
+{
+	cv::Mat out = referenceFloatOfChromaInput(colour8, p);
+	chromaToInputSize(out, colour8.size(), p);
+	return out;
+}
 
 cv::Mat invariantReference8(const cv::Mat& colour8, const InvariantParams& p)
 {
-	const cv::Mat f = invariantReferenceFloat(colour8, p);
+	const cv::Mat f = referenceFloatOfChromaInput(colour8, p);
 	cv::Mat out(f.size(), CV_8U);
 	for (int y = 0; y < f.rows; y++)
 	{
@@ -171,6 +218,9 @@ cv::Mat invariantReference8(const cv::Mat& colour8, const InvariantParams& p)
 		for (int x = 0; x < f.cols; x++)
 			o[x] = cv::saturate_cast<uint8_t>(std::lround(p.toGrey(double(in[x]))));
 	}
+	// Upsampled after the 8-bit mapping, as the fast path does: interpolating
+	// values beyond [0, 255] before clamping would make other images.
+	chromaToInputSize(out, colour8.size(), p);
 	return out;
 }
 
@@ -251,15 +301,17 @@ void InvariantTransform::applyRows(const cv::Mat& colour8, cv::Mat& out8) const
 	}
 }
 
-void InvariantTransform::apply(const cv::Mat& colour8, cv::Mat& out8) const
+void InvariantTransform::apply(const cv::Mat& colour8In, cv::Mat& out8) const
 {
-	requireColour8(colour8, "invariant");
+	requireColour8(colour8In, "invariant");
+	const cv::Mat colour8 = chromaInput(colour8In, m_params);
 	out8.create(colour8.size(), CV_8U);
 	// The linear mapping keeps the plain loop (the common case, and the benchmarked one).
 	if (m_params.hasCompressedTails())
 		applyRows<true>(colour8, out8);
 	else
 		applyRows<false>(colour8, out8);
+	chromaToInputSize(out8, colour8In.size(), m_params);
 }
 
 void InvariantTransform::applyPair(

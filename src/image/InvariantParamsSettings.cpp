@@ -21,6 +21,15 @@ const std::vector<std::pair<std::string, Linearisation>>& linearisationNames()
 	return names;
 }
 
+const std::vector<std::pair<std::string, ChromaHandling>>& chromaHandlingNames()
+{
+	static const std::vector<std::pair<std::string, ChromaHandling>> names = {
+		{"none", ChromaHandling::None},
+		{"prefilter", ChromaHandling::Prefilter},
+		{"chroma_resolution", ChromaHandling::ChromaResolution}};
+	return names;
+}
+
 void InvariantParams::readFrom(core::SettingsSection& s)
 {
 	InvariantParams p = *this;
@@ -78,6 +87,12 @@ void InvariantParams::keys(core::KeyVisitor& v)
 	v("knee_high", knee_high, "", Range::closed(0, 255), "");
 	v("tail_slope_low", tail_slope_low, "", Range::openClosed(0, 1), "");
 	v("tail_slope_high", tail_slope_high, "", Range::openClosed(0, 1), "");
+	v.choice(
+		"chroma_handling", chroma_handling, chromaHandlingNames(),
+		"chroma subsampled input (JPEG 4:2:0): none | prefilter (Gaussian low-pass before the log) | "
+		"chroma_resolution (the invariant of the 2x2 mean, upsampled)");
+	// Above 8 px the low-pass takes more texture than the 16-px block grid it is for.
+	v("chroma_sigma_px", chroma_sigma_px, "px", Range::openClosed(0, 8), "Gaussian sigma with chroma_handling = prefilter");
 }
 
 void InvariantParams::writeTo(core::SettingsWriter& w) const { core::writeKeys(w, *this); }

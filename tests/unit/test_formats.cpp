@@ -111,6 +111,8 @@ CFilterInvariant::Ptr populatedInvariant()
 	p.knee_high = 240.25;
 	p.tail_slope_low = 0.375;
 	p.tail_slope_high = 0.625;
+	p.chroma_handling = image::ChromaHandling::Prefilter;
+	p.chroma_sigma_px = 2.25;
 	f->setParams(p);
 	f->parallel_eyes = false;
 	return f;
@@ -149,6 +151,8 @@ void expectSameInvariant(const CFilterInvariant& a, const CFilterInvariant& b)
 	EXPECT_EQ(p.knee_high, q.knee_high);
 	EXPECT_EQ(p.tail_slope_low, q.tail_slope_low);
 	EXPECT_EQ(p.tail_slope_high, q.tail_slope_high);
+	EXPECT_EQ(p.chroma_handling, q.chroma_handling);
+	EXPECT_EQ(p.chroma_sigma_px, q.chroma_sigma_px);
 	EXPECT_EQ(a.parallel_eyes, b.parallel_eyes);
 }
 void expectSameLinearise(const CFilterLinearise& a, const CFilterLinearise& b)
@@ -502,8 +506,24 @@ TEST(FormatsGolden, InvariantFilterVersion0StillLoads)
 	expected.knee_low = 0;
 	expected.knee_high = 255;
 	expected.tail_slope_low = expected.tail_slope_high = 1;
+	expected.chroma_handling = image::ChromaHandling::None;
 	EXPECT_TRUE(f->params().sameImageAs(expected)) << f->params().asString();
 	EXPECT_FALSE(f->params().hasCompressedTails());
+	EXPECT_EQ(f->common.output_suffix, "_inv9");
+}
+
+// CFilterInvariant version 1 (before the chroma handling; the golden file as
+// it was) still loads, with every pixel as it comes.
+TEST(FormatsGolden, InvariantFilterVersion1StillLoads)
+{
+	const auto back = deserialise(readFile(kGoldenDir + "/CFilterInvariant_v1.bin"));
+	ASSERT_TRUE(back);
+	const auto* f = dynamic_cast<const CFilterInvariant*>(back.get());
+	ASSERT_NE(f, nullptr);
+	auto expected = populatedInvariant()->params();
+	expected.chroma_handling = image::ChromaHandling::None;
+	EXPECT_TRUE(f->params().sameImageAs(expected)) << f->params().asString();
+	EXPECT_TRUE(f->params().hasCompressedTails());
 	EXPECT_EQ(f->common.output_suffix, "_inv9");
 }
 

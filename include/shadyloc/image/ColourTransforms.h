@@ -54,6 +54,20 @@ enum class Linearisation
 	Gamma  //!< plain power law: linear = value^gamma
 };
 
+/** What the invariant does about chroma that has less resolution than luma
+ * (JPEG 4:2:0: chroma in 16x16-pixel blocks of the full image, whose block
+ * edges become a grid in the invariant image, which is chroma only). */
+enum class ChromaHandling
+{
+	None,  //!< every pixel as it comes (raw, lossless, 4:4:4)
+	/** Gaussian low-pass of the colour image (chroma_sigma_px) before the
+	 * logarithm: block edges become ramps FAST does not fire on. */
+	Prefilter,
+	/** The invariant of the 2x2-averaged image (the 4:2:0 chroma grid),
+	 * upsampled back bilinearly. */
+	ChromaResolution
+};
+
 ChannelOrder parseChannelOrder(const std::string& s);  //!< "rgb" | "bgr"
 Linearisation parseLinearisation(const std::string& s);	 //!< "none" | "srgb" | "gamma"
 std::string toString(ChannelOrder o);
@@ -61,6 +75,8 @@ std::string toString(Linearisation l);
 /** The values as settings name them (core::KeyVisitor::choice). */
 const std::vector<std::pair<std::string, ChannelOrder>>& channelOrderNames();
 const std::vector<std::pair<std::string, Linearisation>>& linearisationNames();
+const std::vector<std::pair<std::string, ChromaHandling>>& chromaHandlingNames();
+std::string toString(ChromaHandling c);
 
 /** Everything that defines the invariant image of an 8-bit colour image,
  * including its fixed quantisation to 8 bits: two images made with equal
@@ -90,6 +106,11 @@ struct InvariantParams
 	 * 0.5 % and give the bulk 200 grey levels there (docs/calibration.md). */
 	double knee_low = 0.0, knee_high = 255.0;
 	double tail_slope_low = 1.0, tail_slope_high = 1.0;
+
+	/** Chroma subsampled input (docs/calibration.md, "Cameras that suit the
+	 * invariant channel"); none keeps the image as it was before this option. */
+	ChromaHandling chroma_handling = ChromaHandling::None;
+	double chroma_sigma_px = 1.5;  //!< Gaussian sigma with chroma_handling = prefilter [px]
 
 	/** Linear response given to a zero-valued pixel so logs stay finite:
 	 * half of the smallest non-zero code value (in [0,1] units). */
@@ -129,7 +150,7 @@ struct InvariantParams
 	 * alpha and beta, or peak_wavelength_{blue,green,red}_nm (then beta =
 	 * 1 - alpha), channel_order, linearisation, gamma, scale and offset
 	 * (absent: defaultOffset() of the new alpha, beta), knee_low, knee_high,
-	 * tail_slope_low, tail_slope_high. Absent keys keep their
+	 * tail_slope_low, tail_slope_high, chroma_handling, chroma_sigma_px. Absent keys keep their
 	 * values; validates. Declares its keys known in `s`; the caller finishes it. */
 	void readFrom(core::SettingsSection& s);
 	/** Writes every key readFrom() reads back to these exact values. */
@@ -143,6 +164,14 @@ struct InvariantParams
 /** Linear response in (0,1] of an 8-bit code value under a linearisation.
  * Zero maps to the linearised value of kZeroCode. */
 double linearise(int code, Linearisation lin, double gamma);
+
+/** The colour image the logarithm sees under p.chroma_handling: the input
+ * itself (none), its Gaussian low-pass (prefilter), or its 2x2 average at
+ * half size (chroma_resolution; chromaToInputSize() brings the invariant back). */
+cv::Mat chromaInput(const cv::Mat& colour8, const InvariantParams& p);
+/** An invariant made from chromaInput() back at the input's size (bilinear
+ * for chroma_resolution, nothing to do otherwise). */
+void chromaToInputSize(cv::Mat& invariant, const cv::Size& inputSize, const InvariantParams& p);
 
 /** Reference (float, per-pixel std::log) invariant: CV_32F image of I in log
  * units, no offset or scale. Slow; the yardstick for tests. */
