@@ -17,7 +17,9 @@
  *            they are (mean Hamming distances);
  *   patch_all, patch_all_warped  landmarks whose patch, climbed to from the
  *            true projection whether a corner was detected there or not,
- *            is found within 1.5 px, unwarped and warped.
+ *            is found within 1.5 px, unwarped and warped;
+ *   offset_mean_x/y_px, offset_rms_px  the right refined correspondences'
+ *            offsets from their true projection: mean and RMS.
  * Per bin of the landmarks' scale change s = depth in keyframe / depth in
  * live frame (s > 1: the live view is closer, the patch looks larger) it
  * adds up detected, brief_ok and refined-right landmarks.
@@ -125,7 +127,8 @@ int main(int argc, char** argv)
 		std::printf(
 			"frame,kf,dist_m,lateral_m,visible,detected,brief_ok,patch_ok,gate_overflow,gate_median_px,exact_gate_overflow,exact_gate_median_px,gate_matches,"
 			"gate_right,refined,refined_right,inliers,wide_matches,wide_right,wide_refined_right,wide_inliers,status,global,"
-			"with_normal,brief_ok_warped,patch_ok_warped,hamming,hamming_warped,patch_all,patch_all_warped\n");
+			"with_normal,brief_ok_warped,patch_ok_warped,hamming,hamming_warped,patch_all,patch_all_warped,"
+			"offset_mean_x_px,offset_mean_y_px,offset_rms_px\n");
 		while (source.next(fr))
 		{
 			if (static_cast<int>(fr.index) % step) continue;
@@ -266,15 +269,24 @@ int main(int argc, char** argv)
 			vo::TKeyframeMatchOutput out;
 			matcher.match(mi, out);
 			int refinedRight = 0;
+			// The right ones' offsets from the truth: a mean comparable to
+			// the RMS is an error shared by many correspondences at once.
+			Eigen::Vector2d offSum = Eigen::Vector2d::Zero();
+			double offSq = 0;
 			for (size_t c = 0; c < out.corr.size(); c++)
 			{
 				const size_t j = static_cast<size_t>(out.landmark[c]);
-				if ((out.corr[c].z_curr.head<2>() - truthPx[j]).norm() < 3)
+				const Eigen::Vector2d off = out.corr[c].z_curr.head<2>() - truthPx[j];
+				if (off.norm() < 3)
 				{
 					refinedRight++;
 					bins[binOf(scale[j])].refined_right++;
+					offSum += off;
+					offSq += off.squaredNorm();
 				}
 			}
+			const Eigen::Vector2d offMean = offSum / std::max(1, refinedRight);
+			const double offRms = std::sqrt(offSq / std::max(1, refinedRight));
 			auto solveInliers = [&](const vo::TKeyframeMatchOutput& o) {
 				if (o.corr.size() < 6) return 0;
 				vo::TRelativePoseInput pi;
@@ -327,12 +339,13 @@ int main(int argc, char** argv)
 			for (auto& c : gs)
 				if (c == ',') c = ';';
 			std::printf(
-				"%zu,%u,%.2f,%.2f,%d,%d,%d,%d,%d,%.1f,%d,%.1f,%d,%d,%zu,%d,%d,%d,%d,%d,%d,%s,%s,%d,%d,%d,%.1f,%.1f,%d,%d\n", fr.index, kf.id, bestD,
+				"%zu,%u,%.2f,%.2f,%d,%d,%d,%d,%d,%.1f,%d,%.1f,%d,%d,%zu,%d,%d,%d,%d,%d,%d,%s,%s,%d,%d,%d,%.1f,%.1f,%d,%d,%.3f,%.3f,%.3f\n", fr.index, kf.id, bestD,
 				T_kf_live.translation().x(), visible, detected, briefOk, patchOk, out.gate.overflow, out.gate.median_axis_px, exactGate.overflow,
 				exactGate.median_axis_px,
 				gateMatches, gateRight, out.corr.size(), refinedRight, inliers, wideMatches, wideRight, wideRefinedRight,
 				wideInliers, localisation::toString(res.status).c_str(), gs.c_str(), withNormal, briefOkW, patchOkW,
-				withNormal ? double(hamSum) / withNormal : 0.0, withNormal ? double(hamSumW) / withNormal : 0.0, patchAll, patchAllW);
+				withNormal ? double(hamSum) / withNormal : 0.0, withNormal ? double(hamSumW) / withNormal : 0.0, patchAll, patchAllW,
+				offMean.x(), offMean.y(), offRms);
 			std::fflush(stdout);
 		}
 		std::printf("\nscale_bin_lo,scale_bin_hi,visible,detected,brief_ok,refined_right,mean_hamming\n");
