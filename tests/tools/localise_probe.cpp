@@ -26,7 +26,9 @@
  *
  *   localise_probe MAP LIVE.rawlog LIVE.tum CHANNEL STEP CONFIG.ini...
  *
- * Prints CSV (one row per probed frame), then the scale table. A diagnostic
+ * Prints CSV (one row per probed frame), then the scale table, then the
+ * right refined correspondences by landmark depth in the live frame (their
+ * RMS offset in (uL, v) and in uR from the map landmark's true projection). A diagnostic
  * for developers: not part of the test suite. */
 #include <shadyloc/Registration.h>
 #include <shadyloc/features/Brief.h>
@@ -124,6 +126,15 @@ int main(int argc, char** argv)
 		io::StereoFrameSource source(livePath, so);
 		io::TStereoFrame fr;
 		std::map<int, TBin> bins;
+		// Right refined correspondences by the landmark's depth in the live
+		// frame: count and summed squared offset (uL, v) and uR error.
+		struct TDepthBin
+		{
+			int n = 0;
+			double sq = 0, sqR = 0;
+		};
+		const std::vector<double> depthEdges = {0, 5, 10, 20, 40, 1e9};
+		std::vector<TDepthBin> depthBins(depthEdges.size() - 1);
 		std::printf(
 			"frame,kf,dist_m,lateral_m,visible,detected,brief_ok,patch_ok,gate_overflow,gate_median_px,exact_gate_overflow,exact_gate_median_px,gate_matches,"
 			"gate_right,refined,refined_right,inliers,wide_matches,wide_right,wide_refined_right,wide_inliers,status,global,"
@@ -283,6 +294,13 @@ int main(int argc, char** argv)
 					bins[binOf(scale[j])].refined_right++;
 					offSum += off;
 					offSq += off.squaredNorm();
+					const Eigen::Vector3d Pl = T_live_kf * lms[j].P;
+					const Eigen::Vector3d zTrue = fr.calib.project(Pl);
+					size_t d = 0;
+					while (d + 2 < depthEdges.size() && Pl.z() >= depthEdges[d + 1]) d++;
+					depthBins[d].n++;
+					depthBins[d].sq += off.squaredNorm();
+					depthBins[d].sqR += std::pow(out.corr[c].z_curr.z() - zTrue.z(), 2);
 				}
 			}
 			const Eigen::Vector2d offMean = offSum / std::max(1, refinedRight);
@@ -353,6 +371,11 @@ int main(int argc, char** argv)
 			std::printf(
 				"%.2f,%.2f,%d,%d,%d,%d,%.1f\n", std::pow(2.0, 0.25 * k), std::pow(2.0, 0.25 * (k + 1)), b.visible,
 				b.detected, b.brief_ok, b.refined_right, b.detected ? double(b.hamming_sum) / b.detected : 0.0);
+		std::printf("\ndepth_lo_m,depth_hi_m,refined_right,offset_rms_px,uR_rms_px\n");
+		for (size_t d = 0; d < depthBins.size(); d++)
+			std::printf(
+				"%.0f,%.0f,%d,%.3f,%.3f\n", depthEdges[d], depthEdges[d + 1], depthBins[d].n,
+				std::sqrt(depthBins[d].sq / std::max(1, depthBins[d].n)), std::sqrt(depthBins[d].sqR / std::max(1, depthBins[d].n)));
 		return 0;
 	}
 	catch (const std::exception& e)
