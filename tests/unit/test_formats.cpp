@@ -203,7 +203,14 @@ CKeyframeMap::Ptr populatedKeyframeMap()
 	a.sigma_px = 0.45;
 	b.label = "inv9";
 	b.filter_class = "shadyloc::CFilterInvariant";
-	b.filter_options = populatedInvariant()->imageOptionsAsIni();
+	// Its images as they come (chroma_handling none, left out of the
+	// options): maps of the versions before the chroma handling load to
+	// exactly this map's bytes (test_map_format.cpp, Version2/3MapsStillLoad).
+	auto inv = populatedInvariant();
+	auto ip = inv->params();
+	ip.chroma_handling = image::ChromaHandling::None;
+	inv->setParams(ip);
+	b.filter_options = inv->imageOptionsAsIni();
 	b.brief_patch_size = 29;
 	b.brief_seed = 0x7654321;
 	b.presmooth_sigma = 1.25;
