@@ -26,6 +26,11 @@
  *
  *   localise_probe MAP LIVE.rawlog LIVE.tum CHANNEL STEP CONFIG.ini...
  *
+ * With SHADYLOC_PROBE_DUMP=FILE it also writes each probed frame's refined
+ * correspondences; `localise_probe --joint DUMP_A DUMP_B CONFIG.ini...`
+ * solves two such dumps' frames (two channels of one run) separately and
+ * in one solve, with each error against the truth.
+ *
  * Prints CSV (one row per probed frame), then the scale table, then the
  * right refined correspondences by landmark depth in the live frame (their
  * RMS offset in (uL, v) and in uR from the map landmark's true projection). A diagnostic
@@ -44,6 +49,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <type_traits>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -61,6 +68,103 @@ struct TBin
 	long hamming_sum = 0;
 };
 
+/** fn(data, count) over a correspondence's fields, in one order. */
+template <typename C, typename F>
+void forEachField(C& c, F&& fn)
+{
+	fn(c.P_ref.data(), 3);
+	fn(c.cov_ref.data(), 9);
+	fn(c.z_ref.data(), 3);
+	static_assert(sizeof(geometry::TStereoCalib) == 6 * sizeof(double), "fx, fy, cx, cy, cxR, baseline in a row");
+	fn(&c.calib_ref.fx, 6);
+	fn(c.z_curr.data(), 3);
+	fn(c.P_curr.data(), 3);
+}
+
+/** One probed frame's refined correspondences and the true T_live_kf, as
+ * raw bytes (a developer's scratch file, read back by --joint on the same
+ * machine; TStereoCorrespondence is trivially copyable). */
+void dumpFrame(std::ofstream& out, size_t frame, const Eigen::Isometry3d& T_live_kf, const geometry::TStereoCalib& calib,
+			   const std::vector<geometry::TStereoCorrespondence>& corr)
+{
+	static_assert(std::is_trivially_copyable_v<geometry::TStereoCalib>);
+	const uint64_t f = frame, n = corr.size();
+	out.write(reinterpret_cast<const char*>(&f), sizeof f);
+	out.write(reinterpret_cast<const char*>(T_live_kf.matrix().data()), 16 * sizeof(double));
+	out.write(reinterpret_cast<const char*>(&calib), sizeof calib);
+	out.write(reinterpret_cast<const char*>(&n), sizeof n);
+	for (const auto& c : corr) forEachField(c, [&](const double* p, size_t k) {
+		out.write(reinterpret_cast<const char*>(p), static_cast<std::streamsize>(k * sizeof(double)));
+	});
+}
+
+struct TDumpedFrame
+{
+	Eigen::Isometry3d T_live_kf;
+	geometry::TStereoCalib calib;
+	std::vector<geometry::TStereoCorrespondence> corr;
+};
+
+std::map<uint64_t, TDumpedFrame> readDump(const std::string& path)
+{
+	std::ifstream in(path, std::ios::binary);
+	if (!in) throw std::runtime_error("cannot read '" + path + "'");
+	std::map<uint64_t, TDumpedFrame> frames;
+	uint64_t f = 0, n = 0;
+	while (in.read(reinterpret_cast<char*>(&f), sizeof f))
+	{
+		TDumpedFrame d;
+		in.read(reinterpret_cast<char*>(d.T_live_kf.matrix().data()), 16 * sizeof(double));
+		in.read(reinterpret_cast<char*>(&d.calib), sizeof d.calib);
+		in.read(reinterpret_cast<char*>(&n), sizeof n);
+		d.corr.resize(n);
+		for (auto& c : d.corr) forEachField(c, [&](double* p, size_t k) {
+			in.read(reinterpret_cast<char*>(p), static_cast<std::streamsize>(k * sizeof(double)));
+		});
+		if (!in) throw std::runtime_error("'" + path + "' is truncated");
+		frames[f] = std::move(d);
+	}
+	return frames;
+}
+
+/** --joint: each frame solved on channel A's correspondences, on B's, and
+ * on both in one solve (the same keyframe: the probe picks it by the truth),
+ * with the error of each against the true pose. */
+int jointMode(const std::string& dumpA, const std::string& dumpB, const mrpt::config::CConfigFileBase& cfg)
+{
+	const auto A = readDump(dumpA), B = readDump(dumpB);
+	const auto lo = localisation::localiserOptionsFor(cfg, "mono", "localiser");
+	const vo::RelativePoseEstimator estimator(localisation::estimatorOptionsFor(lo));
+	std::printf("frame,a_corr,b_corr,a_inliers,a_err_m,b_inliers,b_err_m,joint_inliers,joint_err_m\n");
+	auto solve = [&](const std::vector<geometry::TStereoCorrespondence>& c, const TDumpedFrame& d, uint64_t seed,
+					 int& inliers) {
+		inliers = 0;
+		if (c.size() < 6) return std::nan("");
+		vo::TRelativePoseInput pi;
+		pi.corr = &c;
+		pi.calib = d.calib;
+		pi.seed = static_cast<uint32_t>(seed);
+		vo::TRelativePoseOutput out;
+		estimator.estimate(pi, out);
+		if (!out.ok()) return std::nan("");
+		inliers = static_cast<int>(out.inliers);
+		return (out.T_curr_ref.translation() - d.T_live_kf.translation()).norm();
+	};
+	for (const auto& [f, a] : A)
+	{
+		const auto it = B.find(f);
+		if (it == B.end()) continue;
+		const auto& b = it->second;
+		auto both = a.corr;
+		both.insert(both.end(), b.corr.begin(), b.corr.end());
+		int ia = 0, ib = 0, ij = 0;
+		const double ea = solve(a.corr, a, f, ia), eb = solve(b.corr, a, f, ib), ej = solve(both, a, f, ij);
+		std::printf("%llu,%zu,%zu,%d,%.4f,%d,%.4f,%d,%.4f\n", static_cast<unsigned long long>(f), a.corr.size(),
+					b.corr.size(), ia, ea, ib, eb, ij, ej);
+	}
+	return 0;
+}
+
 int binOf(double s)
 {
 	// log2 bins of width 0.25 around 1: ... [0.71,0.84) [0.84,1) [1,1.19) [1.19,1.41) ...
@@ -70,14 +174,30 @@ int binOf(double s)
 
 int main(int argc, char** argv)
 {
-	if (argc < 7)
+	const bool joint = argc >= 5 && std::string(argv[1]) == "--joint";
+	if (argc < 7 && !joint)
 	{
-		std::cerr << "usage: localise_probe MAP LIVE.rawlog LIVE.tum CHANNEL STEP CONFIG.ini...\n";
+		std::cerr << "usage: localise_probe MAP LIVE.rawlog LIVE.tum CHANNEL STEP CONFIG.ini...\n"
+					 "       localise_probe --joint DUMP_A DUMP_B CONFIG.ini...\n";
 		return 2;
 	}
 	try
 	{
 		registerAllClasses();
+		if (joint)
+		{
+			std::string text;
+			for (int i = 4; i < argc; i++)
+			{
+				std::ifstream f(argv[i]);
+				if (!f) throw std::runtime_error(std::string("cannot read '") + argv[i] + "'");
+				std::stringstream ss;
+				ss << f.rdbuf();
+				text += ss.str() + "\n";
+			}
+			mrpt::config::CConfigFileMemory cfg(text);
+			return jointMode(argv[2], argv[3], cfg);
+		}
 		const std::string mapPath = argv[1], livePath = argv[2], tumPath = argv[3], channel = argv[4];
 		const int step = std::max(1, std::atoi(argv[5]));
 		std::string text;
@@ -126,6 +246,10 @@ int main(int argc, char** argv)
 		io::StereoFrameSource source(livePath, so);
 		io::TStereoFrame fr;
 		std::map<int, TBin> bins;
+		// SHADYLOC_PROBE_DUMP=FILE: the refined correspondences of each probed
+		// frame, for --joint.
+		std::ofstream dump;
+		if (const char* d = std::getenv("SHADYLOC_PROBE_DUMP")) dump.open(d, std::ios::binary);
 		// Right refined correspondences by the landmark's depth in the live
 		// frame: count and summed squared offset (uL, v) and uR error.
 		struct TDepthBin
@@ -303,6 +427,7 @@ int main(int argc, char** argv)
 					depthBins[d].sqR += std::pow(out.corr[c].z_curr.z() - zTrue.z(), 2);
 				}
 			}
+			if (dump.is_open()) dumpFrame(dump, fr.index, T_live_kf, fr.calib, out.corr);
 			const Eigen::Vector2d offMean = offSum / std::max(1, refinedRight);
 			const double offRms = std::sqrt(offSq / std::max(1, refinedRight));
 			auto solveInliers = [&](const vo::TKeyframeMatchOutput& o) {
