@@ -36,6 +36,7 @@
  * RMS offset in (uL, v) and in uR from the map landmark's true projection). A diagnostic
  * for developers: not part of the test suite. */
 #include <shadyloc/Registration.h>
+#include <shadyloc/core/Settings.h>
 #include <shadyloc/features/Brief.h>
 #include <shadyloc/features/PatchWarp.h>
 #include <shadyloc/io/StereoFrameSource.h>
@@ -184,32 +185,15 @@ int main(int argc, char** argv)
 	try
 	{
 		registerAllClasses();
-		if (joint)
-		{
-			std::string text;
-			for (int i = 4; i < argc; i++)
-			{
-				std::ifstream f(argv[i]);
-				if (!f) throw std::runtime_error(std::string("cannot read '") + argv[i] + "'");
-				std::stringstream ss;
-				ss << f.rdbuf();
-				text += ss.str() + "\n";
-			}
-			mrpt::config::CConfigFileMemory cfg(text);
-			return jointMode(argv[2], argv[3], cfg);
-		}
+		// The config files from argv[first] on, layered as the commands' -c.
+		auto configFrom = [&](int first) {
+			return mrpt::config::CConfigFileMemory(
+				core::layeredConfigText(std::vector<std::string>(argv + first, argv + argc)));
+		};
+		if (joint) return jointMode(argv[2], argv[3], configFrom(4));
 		const std::string mapPath = argv[1], livePath = argv[2], tumPath = argv[3], channel = argv[4];
 		const int step = std::max(1, std::atoi(argv[5]));
-		std::string text;
-		for (int i = 6; i < argc; i++)
-		{
-			std::ifstream f(argv[i]);
-			if (!f) throw std::runtime_error(std::string("cannot read '") + argv[i] + "'");
-			std::stringstream ss;
-			ss << f.rdbuf();
-			text += ss.str() + "\n";
-		}
-		mrpt::config::CConfigFileMemory cfg(text);
+		const auto cfg = configFrom(6);
 		auto map = CKeyframeMap::LoadFromFile(mapPath);
 		const auto setup = localisation::LocalisationSystem::SetupFromConfig(cfg, {channel}, 1, "probe");
 		const localisation::LocalisationSystem::TChannelSetup* cs = nullptr;
