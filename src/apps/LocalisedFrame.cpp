@@ -108,6 +108,7 @@ cv::Mat topDownPanel(const CKeyframeMap& map, const std::vector<TLocalisationUpd
 	x = drawText(view, "   path: ", x, kCaptionHeight - 4, kWhite);
 	x = drawText(view, "mono ", x, kCaptionHeight - 4, toBgr(kMonoColour));
 	x = drawText(view, "invariant ", x, kCaptionHeight - 4, toBgr(kInvariantColour));
+	if (u.result("joint")) x = drawText(view, "joint ", x, kCaptionHeight - 4, toBgr(kJointColour));
 	drawText(view, "VO only", x, kCaptionHeight - 4, toBgr(kNoneColour));
 	return view;
 }
@@ -133,17 +134,19 @@ cv::Mat composeLocalisedFrame(
 {
 	if (ups.empty() || images.empty()) throw std::invalid_argument("composeLocalisedFrame: no frame to draw");
 	const auto& u = ups.back();
-	const size_t n = u.localisers.size();
+	// A panel per localiser with live images of its own (not the joint one).
+	std::vector<const localisation::TLocaliserResult*> drawn;
+	for (const auto& r : u.localisers)
+		if (std::any_of(images.begin(), images.end(), [&](const TChannelImage& im) { return im.channel == r.channel; }))
+			drawn.push_back(&r);
+	const size_t n = drawn.size();
 	const cv::Size camera = images.front().left.size();
 	const cv::Size size = localisedFrameSize(width, n, camera);
 	const cv::Size panel(width / int(std::max<size_t>(n, 1)), size.height - int(std::lround(width / 3.0)));
 	cv::Mat frame(size, CV_8UC3, kWhite);
 	for (size_t i = 0; i < n; i++)
-	{
-		const auto& r = u.localisers[i];
-		channelPanel(imageOf(images, r.channel), r, u, panel)
+		channelPanel(imageOf(images, drawn[i]->channel), *drawn[i], u, panel)
 			.copyTo(frame(cv::Rect(int(i) * panel.width, 0, panel.width, panel.height)));
-	}
 	const cv::Rect below(0, panel.height, width, size.height - panel.height);
 	topDownPanel(map, ups, below.size()).copyTo(frame(below));
 	return frame;

@@ -18,7 +18,9 @@ mrpt::math::TPoint3D toPoint(const Eigen::Vector3d& p) { return {p.x(), p.y(), p
 
 mrpt::img::TColor colourOfUsed(const std::string& used)
 {
-	return used == "mono" ? kMonoColour : (used == "invariant" ? kInvariantColour : kNoneColour);
+	if (used == "mono") return kMonoColour;
+	if (used == "invariant") return kInvariantColour;
+	return used == "joint" ? kJointColour : kNoneColour;
 }
 
 std::string viewFileName(size_t frame)
@@ -50,11 +52,11 @@ std::vector<TrajectoryLayer> localisedViewLayers(
 	TrajectoryLayer live;
 	live.name = "live";
 	live.widthPx = 6.0;
-	size_t counts[3] = {0, 0, 0};
+	size_t counts[4] = {0, 0, 0, 0};
 	for (const auto& u : ups)
 	{
 		if (!u.placeKnown) continue;
-		const int k = u.used == "mono" ? 0 : (u.used == "invariant" ? 1 : 2);
+		const int k = u.used == "mono" ? 0 : (u.used == "invariant" ? 1 : (u.used == "joint" ? 3 : 2));
 		counts[k]++;
 		if (!live.points.empty()) live.segmentColours.push_back(colourOfUsed(u.used));
 		live.points.push_back(toPoint(u.T_map_live.translation()));
@@ -62,6 +64,8 @@ std::vector<TrajectoryLayer> localisedViewLayers(
 	live.legend = {{"mono fix: " + std::to_string(counts[0]) + " frames", kMonoColour},
 				   {"invariant fix: " + std::to_string(counts[1]), kInvariantColour},
 				   {"no fix (VO): " + std::to_string(counts[2]), kNoneColour}};
+	// Only where the joint localiser ran: the legends of today's figures stay as they are.
+	if (counts[3] > 0) live.legend.insert(live.legend.begin() + 2, {"joint fix: " + std::to_string(counts[3]), kJointColour});
 	std::vector<TrajectoryLayer> layers{keyframesLayer(map, map.runs().empty() ? "" : map.runs().front())};
 	if (live.points.size() >= 2) layers.push_back(live);
 	// The latest pose: 1.5 m along its optical axis (z of the camera).

@@ -19,6 +19,8 @@ namespace shadyloc::apps
 {
 /** Who held a frame, as every figure colours it (docs/figures.md). */
 constexpr mrpt::img::TColor kMonoColour{31, 98, 196}, kInvariantColour{230, 130, 14}, kNoneColour{214, 39, 40};
+/** The joint localiser's fixes (both channels in one solve). */
+constexpr mrpt::img::TColor kJointColour{44, 160, 44};
 
 /** The colour of a frame held by `used` ("mono", "invariant", "" = none). */
 mrpt::img::TColor colourOfUsed(const std::string& used);

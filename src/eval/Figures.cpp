@@ -141,10 +141,10 @@ TPairRuns readPair(const std::string& baselineCsv, const std::string& combinedCs
 				std::to_string(c[i].frame) + " at " + fmt(c[i].stamp, 6) + " s in one and frame " +
 				std::to_string(b[i].frame) + " at " + fmt(b[i].stamp, 6) + " s in the other: not the same live run");
 	for (const auto& f : b)
-		if (f.used == "invariant")
+		if (f.used == "invariant" || f.used == "joint")
 			throw std::runtime_error(
 				"'" + baselineCsv + "' frame " + std::to_string(f.frame) +
-				" used the invariant localiser: not a baseline run (localise --localisers mono)");
+				" used the " + f.used + " localiser: not a baseline run (localise --localisers mono)");
 	if (p.combined.frames.front().invariant_ok < 0)
 		throw std::runtime_error(
 			"'" + combinedCsv + "': the invariant localiser did not run: not a combined run (localise without "
@@ -262,8 +262,8 @@ TLocalisedRun readFramesCsv(const std::string& path)
 		r.mono_ok = parseFlag(f[cMono], at, "mono_ok", true);
 		r.invariant_ok = parseFlag(f[cInv], at, "invariant_ok", true);
 		r.used = f[cUsed];
-		if (r.used != "mono" && r.used != "invariant" && r.used != "none")
-			throw std::runtime_error(at + ": column 'used': '" + r.used + "' is not mono, invariant or none");
+		if (r.used != "mono" && r.used != "invariant" && r.used != "joint" && r.used != "none")
+			throw std::runtime_error(at + ": column 'used': '" + r.used + "' is not mono, invariant, joint or none");
 		if (itTrue != col.end()) r.used_true = parseFlag(f[itTrue->second], at, "used_true", true);
 		if (!run.frames.empty() && r.distance_m < run.frames.back().distance_m - 1e-9)
 			throw std::runtime_error(at + ": the distance travelled decreases (" + fmt(run.frames.back().distance_m, 3) +

@@ -63,6 +63,9 @@ void TSystemOptions::keys(core::KeyVisitor& v)
 {
 	using core::Range;
 	v("localisers", localisers, "", Range::any(), "policy order: the first with an accepted fix is used");
+	v("joint", joint, "", Range::any(),
+	  "channels whose searches one more localiser solves together, first in policy order (empty = none; runs "
+	  "only when each is a localiser)");
 	v("vo_channel", vo_channel, "", Range::any(), "the live VO that predicts for every localiser");
 	v("vo_fallback_channel", vo_fallback_channel, "", Range::any(),
 	  "a second live VO whose step is used where vo_channel's could not be measured (\"\" = none; runs only "
@@ -110,6 +113,9 @@ void TSystemOptions::validate() const
 	for (size_t i = 0; i < localisers.size(); i++)
 		for (size_t j = i + 1; j < localisers.size(); j++)
 			need(localisers[i] != localisers[j], "localisers", "a localiser named twice");
+	for (size_t i = 0; i < joint.size(); i++)
+		for (size_t j = i + 1; j < joint.size(); j++) need(joint[i] != joint[j], "joint", "a channel named twice");
+	need(joint.empty() || joint.size() >= 2, "joint", "names one channel: a joint solve needs two or more");
 	need(!vo_channel.empty(), "vo_channel", "must name a channel");
 	need(vo_fallback_channel != vo_channel, "vo_fallback_channel", "must differ from vo_channel (or be empty)");
 	core::checkKeys(*this);
@@ -147,7 +153,8 @@ features::TStereoFeatureOptions featuresOf(
 
 LocalisationSystem::LocalisationSystem(
 	CKeyframeMap::Ptr map, const std::vector<TChannelSetup>& channels, const vo::TStereoVOOptions& vopt,
-	const TSystemOptions& o, const std::optional<vo::TStereoVOOptions>& voFallback)
+	const TSystemOptions& o, const std::optional<vo::TStereoVOOptions>& voFallback,
+	const std::optional<TLocaliserOptions>& joint)
 	: mrpt::system::COutputLogger("LocalisationSystem"),
 	  m_map(std::move(map)),
 	  m_opts(o),
@@ -191,6 +198,19 @@ LocalisationSystem::LocalisationSystem(
 				m_voFallback->pipe = i;
 				m_voFallback->vo.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 			}
+	// The joint localiser runs beside all of its channels' localisers, or not at all.
+	if (joint && !m_opts.joint.empty())
+	{
+		std::vector<size_t> pipes;
+		for (const auto& l : m_opts.joint)
+			for (size_t i = 0; i < m_pipes.size(); i++)
+				if (m_pipes[i].setup.channel.label == l && m_pipes[i].localiser) pipes.push_back(i);
+		if (pipes.size() == m_opts.joint.size())
+		{
+			m_joint = std::make_unique<JointLocaliser>(*m_map, m_opts.joint, *joint);
+			m_jointPipes = pipes;
+		}
+	}
 }
 
 map::TChannelParams LocalisationSystem::liveParams(const filters::TChannel& ch, const features::TStereoFeatureOptions& fo)
@@ -249,6 +269,8 @@ LocalisationSystem::TSetup LocalisationSystem::SetupFromConfig(
 			if (l == labels[i]) l = chans[i].channel.label;
 		if (so.vo_channel == labels[i]) so.vo_channel = chans[i].channel.label;
 		if (so.vo_fallback_channel == labels[i]) so.vo_fallback_channel = chans[i].channel.label;
+		for (auto& l : so.joint)
+			if (l == labels[i]) l = chans[i].channel.label;
 	}
 	r.vo = vo::voOptionsFor(cfg, so.vo_channel);
 	// The fallback VO runs only beside its channel's localiser: the baseline
@@ -256,6 +278,14 @@ LocalisationSystem::TSetup LocalisationSystem::SetupFromConfig(
 	if (!so.vo_fallback_channel.empty() &&
 		std::find(so.localisers.begin(), so.localisers.end(), so.vo_fallback_channel) != so.localisers.end())
 		r.voFallback = vo::voOptionsFor(cfg, so.vo_fallback_channel);
+	const bool jointRuns = !so.joint.empty() && std::all_of(so.joint.begin(), so.joint.end(), [&](const std::string& j) {
+		return std::find(so.localisers.begin(), so.localisers.end(), j) != so.localisers.end();
+	});
+	if (jointRuns)
+	{
+		r.joint = localiserOptionsFor(cfg, JointLocaliser::kLabel);
+		r.joint->validate();
+	}
 	return r;
 }
 
@@ -264,7 +294,7 @@ std::unique_ptr<LocalisationSystem> LocalisationSystem::FromConfig(
 	int threads, const std::string& what)
 {
 	TSetup s = SetupFromConfig(cfg, localisers, threads, what);
-	return std::make_unique<LocalisationSystem>(std::move(map), s.channels, s.vo, s.system, s.voFallback);
+	return std::make_unique<LocalisationSystem>(std::move(map), s.channels, s.vo, s.system, s.voFallback, s.joint);
 }
 
 void LocalisationSystem::reset()
@@ -277,6 +307,7 @@ void LocalisationSystem::reset()
 		}
 	for (auto& p : m_pipes)
 		if (p.localiser) p.localiser->reset();
+	if (m_joint) m_joint->reset();
 	m_frame = 0;
 	m_track.reset();
 	m_searchAmong.clear();
@@ -413,29 +444,31 @@ void LocalisationSystem::forLocalisers(F&& fn)
 	both(par, runFirst, runRest);
 }
 
-const TLocaliserResult* LocalisationSystem::policyFix(
-	const std::vector<TLocaliserResult>& res, const std::vector<size_t>& order) const
+const TLocaliserResult* LocalisationSystem::policyFix(const std::vector<const TLocaliserResult*>& inOrder) const
 {
-	std::vector<size_t> accepted;
-	for (const size_t i : order)
-		if (res[i].accepted()) accepted.push_back(i);
+	std::vector<const TLocaliserResult*> accepted;
+	for (const auto* r : inOrder)
+		if (r->accepted()) accepted.push_back(r);
 	if (accepted.empty()) return nullptr;
-	if (!m_opts.track.cross_check_fixes || accepted.size() < 2) return &res[accepted.front()];
+	if (!m_opts.track.cross_check_fixes || accepted.size() < 2) return accepted.front();
 	std::vector<TKeyframePose> fixes;
 	std::vector<double> sigma;
-	for (const size_t i : accepted)
+	for (const auto* r : accepted)
 	{
-		fixes.push_back(res[i].pose());
-		sigma.push_back(res[i].sigma_m);
+		fixes.push_back(r->pose());
+		sigma.push_back(r->sigma_m);
 	}
-	const auto& L = *m_pipes[accepted.front()].localiser;
-	const KeyframeLink link = [&L](uint32_t a, uint32_t b) { return L.between(a, b); };
-	const size_t k = chooseFix(fixes, sigma, link, L.options().prediction_chi2);
+	// The first accepted localiser's link and prediction test judge.
+	const bool joint = m_joint && accepted.front()->channel == JointLocaliser::kLabel;
+	const StereoLocaliser* L = joint ? nullptr : localiser(accepted.front()->channel);
+	const KeyframeLink link = [this, L](uint32_t a, uint32_t b) { return L ? L->between(a, b) : m_joint->between(a, b); };
+	const double chi2 = (L ? L->options() : m_joint->options()).prediction_chi2;
+	const size_t k = chooseFix(fixes, sigma, link, chi2);
 	if (k != 0)
 		MRPT_LOG_DEBUG_FMT(
-			"frame %zu: the fixes disagree; %s (sigma %.3f m) used, not %s (%.3f m)", res[accepted[k]].frame,
-			res[accepted[k]].channel.c_str(), sigma[k], res[accepted.front()].channel.c_str(), sigma.front());
-	return &res[accepted[k]];
+			"frame %zu: the fixes disagree; %s (sigma %.3f m) used, not %s (%.3f m)", accepted[k]->frame,
+			accepted[k]->channel.c_str(), sigma[k], accepted.front()->channel.c_str(), sigma.front());
+	return accepted[k];
 }
 
 TKeyframePose LocalisationSystem::fusedFix(const TLocaliserResult& r, const TKeyframePose& pred, bool confirmed) const
@@ -522,7 +555,10 @@ void LocalisationSystem::searchPlace(
 			// The verified place is each localiser's first consistent frame
 			// (unless the track outranked it).
 			if (outcome != PlaceOutcome::Outranked)
+			{
 				for (const size_t j : order) m_pipes[j].localiser->startFrom(u.frame, m_track.estimate());
+				if (m_joint) m_joint->startFrom(u.frame, m_track.estimate());
+			}
 			m_searchAmong.clear();
 			MRPT_LOG_DEBUG_FMT(
 				"frame %zu: place found by %s at keyframe %u (%d inliers)%s", u.frame,
@@ -558,27 +594,40 @@ TLocalisationUpdate LocalisationSystem::processChannels(
 
 	// ---- the localisers, in parallel (no prediction: each records a failure)
 	std::vector<TLocaliserResult> res(n);
+	std::vector<TSearchedCorrespondences> searched(m_joint ? n : 0);
+	TLocaliserInput in;
+	in.frame = u.frame;
+	in.timestamp = timestamp;
+	in.calib = calib;
+	in.prediction = pred;
+	in.search = m_track.searchSeed();
+	in.track_confirmed = u.track_confirmed;
+	in.motion = u.motion;
 	forLocalisers([&](size_t i) {
-		TLocaliserInput in;
-		in.frame = u.frame;
-		in.timestamp = timestamp;
-		in.meas = &meas[i];
-		in.calib = calib;
-		in.prediction = pred;
-		in.search = m_track.searchSeed();
-		in.track_confirmed = u.track_confirmed;
-		in.motion = u.motion;
-		res[i] = m_pipes[i].localiser->localise(in);
+		TLocaliserInput mine = in;
+		mine.meas = &meas[i];
+		res[i] = m_pipes[i].localiser->localise(mine, m_joint ? &searched[i] : nullptr);
 	});
-	std::vector<size_t> order;	// the localisers in policy order
+	std::vector<size_t> order;	// the channel localisers in policy order
 	for (size_t i = 0; i < n; i++)
 		if (m_pipes[i].localiser) order.push_back(i);
 	std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return m_pipes[a].policyRank < m_pipes[b].policyRank; });
 	for (const size_t i : order) u.localisers.push_back(res[i]);
+	// ---- the joint localiser on what their searches found (after them in
+	// the update, first in policy order)
+	std::vector<const TLocaliserResult*> inOrder;
+	if (m_joint)
+	{
+		std::vector<const TSearchedCorrespondences*> parts;
+		for (const size_t i : m_jointPipes) parts.push_back(&searched[i]);
+		u.localisers.push_back(m_joint->localise(in, parts));
+		inOrder.push_back(&u.localisers.back());
+	}
+	for (size_t k = 0; k < order.size(); k++) inOrder.push_back(&u.localisers[k]);
 
 	// ---- the policy: the first accepted fix in policy order (the most certain
 	// where they disagree), else dead reckoning
-	const TLocaliserResult* fix = policyFix(res, order);
+	const TLocaliserResult* fix = policyFix(inOrder);
 	if (fix)
 	{
 		u.used = fix->channel;
@@ -593,6 +642,7 @@ TLocalisationUpdate LocalisationSystem::processChannels(
 			allLost &= res[i].status == LocaliserStatus::Lost;
 			if (res[i].status == LocaliserStatus::Unconfirmed) seeds.push_back(res[i].pose());
 		}
+		if (m_joint && u.localisers.back().status == LocaliserStatus::Unconfirmed) seeds.push_back(u.localisers.back().pose());
 		m_track.noFix(seeds);
 		// ---- relocalisation, on this frame
 		const SearchScope scope = m_track.searchNeeded(allLost);

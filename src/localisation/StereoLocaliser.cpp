@@ -1,5 +1,6 @@
 /* ShadyLoc — one localiser (active search, solve, failure test, global search). */
 #include <shadyloc/localisation/StereoLocaliser.h>
+#include <shadyloc/localisation/FixEstimate.h>
 #include <shadyloc/core/Units.h>
 
 #include <Eigen/Cholesky>
@@ -37,132 +38,7 @@ vo::TKeyframeMatcherOptions placeMatcherOptions(const TLocaliserOptions& o)
 	return m;
 }
 
-/** The localiser's measurement model for the pose solver. */
-geometry::TPoseSolverOptions solverOptionsFor(const TLocaliserOptions& o)
-{
-	geometry::TPoseSolverOptions so;
-	so.sigma_px = o.sigma_px;
-	so.sigma_disparity_px = o.sigma_disparity_px;
-	so.huber_k = o.huber_k;
-	return so;
-}
-
-/** A posteriori variance factor of a solve (Foerstner and Wrobel,
- * "Photogrammetric Computer Vision", 2016, Sec. 4.2.3): the inliers' squared
- * residuals whitened by their a priori covariance (pixel noise plus the map
- * landmark's covariance through the projection, the model of
- * geometry::solveStereoPose), over the redundancy 3n - 6. About 1 when the
- * a priori noise is right; larger when the channel's measurements are
- * noisier than sigma_px says (the invariant image) or the landmarks fit the
- * pose worse than their covariance allows. */
-double varianceFactor(
-	const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
-	const std::vector<uint8_t>& inlier, const Eigen::Isometry3d& T_curr_ref, const geometry::TPoseSolverOptions& so)
-{
-	double sum = 0;
-	int n = 0;
-	for (size_t i = 0; i < corr.size(); i++)
-	{
-		if (i < inlier.size() && !inlier[i]) continue;
-		Eigen::Vector3d r;
-		geometry::Matrix36d J;
-		if (!geometry::stereoResidual(calib, T_curr_ref, corr[i].P_ref, corr[i].z_curr, r, &J)) continue;
-		const Eigen::Matrix3d JP = J.leftCols<3>() * T_curr_ref.linear();
-		const Eigen::Matrix3d S =
-			Eigen::Matrix3d(geometry::measurementVariances(so).asDiagonal()) + JP * corr[i].cov_ref * JP.transpose();
-		sum += r.dot(S.ldlt().solve(r));
-		n++;
-	}
-	return n > 2 ? sum / (3.0 * n - 6.0) : std::numeric_limits<double>::infinity();
-}
-
-/** Bootstrap covariance of T_ref_curr (left perturbation) around the solve
- * T_curr_ref: the inliers resampled with replacement `samples` times, each
- * resample solved from T_curr_ref (fixed landmarks with their covariance,
- * geometry::solveStereoPose), the spread of the solutions about T_curr_ref
- * (Efron and Tibshirani, "An Introduction to the Bootstrap", 1993, ch. 6).
- * It sees what the information matrix cannot: a pose that rests on a few
- * correspondences (a wrong match among the inliers, landmarks all far or on
- * one side) moves when they are left out. Zero when fewer than 2 resamples
- * solve. Each resample is solved, not stepped once from the solution: a
- * one-step bootstrap (terms linearised once, Huber weights kept) is far
- * cheaper but came out too small on the marginal solves that matter, and
- * doubled the false fixes on the 301 m set (docs/localisation.md). */
-Matrix6d bootstrapCovariance(
-	const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
-	const std::vector<uint8_t>& inlier, const Eigen::Isometry3d& T_curr_ref, const TLocaliserOptions& o, uint32_t seed)
-{
-	std::vector<geometry::TStereoCorrespondence> in;
-	for (size_t i = 0; i < corr.size(); i++)
-		if (i >= inlier.size() || inlier[i]) in.push_back(corr[i]);
-	Matrix6d C = Matrix6d::Zero();
-	if (in.size() < 4 || o.bootstrap_samples < 2) return C;
-	std::mt19937 rng(seed);
-	std::uniform_int_distribution<size_t> pick(0, in.size() - 1);
-	geometry::TPoseSolverOptions so = solverOptionsFor(o);
-	so.max_iterations = 5;
-	const Eigen::Isometry3d T_ref_curr = T_curr_ref.inverse();
-	// Every resample starts at the solve: its first linearisation is shared,
-	// and a resample is a count per inlier rather than a copied list.
-	const auto atSolve = geometry::normalTermsAt(calib, in, T_curr_ref, so);
-	std::vector<int> count(in.size());
-	int solved = 0;
-	for (int b = 0; b < o.bootstrap_samples; b++)
-	{
-		std::fill(count.begin(), count.end(), 0);
-		for (size_t k = 0; k < in.size(); k++) count[pick(rng)]++;
-		const auto sol = geometry::solveStereoPoseCounted(calib, in, count, T_curr_ref, so, &atSolve);
-		if (!sol.ok) continue;
-		const Vector6d xi = geometry::localLeft(sol.T_curr_ref.inverse(), T_ref_curr);
-		C += xi * xi.transpose();
-		solved++;
-	}
-	return solved >= 2 ? Matrix6d(C / (solved - 1)) : Matrix6d::Zero();
-}
-
-/** The smallest covariance at least as large as both A and B in the
- * directions where each is larger (A's whitening, B's eigenvalues in it
- * clamped to >= 1); A when B is zero. B is a sample covariance of `samples`
- * draws: in A's whitening, when A is right, its eigenvalues scatter up to
- * the Marchenko-Pastur edge (1 + sqrt(6 / (samples - 1)))^2 (about 2 for 30
- * draws) by chance alone, so eigenvalues below the edge are taken as 1 (no
- * evidence that A is too small there). */
-Matrix6d covarianceMax(const Matrix6d& A, const Matrix6d& B, int samples)
-{
-	const Eigen::LLT<Matrix6d> llt(0.5 * (A + A.transpose()));
-	if (llt.info() != Eigen::Success) return A + B;
-	const Matrix6d L = llt.matrixL();
-	const Matrix6d Li = L.inverse();
-	const Matrix6d M = Li * (0.5 * (B + B.transpose())) * Li.transpose();
-	Eigen::SelfAdjointEigenSolver<Matrix6d> es(M);
-	const double edge = std::pow(1.0 + std::sqrt(6.0 / std::max(1, samples - 1)), 2);
-	Vector6d d = es.eigenvalues();
-	for (int i = 0; i < 6; i++) d[i] = d[i] > edge ? d[i] : 1.0;
-	return L * es.eigenvectors() * d.asDiagonal() * es.eigenvectors().transpose() * L.transpose();
-}
-
-
-/** The largest standard deviation of a pose covariance's translation [m]. */
-double translationSigma(const Matrix6d& cov)
-{
-	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
-	return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
-}
-
-/** ... and of its rotation [rad]. */
-double rotationSigma(const Matrix6d& cov)
-{
-	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
-	return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
-}
 }  // namespace
-
-Matrix6d fixCovariance(const Matrix6d& solver, const Matrix6d& bootstrap, double cov_scale, int samples)
-{
-	const Matrix6d scaled = cov_scale * solver;
-	if (samples < 2 || bootstrap.isZero(0)) return scaled;
-	return covarianceMax(scaled, bootstrap, samples);
-}
 
 vo::TKeyframeMatcherOptions matcherOptionsFor(const TLocaliserOptions& o, SearchMode mode)
 {
@@ -275,24 +151,7 @@ const features::BriefExtractor* StereoLocaliser::briefPattern() const
 																										   : nullptr;
 }
 
-TPoseWithCov StereoLocaliser::between(uint32_t a, uint32_t b) const
-{
-	TPoseWithCov r;
-	if (a == b) return r;
-	if (m_map.sameSegment(a, b))
-	{
-		const auto rp = m_map.relativePose(a, b);
-		r.T = rp.T_a_b;
-		r.cov = rp.cov;
-		return r;
-	}
-	// Across a VO break: the map poses (one of them only predicted), with a
-	// covariance that says so.
-	r.T = m_map.keyframe(a).T_map_kf.inverse() * m_map.keyframe(b).T_map_kf;
-	const double st = m_opts.cross_segment_sigma_m, sr = m_opts.cross_segment_sigma_deg * kDeg;
-	r.cov.diagonal() << st * st, st * st, st * st, sr * sr, sr * sr, sr * sr;
-	return r;
-}
+TPoseWithCov StereoLocaliser::between(uint32_t a, uint32_t b) const { return keyframeLink(m_map, m_opts, a, b); }
 
 TKeyframePose StereoLocaliser::chooseKeyframe(const TKeyframePose& pred) const
 {
@@ -355,23 +214,6 @@ std::vector<uint32_t> StereoLocaliser::window(uint32_t ref, const Eigen::Isometr
 		if (static_cast<int>(w.size()) < m_opts.kf_window_max) w.push_back(dk.second);
 	return w;
 }
-
-namespace
-{
-/** A correspondence with a landmark of keyframe k moved into keyframe ref's
- * frame; its measurement there is the landmark's projection (the two-view
- * adjustment needs one). False when it lies behind ref's camera. */
-bool intoReference(
-	geometry::TStereoCorrespondence& corr, const Eigen::Isometry3d& T_ref_k, const geometry::TStereoCalib& calibKf)
-{
-	corr.P_ref = T_ref_k * corr.P_ref;
-	corr.cov_ref = T_ref_k.linear() * corr.cov_ref * T_ref_k.linear().transpose();
-	if (!(corr.P_ref.z() > 0.5)) return false;
-	corr.z_ref = calibKf.project(corr.P_ref);
-	corr.calib_ref = calibKf;
-	return true;
-}
-}  // namespace
 
 void StereoLocaliser::searchLocalMapByPatches(
 	const TLocaliserInput& in, uint32_t ref, const Eigen::Isometry3d& T_curr_ref, vo::TKeyframeMatchOutput& out,
@@ -461,19 +303,6 @@ void StereoLocaliser::searchLocalMap(
 
 namespace
 {
-LocaliserStatus statusOf(AcceptanceVerdict v)
-{
-	switch (v)
-	{
-		case AcceptanceVerdict::Fix: return LocaliserStatus::Ok;
-		case AcceptanceVerdict::Unconfirmed: return LocaliserStatus::Unconfirmed;
-		case AcceptanceVerdict::Uncounted: return LocaliserStatus::Uncertain;
-		case AcceptanceVerdict::PredictionInconsistent: return LocaliserStatus::PredictionInconsistent;
-		case AcceptanceVerdict::MotionInconsistent: return LocaliserStatus::MotionInconsistent;
-	}
-	return LocaliserStatus::SolverFailed;
-}
-
 /** The correspondences' live pixels, marked where the solve kept them (a
  * solve of another search than mo's, after a retry, marks none). */
 std::vector<TLiveMatch> liveMatchesOf(const vo::TKeyframeMatchOutput& mo, const vo::TRelativePoseOutput& po)
@@ -486,7 +315,7 @@ std::vector<TLiveMatch> liveMatchesOf(const vo::TKeyframeMatchOutput& mo, const 
 }
 }  // namespace
 
-TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in)
+TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in, TSearchedCorrespondences* searched)
 {
 	const auto t0 = std::chrono::steady_clock::now();
 	const auto& o = m_opts;
@@ -495,6 +324,7 @@ TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in)
 	r.frame = in.frame;
 	r.timestamp = in.timestamp;
 	r.channel = m_channel;
+	if (searched) *searched = TSearchedCorrespondences();
 	// Any frame without a consistent solve is a failure: consistency starts again.
 	auto fail = [&](LocaliserStatus s) {
 		r.status = s;
@@ -528,27 +358,18 @@ TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in)
 	vo::TRelativePoseOutput po;
 	const LocaliserStatus searchStatus = searchAndSolve(in, matchKf, pred, mo, po, r);
 	r.live_matches = liveMatchesOf(mo, po);
+	// What the search found, solved or not: the joint localiser's share
+	// (correspondences in the matched keyframe, reported as the chosen one).
+	if (searched && searchStatus != LocaliserStatus::Lost)
+	{
+		searched->kf = r.kf_id;
+		searched->corr = mo.corr;
+	}
 	if (searchStatus != LocaliserStatus::Ok) return fail(searchStatus);
-	r.solved = true;
-	r.var_factor = varianceFactor(in.calib, mo.corr, po.inlier, po.T_curr_ref, solverOptionsFor(o));
-	r.T_kf_live = po.T_curr_ref.inverse();
-	const uint32_t seed = static_cast<uint32_t>(in.frame * 2654435761u + 7) ^ 0x9e3779b9u;
-	r.cov = solveCovariance(in.calib, mo.corr, po, seed);
-	r.sigma_m = translationSigma(r.cov);
-	r.sigma_deg = rotationSigma(r.cov) / kDeg;
+	describeSolve(o, in.calib, mo.corr, po, in.frame, r);
 
 	// ---- 4. acceptance (FixAcceptance.h) ---------------------------------------------------
-	const bool uncertain = !certain(r.cov);
-	if (uncertain && o.uncertain_breaks_chain) return fail(LocaliserStatus::Uncertain);
-	TSolve sv;
-	sv.frame = in.frame;
-	sv.pose = r.pose();  // r.kf_id is pred.kf
-	const TAcceptance acc = m_accept.judge(
-		sv, in.prediction, in.motion, in.track_confirmed, !uncertain, [this](uint32_t a, uint32_t b) { return between(a, b); });
-	r.prediction_d2 = acc.prediction_d2;
-	r.motion_d2 = acc.motion_d2;
-	r.consistent = acc.consistent;
-	r.status = statusOf(acc.verdict);
+	acceptSolve(m_accept, o, in, [this](uint32_t a, uint32_t b) { return between(a, b); }, r);
 	r.ms = msSince(t0);
 	return r;
 }
@@ -656,24 +477,6 @@ LocaliserStatus StereoLocaliser::searchAndSolve(
 		}
 	}
 	return status;
-}
-
-Matrix6d StereoLocaliser::solveCovariance(
-	const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
-	const vo::TRelativePoseOutput& po, uint32_t seed) const
-{
-	const auto& o = m_opts;
-	return fixCovariance(
-		po.cov_T_ref_curr,
-		o.bootstrap_samples > 0 ? bootstrapCovariance(calib, corr, po.inlier, po.T_curr_ref, o, seed) : Matrix6d::Zero(),
-		o.cov_scale, o.bootstrap_samples);
-}
-
-bool StereoLocaliser::certain(const Matrix6d& cov) const
-{
-	const auto& o = m_opts;
-	return !(o.max_sigma_m > 0 && translationSigma(cov) > o.max_sigma_m) &&
-		   !(o.max_sigma_deg > 0 && rotationSigma(cov) > o.max_sigma_deg * kDeg);
 }
 
 void StereoLocaliser::putNearestFirst(
@@ -834,8 +637,8 @@ TGlobalPlace StereoLocaliser::bestPlace(
 	out.pose.T_kf_live = best.T_kf_live;
 	// The covariance a tracked solve of the same matches gets (bootstrap
 	// included): a place is a fix only under the same sigma bounds.
-	out.pose.cov = solveCovariance(calib, best.corr, best.solve, seed + best.kf);
-	out.certain = certain(out.pose.cov);
+	out.pose.cov = solveCovariance(m_opts, calib, best.corr, best.solve, seed + best.kf);
+	out.certain = withinFixBounds(m_opts, out.pose.cov);
 	if (best.inliers < o.global_min_inliers)
 	{
 		out.why = "best place has " + std::to_string(best.inliers) + " inliers (< " +

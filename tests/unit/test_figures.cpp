@@ -164,7 +164,7 @@ TEST(FiguresCsv, BadInputNamesFileLineAndColumn)
 		{"flag.csv", kHeader + "\n" + "0,100.0,0.0,yes,1,0,mono,noon,3,1,100.3,50,20,0.1,0,0.2,0,0,0,1\n",
 		 "line 2: column 'in_map': 'yes' is not 0 or 1"},
 		{"used.csv", kHeader + "\n" + "0,100.0,0.0,1,1,0,both,noon,3,1,100.3,50,20,0.1,0,0.2,0,0,0,1\n",
-		 "line 2: column 'used': 'both' is not mono, invariant or none"},
+		 "line 2: column 'used': 'both' is not mono, invariant, joint or none"},
 		{"frame.csv", kHeader + "\n" + "0.5,100.0,0.0,1,1,0,mono,noon,3,1,100.3,50,20,0.1,0,0.2,0,0,0,1\n",
 		 "line 2: column 'frame': '0.5' is not a whole number"},
 		{"back.csv", kHeader + "\n" + row + "1,100.1,-2.0,1,1,0,mono,noon,3,1,100.3,50,20,0.1,0,0.2,0,0,0,1\n",

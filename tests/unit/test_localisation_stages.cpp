@@ -4,8 +4,9 @@
  * here: drift that grew with the square root of the distance, a rejected
  * solve kept as the motion test's reference, an unconfirmed solve that
  * validated the next frame against itself, the bootstrap covariance
- * inflated twice. */
+ * inflated twice. The joint localiser's solve of two channels' searches. */
 #include <shadyloc/localisation/FixAcceptance.h>
+#include <shadyloc/localisation/JointLocaliser.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
 #include <shadyloc/localisation/StereoLocaliser.h>
 #include <shadyloc/localisation/Track.h>
@@ -448,4 +449,81 @@ TEST(LocalisationStages, DisagreeingFixesOfOneFrameGoToTheMoreCertain)
 	EXPECT_EQ(chooseFix({poseAt(1.0, 0.12), poseAt(0.4, 0.02, 1)}, {0.12, 0.02}, ahead06, chi2), 0u);
 	EXPECT_EQ(chooseFix({poseAt(1.0, 0.12), poseAt(1.0, 0.02, 1)}, {0.12, 0.02}, ahead06, chi2), 1u);
 	EXPECT_THROW(chooseFix({poseAt(1.0, 0.1)}, {}, identityLink, chi2), std::invalid_argument);
+}
+
+namespace
+{
+/** A channel's search of one live frame, as a localiser hands it on: `n`
+ * landmarks of keyframe 0 between depths zMin and zMax, seen from the live
+ * camera at T_kf_live with `noise_px` on each coordinate, expressed in
+ * keyframe `kf` (through T_kf_0). */
+TSearchedCorrespondences searchOf(
+	const geometry::TStereoCalib& cal, const Eigen::Isometry3d& T_kf_live, int n, double zMin, double zMax,
+	double noise_px, uint32_t seed, uint32_t kf = 0, const Eigen::Isometry3d& T_kf_0 = Eigen::Isometry3d::Identity())
+{
+	std::mt19937 rng(seed);
+	std::uniform_real_distribution<double> U(0, 1);
+	std::normal_distribution<double> N(0, noise_px);
+	TSearchedCorrespondences s;
+	s.kf = kf;
+	for (int i = 0; i < n; i++)
+	{
+		const double z = zMin + (zMax - zMin) * U(rng);
+		const Eigen::Vector3d P0((U(rng) - 0.5) * 0.8 * z, (U(rng) - 0.3) * 0.4 * z, z);
+		geometry::TStereoCorrespondence c;
+		c.P_ref = T_kf_0 * P0;
+		c.calib_ref = cal;
+		c.z_ref = cal.project(c.P_ref);
+		c.z_curr = cal.project(T_kf_live.inverse() * P0) + Eigen::Vector3d(N(rng), N(rng), N(rng));
+		cal.triangulate(c.z_curr.x(), c.z_curr.y(), c.z_curr.z(), c.P_curr);
+		s.corr.push_back(c);
+	}
+	return s;
+}
+}  // namespace
+
+// Two channels whose searches each hold too few matches for a solve of
+// their own (12 near, 12 far; min_matches 15) solve together; the union is
+// the same whichever keyframe a channel searched in (joined through the chain).
+TEST(LocalisationStages, JointLocaliserSolvesTheUnionOfTwoChannelsSearches)
+{
+	const auto map = test::makeSyntheticMap(4, 4, 0);
+	const geometry::TStereoCalib cal = map->calibration();
+	TLocaliserOptions o;  // min_matches 15, min_inliers 20
+	Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+	truth.translation() = Eigen::Vector3d(0.15, -0.02, 0.9);
+	truth.linear() = Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitY()).toRotationMatrix();
+	const auto near = searchOf(cal, truth, 12, 3, 8, 0.3, 1);
+	const auto far = searchOf(cal, truth, 12, 20, 40, 0.3, 2);
+
+	TLocaliserInput in;
+	in.frame = 7;
+	in.calib = cal;
+	in.prediction = poseAt(0.9, 0.1);
+	in.track_confirmed = true;
+	in.motion = step(0.9);
+
+	JointLocaliser one(*map, {"mono", "invariant"}, o);
+	EXPECT_EQ(one.localise(in, {&near, nullptr}).status, LocaliserStatus::FewMatches) << "12 matches alone";
+	JointLocaliser joint(*map, {"mono", "invariant"}, o);
+	const TLocaliserResult r = joint.localise(in, {&near, &far});
+	EXPECT_EQ(r.channel, "joint");
+	EXPECT_EQ(r.matches, 24);
+	EXPECT_EQ(r.status, LocaliserStatus::Ok) << toString(r.status);
+	ASSERT_TRUE(r.solved);
+	// 0.3 px on 24 landmarks, a third of them within 8 m: centimetres.
+	EXPECT_LT((r.T_kf_live.translation() - truth.translation()).norm(), 0.05);
+	EXPECT_GT(r.sigma_m, 0);
+
+	// The far channel's search in keyframe 1: moved into keyframe 0 through
+	// the map's chain, the same solve.
+	const Eigen::Isometry3d T_1_0 = joint.between(1, 0).T;
+	const auto farIn1 = searchOf(cal, truth, 12, 20, 40, 0.3, 2, 1, T_1_0);
+	JointLocaliser across(*map, {"mono", "invariant"}, o);
+	const TLocaliserResult a = across.localise(in, {&near, &farIn1});
+	ASSERT_TRUE(a.solved);
+	EXPECT_EQ(a.kf_id, 0u);
+	EXPECT_LT((a.T_kf_live.translation() - r.T_kf_live.translation()).norm(), 1e-6);
+	EXPECT_THROW(JointLocaliser(*map, {"mono"}, o), std::invalid_argument);
+	EXPECT_THROW(JointLocaliser(*map, {"mono", "colour"}, o), std::exception);
 }

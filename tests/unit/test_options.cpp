@@ -216,8 +216,10 @@ class Perturber : public core::KeyVisitor
 	}
 	bool alternative(core::Words& w, const Range&)
 	{
-		if (m_choice > 0) return false;
+		// One more word, then two (a list that needs two or none).
+		if (m_choice > 1) return false;
 		w.push_back("extra");
+		if (m_choice == 1) w.push_back("extra2");
 		return true;
 	}
 	template <typename T>

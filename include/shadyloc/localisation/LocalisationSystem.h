@@ -24,6 +24,7 @@
 
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/filters/Channel.h>
+#include <shadyloc/localisation/JointLocaliser.h>
 #include <shadyloc/localisation/StereoLocaliser.h>
 #include <shadyloc/localisation/Track.h>
 #include <shadyloc/map/CKeyframeMap.h>
@@ -52,6 +53,11 @@ struct TSystemOptions
 {
 	/** Localisers, in policy order (the first with an accepted fix is used). */
 	std::vector<std::string> localisers = {"mono", "invariant"};
+	/** Channels whose searches one more localiser solves together
+	 * (JointLocaliser.h; its options [localiser.joint]); first in policy
+	 * order. Runs only when every channel named is one of the localisers, so
+	 * the baseline (`--localisers mono`) stays the paper's. Empty = none. */
+	std::vector<std::string> joint;
 	std::string vo_channel = "mono";  //!< the channel of the live VO that predicts for all
 	/** A second live VO on this channel ("" = none) whose step replaces the
 	 * VO channel's where that one could not measure the step (too few
@@ -148,7 +154,8 @@ class LocalisationSystem : public mrpt::system::COutputLogger
 	 * channels and keyframes. */
 	LocalisationSystem(
 		CKeyframeMap::Ptr map, const std::vector<TChannelSetup>& channels, const vo::TStereoVOOptions& vo,
-		const TSystemOptions& o, const std::optional<vo::TStereoVOOptions>& voFallback = std::nullopt);
+		const TSystemOptions& o, const std::optional<vo::TStereoVOOptions>& voFallback = std::nullopt,
+		const std::optional<TLocaliserOptions>& joint = std::nullopt);
 
 	/** From a config: [localise], [localiser], [localiser.<channel>], [vo],
 	 * [features] and their channel sections, the channel filter sections.
@@ -167,6 +174,8 @@ class LocalisationSystem : public mrpt::system::COutputLogger
 		/** The fallback VO's options (its channel's [vo.<channel>]), when it runs. */
 		std::optional<vo::TStereoVOOptions> voFallback;
 		TSystemOptions system;
+		/** The joint localiser's options ([localiser], [localiser.joint]), when it runs. */
+		std::optional<TLocaliserOptions> joint;
 	};
 	static TSetup SetupFromConfig(
 		const mrpt::config::CConfigFileBase& cfg, const std::vector<std::string>& localisers, int threads,
@@ -198,6 +207,8 @@ class LocalisationSystem : public mrpt::system::COutputLogger
 	void setFrameHook(FrameHook hook) { m_hook = std::move(hook); }
 	/** The localiser of a channel (nullptr: the channel only feeds the VO). */
 	const StereoLocaliser* localiser(const std::string& label) const;
+	/** The joint localiser (nullptr: none runs). */
+	const JointLocaliser* jointLocaliser() const { return m_joint.get(); }
 
 	const CKeyframeMap& map() const { return *m_map; }
 	const TSystemOptions& options() const { return m_opts; }
@@ -236,6 +247,8 @@ class LocalisationSystem : public mrpt::system::COutputLogger
 	std::vector<TPipe> m_pipes;	 //!< the VO channel first
 	TVOTrack m_vo;
 	std::unique_ptr<TVOTrack> m_voFallback;	 //!< null: no fallback VO
+	std::unique_ptr<JointLocaliser> m_joint;  //!< null: no joint localiser
+	std::vector<size_t> m_jointPipes;  //!< the pipes whose searches it joins, in its channels' order
 	/** Each channel's live measurements and their VO's motion (the front end). */
 	void frontEnd(
 		const ChannelImages& images, const geometry::TStereoCalib& calib, double timestamp,
@@ -244,10 +257,11 @@ class LocalisationSystem : public mrpt::system::COutputLogger
 	 * the others on a second one when threads >= 2. */
 	template <typename F>
 	void forLocalisers(F&& fn);
+	/** The accepted fix the frame uses (chooseFix over the results in
+	 * policy order), or null. */
+	const TLocaliserResult* policyFix(const std::vector<const TLocaliserResult*>& inOrder) const;
 	/** The accepted solve `r` as the track takes it (fused with the
 	 * prediction while the track is confirmed). */
-	/** The accepted fix the frame uses (chooseFix over `order`), or null. */
-	const TLocaliserResult* policyFix(const std::vector<TLocaliserResult>& res, const std::vector<size_t>& order) const;
 	TKeyframePose fusedFix(const TLocaliserResult& r, const TKeyframePose& pred, bool confirmed) const;
 	/** Searches for the place (scope) and adopts the first verified one in
 	 * policy order: a fix when it agrees with a confirmed track, or when it

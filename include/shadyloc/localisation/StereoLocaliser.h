@@ -310,6 +310,16 @@ struct TLocaliserResult
 	std::vector<TLiveMatch> live_matches;
 };
 
+/** What a localiser's search found on one frame, solved or not: the
+ * correspondences of its last search (refined, the patch pass's included),
+ * in keyframe kf's frame. Empty when it did not search (no keyframe, lost).
+ * The joint localiser solves the union of several channels' (JointLocaliser.h). */
+struct TSearchedCorrespondences
+{
+	uint32_t kf = 0;
+	std::vector<geometry::TStereoCorrespondence> corr;
+};
+
 /** A place found by the global search. */
 struct TGlobalPlace
 {
@@ -330,8 +340,9 @@ class StereoLocaliser
 	 * channels if absent). The map must outlive the localiser. */
 	StereoLocaliser(const CKeyframeMap& map, const std::string& channel, const TLocaliserOptions& o);
 
-	/** One frame (see the file comment). Keeps the state of the failure test. */
-	TLocaliserResult localise(const TLocaliserInput& in);
+	/** One frame (see the file comment). Keeps the state of the failure test.
+	 * With `searched`, also what the search found (for a joint solve). */
+	TLocaliserResult localise(const TLocaliserInput& in, TSearchedCorrespondences* searched = nullptr);
 
 	/** A place for the live frame with no prior. Const: one instance may run
 	 * it while another thread uses a different localiser. */
@@ -383,13 +394,6 @@ class StereoLocaliser
 		const TLocaliserInput& in, uint32_t ref, const TKeyframePose& pred, vo::TKeyframeMatchOutput& mo,
 		vo::TRelativePoseOutput& po, TLocaliserResult& r) const;
 
-	/** A solve's covariance as a fix carries it (scaled solver's, at least
-	 * the bootstrap's over its inliers). */
-	geometry::Matrix6d solveCovariance(
-		const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
-		const vo::TRelativePoseOutput& po, uint32_t seed) const;
-	/** Within the fix bounds (max_sigma_m, max_sigma_deg; 0 = none). */
-	bool certain(const geometry::Matrix6d& cov) const;
 	/** A place the global search verified: its solve and correspondences. */
 	struct TVerifiedPlace
 	{
