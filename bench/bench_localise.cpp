@@ -164,6 +164,15 @@ BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_fallback_vo, 2, "[localise]\nvo_
 	->Unit(benchmark::kMillisecond)
 	->UseManualTime()
 	->Iterations(600);
+// With and without the joint localiser (JointLocaliser.h): its cost is the difference.
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_joint, 2, "[localise]\njoint = mono invariant\n")
+	->Unit(benchmark::kMillisecond)
+	->UseManualTime()
+	->Iterations(600);
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_joint, 2, "[localise]\njoint =\n")
+	->Unit(benchmark::kMillisecond)
+	->UseManualTime()
+	->Iterations(600);
 // Without the patch pass and the warped patches (docs/localisation.md,
 // "Patches that follow the viewpoint"): their cost is the difference.
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_patch_pass, 2, "[localiser]\npatch_search = false\nwarp_patches = false\n")

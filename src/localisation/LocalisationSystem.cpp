@@ -90,6 +90,11 @@ void TSystemOptions::keys(core::KeyVisitor& v)
 	  "while the track is confirmed, a fix is the solve fused with the prediction");
 	v("cross_check_fixes", track.cross_check_fixes, "", Range::any(),
 	  "where the localisers' fixes of a frame disagree, the most certain is used");
+	v.choice("reject_contradicted", track.reject_contradicted,
+			 {{"none", TTrackOptions::Contradicted::Kept},
+			  {"joint", TTrackOptions::Contradicted::Joint},
+			  {"all", TTrackOptions::Contradicted::All}},
+			 "none | joint | all: whose fix that disagrees with a more certain one of the frame is no fix");
 	v("confirmed_track_outranks_places", track.confirmed_track_outranks_places, "", Range::any(),
 	  "a place that is no fix replaces a confirmed track only when the more certain");
 	v("global_search_after_frames", track.global_search_after_frames, "frames", Range::any(),
@@ -471,6 +476,43 @@ const TLocaliserResult* LocalisationSystem::policyFix(const std::vector<const TL
 	return accepted[k];
 }
 
+void LocalisationSystem::rejectContradicted(std::vector<TLocaliserResult>& results)
+{
+	std::vector<TLocaliserResult*> accepted;
+	std::vector<TKeyframePose> fixes;
+	std::vector<double> sigma;
+	for (auto& r : results)
+		if (r.accepted())
+		{
+			accepted.push_back(&r);
+			fixes.push_back(r.pose());
+			sigma.push_back(r.sigma_m);
+		}
+	if (accepted.size() < 2) return;
+	// Every localiser links keyframes through the same map; the first channel
+	// localiser's options (cross-segment covariance, chi^2) judge.
+	const StereoLocaliser* L = nullptr;
+	for (const auto& p : m_pipes)
+		if (!L && p.localiser) L = p.localiser.get();
+	const KeyframeLink link = [L](uint32_t a, uint32_t b) { return L->between(a, b); };
+	const std::vector<bool> contradicted = contradictedFixes(fixes, sigma, link, L->options().prediction_chi2);
+	for (size_t i = 0; i < accepted.size(); i++)
+	{
+		TLocaliserResult& r = *accepted[i];
+		const bool joint = r.channel == JointLocaliser::kLabel;
+		if (!contradicted[i] || (m_opts.track.reject_contradicted == TTrackOptions::Contradicted::Joint && !joint))
+			continue;
+		r.status = LocaliserStatus::Contradicted;
+		r.consistent = 0;
+		if (joint)
+			m_joint->forgetSolve();
+		else
+			for (auto& p : m_pipes)
+				if (p.localiser && p.setup.channel.label == r.channel) p.localiser->forgetSolve();
+		MRPT_LOG_DEBUG_FMT("frame %zu: the %s fix (sigma %.3f m) contradicts a more certain one", r.frame, r.channel.c_str(), r.sigma_m);
+	}
+}
+
 TKeyframePose LocalisationSystem::fusedFix(const TLocaliserResult& r, const TKeyframePose& pred, bool confirmed) const
 {
 	TKeyframePose f = r.pose();
@@ -624,6 +666,7 @@ TLocalisationUpdate LocalisationSystem::processChannels(
 		inOrder.push_back(&u.localisers.back());
 	}
 	for (size_t k = 0; k < order.size(); k++) inOrder.push_back(&u.localisers[k]);
+	if (m_opts.track.reject_contradicted != TTrackOptions::Contradicted::Kept) rejectContradicted(u.localisers);
 
 	// ---- the policy: the first accepted fix in policy order (the most certain
 	// where they disagree), else dead reckoning

@@ -122,6 +122,7 @@ std::string toString(LocaliserStatus s)
 		case LocaliserStatus::Uncertain: return "uncertain";
 		case LocaliserStatus::PredictionInconsistent: return "prediction_inconsistent";
 		case LocaliserStatus::MotionInconsistent: return "motion_inconsistent";
+		case LocaliserStatus::Contradicted: return "contradicted";
 	}
 	return "?";
 }

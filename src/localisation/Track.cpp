@@ -175,4 +175,22 @@ size_t chooseFix(
 	return static_cast<size_t>(std::min_element(sigma_m.begin(), sigma_m.end()) - sigma_m.begin());
 }
 
+std::vector<bool> contradictedFixes(
+	const std::vector<TKeyframePose>& fixes, const std::vector<double>& sigma_m, const KeyframeLink& link, double chi2)
+{
+	if (fixes.size() != sigma_m.size()) throw std::invalid_argument("contradictedFixes: one sigma per fix");
+	std::vector<size_t> byCertainty(fixes.size());
+	for (size_t i = 0; i < fixes.size(); i++) byCertainty[i] = i;
+	std::stable_sort(byCertainty.begin(), byCertainty.end(), [&](size_t a, size_t b) { return sigma_m[a] < sigma_m[b]; });
+	std::vector<bool> contradicted(fixes.size(), false);
+	std::vector<size_t> kept;
+	for (const size_t i : byCertainty)
+	{
+		for (const size_t k : kept)
+			if (predictionDistance2(fixes[i], fixes[k], link) > chi2) contradicted[i] = true;
+		if (!contradicted[i]) kept.push_back(i);
+	}
+	return contradicted;
+}
+
 }  // namespace shadyloc::localisation

@@ -96,7 +96,8 @@ CKeyframeMap::Ptr surveyCorridor(uint32_t seed, int nKf, double z0 = 2.0)
 }
 
 std::unique_ptr<LocalisationSystem> makeSystem(
-	const CKeyframeMap::Ptr& map, int threads, const std::string& extraIni = "")
+	const CKeyframeMap::Ptr& map, int threads, const std::string& extraIni = "",
+	const std::vector<std::string>& localisers = {})
 {
 	std::string ini =
 		"[localise]\nthreads = " + std::to_string(threads) +
@@ -105,7 +106,7 @@ std::unique_ptr<LocalisationSystem> makeSystem(
 		"[localiser]\nmin_inliers = 15\n" +
 		extraIni;
 	mrpt::config::CConfigFileMemory cfg(ini);
-	return LocalisationSystem::FromConfig(cfg, map, {}, threads, "test config");
+	return LocalisationSystem::FromConfig(cfg, map, localisers, threads, "test config");
 }
 
 struct TLiveRun
@@ -257,6 +258,43 @@ TEST_F(LocalisationCorridor, SameResultsWithOneAndTwoThreads)
 		fixes += x.localised();
 	}
 	EXPECT_GT(fixes, 5);  // the comparison covered localised frames
+}
+
+TEST_F(LocalisationCorridor, JointLocaliserSolvesBothChannelsMatchesAndComesFirst)
+{
+	// The same live run with the joint localiser ([localise] joint): its
+	// fixes are as accurate as the channels' (5 cm, 0.5 deg), it fixes most
+	// frames, it is used whenever it has a fix (first in policy order; here
+	// nothing contradicts it), and the system localises no fewer frames.
+	auto plain = makeSystem(s_map, 2);
+	auto withJoint = makeSystem(s_map, 2, "[localise]\njoint = mono invariant\n");
+	ASSERT_NE(withJoint->jointLocaliser(), nullptr);
+	ASSERT_EQ(plain->jointLocaliser(), nullptr);
+	const auto base = liveRun(*plain, 1, 40, 0.3);
+	const auto run = liveRun(*withJoint, 1, 40, 0.3);
+	int jointFixes = 0, localised = 0, localisedBefore = 0;
+	for (size_t i = 0; i < run.ups.size(); i++)
+	{
+		const auto& u = run.ups[i];
+		ASSERT_EQ(u.localisers.size(), 3u);
+		const TLocaliserResult* j = u.result("joint");
+		ASSERT_NE(j, nullptr);
+		if (j->accepted())
+		{
+			jointFixes++;
+			const auto [em, ed] = fixError(*s_map, j->kf_id, j->T_kf_live, run.gt[i].T);
+			EXPECT_LT(em, 0.05) << "frame " << i;
+			EXPECT_LT(ed, 0.5) << "frame " << i;
+			EXPECT_EQ(u.used, "joint") << "frame " << i;
+			EXPECT_GE(j->matches, std::max(u.result("mono")->matches, u.result("invariant")->matches)) << "frame " << i;
+		}
+		localised += u.localised();
+		localisedBefore += base.ups[i].localised();
+	}
+	EXPECT_GE(jointFixes, 30);
+	EXPECT_GE(localised, localisedBefore);
+	// The baseline alone has no joint localiser to run.
+	EXPECT_EQ(makeSystem(s_map, 1, "[localise]\njoint = mono invariant\n", {"mono"})->jointLocaliser(), nullptr);
 }
 
 TEST_F(LocalisationCorridor, StartKeyframeRestrictsTheFirstSearch)

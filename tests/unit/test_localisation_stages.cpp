@@ -527,3 +527,29 @@ TEST(LocalisationStages, JointLocaliserSolvesTheUnionOfTwoChannelsSearches)
 	EXPECT_THROW(JointLocaliser(*map, {"mono"}, o), std::invalid_argument);
 	EXPECT_THROW(JointLocaliser(*map, {"mono", "colour"}, o), std::exception);
 }
+
+// The system's cross-check, as a rejection: a fix that disagrees with a
+// more certain one of the same frame is no fix, whatever the policy order;
+// fixes that agree are all kept.
+TEST(LocalisationStages, AFixContradictedByAMoreCertainOneIsRejected)
+{
+	const double chi2 = 16.81;
+	using V = std::vector<bool>;
+	// Agreeing: 3 cm apart at 2-5 cm.
+	EXPECT_EQ(contradictedFixes({poseAt(1.00, 0.05), poseAt(1.03, 0.02)}, {0.05, 0.02}, identityLink, chi2), V({false, false}));
+	// 0.6 m apart at 0.12 and 0.02 m: the less certain goes, first or second.
+	EXPECT_EQ(contradictedFixes({poseAt(1.0, 0.12), poseAt(1.6, 0.02)}, {0.12, 0.02}, identityLink, chi2), V({true, false}));
+	EXPECT_EQ(contradictedFixes({poseAt(1.0, 0.02), poseAt(1.6, 0.12)}, {0.02, 0.12}, identityLink, chi2), V({false, true}));
+	// Three (a joint fix and two channels'): the most certain is kept, one
+	// that agrees with it too, the one that agrees with neither goes.
+	EXPECT_EQ(contradictedFixes(
+				  {poseAt(1.6, 0.12), poseAt(1.0, 0.03), poseAt(1.02, 0.02)}, {0.12, 0.03, 0.02}, identityLink, chi2),
+			  V({true, false, false}));
+	// A wide fix that agrees with both of two that disagree with each other
+	// is kept; of the two, the less certain goes.
+	EXPECT_EQ(contradictedFixes(
+				  {poseAt(1.0, 0.02), poseAt(1.3, 0.3), poseAt(1.6, 0.03)}, {0.02, 0.3, 0.03}, identityLink, chi2),
+			  V({false, false, true}));
+	EXPECT_TRUE(contradictedFixes({}, {}, identityLink, chi2).empty());
+	EXPECT_THROW(contradictedFixes({poseAt(1.0, 0.1)}, {}, identityLink, chi2), std::invalid_argument);
+}

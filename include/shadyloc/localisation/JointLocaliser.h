@@ -39,6 +39,7 @@ class JointLocaliser
 
 	/** See StereoLocaliser::reset, startFrom, between. */
 	void reset() { m_accept.reset(); }
+	void forgetSolve() { m_accept.noSolve(); }
 	void startFrom(size_t frame, const TKeyframePose& place) { m_accept.startFrom(frame, place); }
 	geometry::TPoseWithCov between(uint32_t a, uint32_t b) const;
 

@@ -5,8 +5,10 @@
  * config) run in parallel threads on every frame; the policy takes the first
  * localiser in its order that has an accepted fix (monochrome, then
  * invariant), and when none has, dead-reckons on VO until one re-acquires.
- * Not fused: the invariant estimate is noisier and slightly biased, so
- * switching beats fusing (the paper).
+ * The paper switched rather than fused because its invariant estimate is
+ * noisier and slightly biased; with `joint` one more localiser
+ * (JointLocaliser.h) solves both channels' correspondences together and
+ * comes first, each landmark counting by its own geometry.
  *
  * Stages per frame: the channels' front end and the motion source
  * (frontEnd), the predictor and policy (Track, Track.h), the localisers,
@@ -260,6 +262,9 @@ class LocalisationSystem : public mrpt::system::COutputLogger
 	/** The accepted fix the frame uses (chooseFix over the results in
 	 * policy order), or null. */
 	const TLocaliserResult* policyFix(const std::vector<const TLocaliserResult*>& inOrder) const;
+	/** Marks the frame's accepted fixes that a more certain one contradicts
+	 * (contradictedFixes) and makes their localisers forget them. */
+	void rejectContradicted(std::vector<TLocaliserResult>& results);
 	/** The accepted solve `r` as the track takes it (fused with the
 	 * prediction while the track is confirmed). */
 	TKeyframePose fusedFix(const TLocaliserResult& r, const TKeyframePose& pred, bool confirmed) const;

@@ -254,7 +254,8 @@ enum class LocaliserStatus
 	SolverFailed,
 	Uncertain,	//!< the fix's covariance exceeds max_sigma_m / max_sigma_deg (when set)
 	PredictionInconsistent,	 //!< the fix disagrees with the prediction
-	MotionInconsistent	//!< its frame-to-frame motion disagrees with VO's
+	MotionInconsistent,	 //!< its frame-to-frame motion disagrees with VO's
+	Contradicted  //!< accepted, but a more certain fix of the same frame disagrees (the system's cross-check)
 };
 std::string toString(LocaliserStatus s);
 
@@ -359,6 +360,9 @@ class StereoLocaliser
 
 	/** Forgets the previous solve and confirmation (a new start). */
 	void reset();
+	/** The system rejected this frame's accepted solve (contradicted): it
+	 * is no reference, and consistency starts again. */
+	void forgetSolve() { m_accept.noSolve(); }
 	/** A verified place at `frame` (the global search): the first consistent
 	 * frame of the new hypothesis. */
 	void startFrom(size_t frame, const TKeyframePose& place) { m_accept.startFrom(frame, place); }

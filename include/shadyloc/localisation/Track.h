@@ -57,6 +57,16 @@ struct TTrackOptions
 	/** When the localisers' fixes of one frame disagree, the most certain
 	 * is used, not the first in policy order (chooseFix). */
 	bool cross_check_fixes = true;
+	/** Which fixes that disagree with a more certain fix of the same frame
+	 * are no fix at all (status contradicted; contradictedFixes), their
+	 * localisers forgetting them (no reference either). */
+	enum class Contradicted
+	{
+		Kept,  //!< none: cross_check_fixes only chooses among them
+		Joint,	//!< the joint localiser's: the union pulled by one channel's wrong matches
+		All	 //!< any localiser's
+	};
+	Contradicted reject_contradicted = Contradicted::Kept;
 	/** A verified place that is no fix replaces a confirmed track only when
 	 * it is the more certain of the two (largest translational sigma, the
 	 * place's with global_sigma_m added), or when a second place agrees with
@@ -96,6 +106,13 @@ bool placeAgrees(const TKeyframePose& place, const TKeyframePose& pred, const Ke
  * nothing about which is: on the 301 m set the more certain was the nearer
  * the truth in 9 of 10 such frames (docs/localisation.md). */
 size_t chooseFix(
+	const std::vector<TKeyframePose>& fixes, const std::vector<double>& sigma_m, const KeyframeLink& link, double chi2);
+
+/** Which of one frame's accepted fixes are contradicted: taken from the
+ * most certain (smallest sigma_m) on, a fix that disagrees (chi^2 through
+ * `link` above `chi2`) with a more certain one that is kept is contradicted.
+ * The fixes kept agree pairwise. */
+std::vector<bool> contradictedFixes(
 	const std::vector<TKeyframePose>& fixes, const std::vector<double>& sigma_m, const KeyframeLink& link, double chi2);
 
 /** Where the place is searched for on a frame without a fix. */
