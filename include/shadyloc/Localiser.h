@@ -73,7 +73,8 @@ struct LocalisationUpdate
 {
 	mrpt::Clock::time_point timestamp;	//!< the observation's own timestamp
 	std::string reference_frame = "map";  //!< the frame `pose` is in
-	/** The localiser whose fix was used ("mono", "invariant"), "none" otherwise. */
+	/** The localiser whose fix was used ("mono", "invariant", or "joint":
+	 * both channels' matches in one solve), "none" otherwise. */
 	std::string method = "none";
 	LocalisationStatus status = LocalisationStatus::NoPlace;
 	/** The live left camera in the map frame, covariance over MRPT's

@@ -47,7 +47,7 @@ run("survey" ${env} ${prefix}/bin/shadyloc survey -q -i ${SIM_DIR}/noon.rawlog -
 run("example" ${example} ${WORK_DIR}/noon.kfmap ${SIM_DIR}/overcast.rawlog ${WORK_DIR}/overcast
   ${cfg}/vo_sim.ini ${cfg}/localise_sim.ini --frames ${FRAMES})
 message(STATUS "the example printed:\n${out}")
-string(REGEX MATCHALL "localised \\((mono|invariant)\\)" fixes "${out}")
+string(REGEX MATCHALL "localised \\((mono|invariant|joint)\\)" fixes "${out}")
 list(LENGTH fixes n)
 if(n LESS ${MIN_FIXES})
   message(FATAL_ERROR "${n} of the first ${FRAMES} frames localised, expected at least ${MIN_FIXES}")

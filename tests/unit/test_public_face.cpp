@@ -116,7 +116,7 @@ TEST(PublicFace, LocalisesSimulatedFramesAmongOtherObservations)
 	Localiser loc(mrpt::maps::CMetricMap::Ptr(map), opts);
 	EXPECT_THROW(loc.lastDiagnostics(), std::logic_error);
 	const auto& live = test::simSequence("overcast");
-	const std::set<std::string> methods = {"mono", "invariant"};
+	const std::set<std::string> methods = {"mono", "invariant", "joint"};
 	int localised = 0;
 	for (size_t i = 0; i < 15; i++)
 	{
