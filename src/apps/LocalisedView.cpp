@@ -23,6 +23,20 @@ mrpt::img::TColor colourOfUsed(const std::string& used)
 	return used == "joint" ? kJointColour : kNoneColour;
 }
 
+void HolderTally::add(const std::string& used)
+{
+	size_t& n = used == "mono" ? m_mono : used == "invariant" ? m_invariant : used == "joint" ? m_joint : m_none;
+	n++;
+}
+
+std::vector<HolderTally::TRow> HolderTally::rows() const
+{
+	std::vector<TRow> r{{"mono fix", m_mono, kMonoColour}, {"invariant fix", m_invariant, kInvariantColour}};
+	if (m_joint > 0) r.push_back({"joint fix", m_joint, kJointColour});
+	r.push_back({"no fix (VO)", m_none, kNoneColour});
+	return r;
+}
+
 std::string viewFileName(size_t frame)
 {
 	char name[32];
@@ -52,20 +66,16 @@ std::vector<TrajectoryLayer> localisedViewLayers(
 	TrajectoryLayer live;
 	live.name = "live";
 	live.widthPx = 6.0;
-	size_t counts[4] = {0, 0, 0, 0};
+	HolderTally tally;
 	for (const auto& u : ups)
 	{
 		if (!u.placeKnown) continue;
-		const int k = u.used == "mono" ? 0 : (u.used == "invariant" ? 1 : (u.used == "joint" ? 3 : 2));
-		counts[k]++;
+		tally.add(u.used);
 		if (!live.points.empty()) live.segmentColours.push_back(colourOfUsed(u.used));
 		live.points.push_back(toPoint(u.T_map_live.translation()));
 	}
-	live.legend = {{"mono fix: " + std::to_string(counts[0]) + " frames", kMonoColour},
-				   {"invariant fix: " + std::to_string(counts[1]), kInvariantColour},
-				   {"no fix (VO): " + std::to_string(counts[2]), kNoneColour}};
-	// Only where the joint localiser ran: the legends of today's figures stay as they are.
-	if (counts[3] > 0) live.legend.insert(live.legend.begin() + 2, {"joint fix: " + std::to_string(counts[3]), kJointColour});
+	for (const auto& row : tally.rows())
+		live.legend.push_back({row.what + ": " + std::to_string(row.frames) + (live.legend.empty() ? " frames" : ""), row.colour});
 	std::vector<TrajectoryLayer> layers{keyframesLayer(map, map.runs().empty() ? "" : map.runs().front())};
 	if (live.points.size() >= 2) layers.push_back(live);
 	// The latest pose: 1.5 m along its optical axis (z of the camera).

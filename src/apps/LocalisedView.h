@@ -22,8 +22,27 @@ constexpr mrpt::img::TColor kMonoColour{31, 98, 196}, kInvariantColour{230, 130,
 /** The joint localiser's fixes (both channels in one solve). */
 constexpr mrpt::img::TColor kJointColour{44, 160, 44};
 
-/** The colour of a frame held by `used` ("mono", "invariant", "" = none). */
+/** The colour of a frame held by `used` ("mono", "invariant", "joint", "" = none). */
 mrpt::img::TColor colourOfUsed(const std::string& used);
+
+/** Frames counted by who held them, for a legend: mono, invariant, joint
+ * (only where the joint localiser held any), then VO alone. */
+class HolderTally
+{
+   public:
+	struct TRow
+	{
+		std::string what;  //!< "mono fix", ..., "no fix (VO)"
+		size_t frames = 0;
+		mrpt::img::TColor colour;
+	};
+	void add(const std::string& used);
+	std::vector<TRow> rows() const;
+	size_t total() const { return m_mono + m_invariant + m_joint + m_none; }
+
+   private:
+	size_t m_mono = 0, m_invariant = 0, m_joint = 0, m_none = 0;
+};
 
 /** The map's keyframes as a grey band with a square each (the map's own
  * drawing is blue and orange, the localisers' colours here). */

@@ -37,9 +37,6 @@ std::pair<std::string, std::string> fileAndName(const std::string& spec)
 }
 
 // Colours of who held a frame (the same as docs/figures.md's figures).
-using apps::kInvariantColour;
-using apps::kJointColour;
-using apps::kMonoColour;
 using apps::kNoneColour;
 
 /** The live trajectory of a `shadyloc localise` output folder, each segment
@@ -56,7 +53,7 @@ render::TrajectoryLayer localisedLayer(const std::string& dir, const std::string
 	l.name = name;
 	l.colour = kNoneColour;
 	l.widthPx = 6.0;
-	size_t counts[4] = {0, 0, 0, 0};  // mono, invariant, none, joint
+	apps::HolderTally tally;
 	size_t f = 0;  // frames and poses are both in time order
 	for (const auto& p : traj)
 	{
@@ -66,22 +63,18 @@ render::TrajectoryLayer localisedLayer(const std::string& dir, const std::string
 				"'" + tumPath + "': the pose at " + std::to_string(p.t) + " s has no frame in '" + csvPath +
 				"' (not the same localise run?)");
 		const auto& u = run.frames[f].used;
-		const int k = u == "mono" ? 0 : (u == "invariant" ? 1 : (u == "joint" ? 3 : 2));
-		counts[k]++;
+		tally.add(u);
 		if (!l.points.empty()) l.segmentColours.push_back(apps::colourOfUsed(u));
 		const auto x = p.T.translation();
 		l.points.emplace_back(x.x(), x.y(), x.z());
 	}
 	if (l.points.size() < 2) throw std::runtime_error("'" + tumPath + "': fewer than two poses to draw");
-	const size_t n = counts[0] + counts[1] + counts[2] + counts[3];
-	auto share = [&](size_t k) {
-		return std::to_string(counts[k]) + " frames (" + std::to_string(int(std::lround(100.0 * counts[k] / n))) + " %)";
-	};
-	l.legend = {{name + ": mono fix, " + share(0), kMonoColour},
-				{name + ": invariant fix, " + share(1), kInvariantColour},
-				{name + ": no fix (VO), " + share(2), kNoneColour}};
-	// Only where the joint localiser ran (both channels in one solve).
-	if (counts[3] > 0) l.legend.insert(l.legend.begin() + 2, {name + ": joint fix, " + share(3), kJointColour});
+	const size_t n = tally.total();
+	for (const auto& row : tally.rows())
+		l.legend.push_back(
+			{name + ": " + row.what + ", " + std::to_string(row.frames) + " frames (" +
+				 std::to_string(int(std::lround(100.0 * row.frames / n))) + " %)",
+			 row.colour});
 	return l;
 }
 

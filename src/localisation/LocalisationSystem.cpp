@@ -464,16 +464,21 @@ const TLocaliserResult* LocalisationSystem::policyFix(const std::vector<const TL
 		sigma.push_back(r->sigma_m);
 	}
 	// The first accepted localiser's link and prediction test judge.
-	const bool joint = m_joint && accepted.front()->channel == JointLocaliser::kLabel;
-	const StereoLocaliser* L = joint ? nullptr : localiser(accepted.front()->channel);
-	const KeyframeLink link = [this, L](uint32_t a, uint32_t b) { return L ? L->between(a, b) : m_joint->between(a, b); };
-	const double chi2 = (L ? L->options() : m_joint->options()).prediction_chi2;
+	const auto [link, chi2] = comparisonOf(*accepted.front());
 	const size_t k = chooseFix(fixes, sigma, link, chi2);
 	if (k != 0)
 		MRPT_LOG_DEBUG_FMT(
 			"frame %zu: the fixes disagree; %s (sigma %.3f m) used, not %s (%.3f m)", accepted[k]->frame,
 			accepted[k]->channel.c_str(), sigma[k], accepted.front()->channel.c_str(), sigma.front());
 	return accepted[k];
+}
+
+std::pair<KeyframeLink, double> LocalisationSystem::comparisonOf(const TLocaliserResult& r) const
+{
+	if (m_joint && r.channel == JointLocaliser::kLabel)
+		return {[this](uint32_t a, uint32_t b) { return m_joint->between(a, b); }, m_joint->options().prediction_chi2};
+	const StereoLocaliser* L = localiser(r.channel);
+	return {[L](uint32_t a, uint32_t b) { return L->between(a, b); }, L->options().prediction_chi2};
 }
 
 void LocalisationSystem::rejectContradicted(std::vector<TLocaliserResult>& results)
@@ -489,13 +494,8 @@ void LocalisationSystem::rejectContradicted(std::vector<TLocaliserResult>& resul
 			sigma.push_back(r.sigma_m);
 		}
 	if (accepted.size() < 2) return;
-	// Every localiser links keyframes through the same map; the first channel
-	// localiser's options (cross-segment covariance, chi^2) judge.
-	const StereoLocaliser* L = nullptr;
-	for (const auto& p : m_pipes)
-		if (!L && p.localiser) L = p.localiser.get();
-	const KeyframeLink link = [L](uint32_t a, uint32_t b) { return L->between(a, b); };
-	const std::vector<bool> contradicted = contradictedFixes(fixes, sigma, link, L->options().prediction_chi2);
+	const auto [link, chi2] = comparisonOf(*accepted.front());
+	const std::vector<bool> contradicted = contradictedFixes(fixes, sigma, link, chi2);
 	for (size_t i = 0; i < accepted.size(); i++)
 	{
 		TLocaliserResult& r = *accepted[i];

@@ -3,21 +3,16 @@
 #include <shadyloc/localisation/FixEstimate.h>
 #include <shadyloc/core/Units.h>
 
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <chrono>
-#include <limits>
-#include <random>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
+#include <utility>
 
 namespace shadyloc::localisation
 {
-using geometry::Matrix6d;
 using geometry::TPoseWithCov;
-using geometry::Vector6d;
 
 namespace
 {
@@ -359,15 +354,21 @@ TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in, TSearchedC
 	vo::TRelativePoseOutput po;
 	const LocaliserStatus searchStatus = searchAndSolve(in, matchKf, pred, mo, po, r);
 	r.live_matches = liveMatchesOf(mo, po);
-	// What the search found, solved or not: the joint localiser's share
-	// (correspondences in the matched keyframe, reported as the chosen one).
-	if (searched && searchStatus != LocaliserStatus::Lost)
-	{
+	// What the search found, solved or not, handed on once this frame is done
+	// with it: the joint localiser's share (correspondences in the matched
+	// keyframe, reported as the chosen one).
+	auto handOver = [&] {
+		if (!searched || searchStatus == LocaliserStatus::Lost) return;
 		searched->kf = r.kf_id;
-		searched->corr = mo.corr;
+		searched->corr = std::move(mo.corr);
+	};
+	if (searchStatus != LocaliserStatus::Ok)
+	{
+		handOver();
+		return fail(searchStatus);
 	}
-	if (searchStatus != LocaliserStatus::Ok) return fail(searchStatus);
 	describeSolve(o, in.calib, mo.corr, po, in.frame, r);
+	handOver();
 
 	// ---- 4. acceptance (FixAcceptance.h) ---------------------------------------------------
 	acceptSolve(m_accept, o, in, [this](uint32_t a, uint32_t b) { return between(a, b); }, r);

@@ -41,6 +41,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace shadyloc::core
@@ -265,6 +266,9 @@ class LocalisationSystem : public mrpt::system::COutputLogger
 	/** Marks the frame's accepted fixes that a more certain one contradicts
 	 * (contradictedFixes) and makes their localisers forget them. */
 	void rejectContradicted(std::vector<TLocaliserResult>& results);
+	/** How fixes are compared with each other: the keyframe link and the
+	 * prediction test's chi^2 of the localiser (channel or joint) that made `r`. */
+	std::pair<KeyframeLink, double> comparisonOf(const TLocaliserResult& r) const;
 	/** The accepted solve `r` as the track takes it (fused with the
 	 * prediction while the track is confirmed). */
 	TKeyframePose fusedFix(const TLocaliserResult& r, const TKeyframePose& pred, bool confirmed) const;
