@@ -6,7 +6,9 @@
 #include <Eigen/Eigenvalues>
 
 #include <cmath>
+#include <future>
 #include <limits>
+#include <optional>
 #include <random>
 
 namespace shadyloc::localisation
@@ -70,33 +72,52 @@ double varianceFactor(
  * doubled the false fixes on the 301 m set (docs/localisation.md). */
 Matrix6d bootstrapCovariance(
 	const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
-	const std::vector<uint8_t>& inlier, const Eigen::Isometry3d& T_curr_ref, const TLocaliserOptions& o, uint32_t seed)
+	const std::vector<uint8_t>& inlier, const Eigen::Isometry3d& T_curr_ref, const TLocaliserOptions& o, uint32_t seed,
+	int threads)
 {
 	std::vector<geometry::TStereoCorrespondence> in;
 	for (size_t i = 0; i < corr.size(); i++)
 		if (i >= inlier.size() || inlier[i]) in.push_back(corr[i]);
-	Matrix6d C = Matrix6d::Zero();
-	if (in.size() < 4 || o.bootstrap_samples < 2) return C;
+	if (in.size() < 4 || o.bootstrap_samples < 2) return Matrix6d::Zero();
+	// The resamples are drawn in one sequence whatever the threads, so the
+	// covariance is the same to the bit with one thread or two.
+	const size_t samples = static_cast<size_t>(o.bootstrap_samples);
 	std::mt19937 rng(seed);
 	std::uniform_int_distribution<size_t> pick(0, in.size() - 1);
+	std::vector<std::vector<int>> counts(samples, std::vector<int>(in.size(), 0));
+	for (auto& count : counts)
+		for (size_t k = 0; k < in.size(); k++) count[pick(rng)]++;
 	geometry::TPoseSolverOptions so = solverOptionsFor(o);
 	so.max_iterations = 5;
 	const Eigen::Isometry3d T_ref_curr = T_curr_ref.inverse();
 	// Every resample starts at the solve: its first linearisation is shared,
 	// and a resample is a count per inlier rather than a copied list.
 	const auto atSolve = geometry::normalTermsAt(calib, in, T_curr_ref, so);
-	std::vector<int> count(in.size());
-	int solved = 0;
-	for (int b = 0; b < o.bootstrap_samples; b++)
+	std::vector<std::optional<Vector6d>> xi(samples);
+	auto solveRange = [&](size_t b0, size_t b1) {
+		for (size_t b = b0; b < b1; b++)
+		{
+			const auto sol = geometry::solveStereoPoseCounted(calib, in, counts[b], T_curr_ref, so, &atSolve);
+			if (sol.ok) xi[b] = geometry::localLeft(sol.T_curr_ref.inverse(), T_ref_curr);
+		}
+	};
+	if (threads >= 2)
 	{
-		std::fill(count.begin(), count.end(), 0);
-		for (size_t k = 0; k < in.size(); k++) count[pick(rng)]++;
-		const auto sol = geometry::solveStereoPoseCounted(calib, in, count, T_curr_ref, so, &atSolve);
-		if (!sol.ok) continue;
-		const Vector6d xi = geometry::localLeft(sol.T_curr_ref.inverse(), T_ref_curr);
-		C += xi * xi.transpose();
-		solved++;
+		auto half = std::async(std::launch::async, solveRange, samples / 2, samples);
+		solveRange(0, samples / 2);
+		half.get();
 	}
+	else
+		solveRange(0, samples);
+	// Summed in resample order: the same sum whatever the threads.
+	Matrix6d C = Matrix6d::Zero();
+	int solved = 0;
+	for (const auto& x : xi)
+		if (x)
+		{
+			C += *x * x->transpose();
+			solved++;
+		}
 	return solved >= 2 ? Matrix6d(C / (solved - 1)) : Matrix6d::Zero();
 }
 
@@ -157,11 +178,13 @@ Matrix6d fixCovariance(const Matrix6d& solver, const Matrix6d& bootstrap, double
 
 Matrix6d solveCovariance(
 	const TLocaliserOptions& o, const geometry::TStereoCalib& calib,
-	const std::vector<geometry::TStereoCorrespondence>& corr, const vo::TRelativePoseOutput& po, uint32_t seed)
+	const std::vector<geometry::TStereoCorrespondence>& corr, const vo::TRelativePoseOutput& po, uint32_t seed,
+	int threads)
 {
 	return fixCovariance(
 		po.cov_T_ref_curr,
-		o.bootstrap_samples > 0 ? bootstrapCovariance(calib, corr, po.inlier, po.T_curr_ref, o, seed) : Matrix6d::Zero(),
+		o.bootstrap_samples > 0 ? bootstrapCovariance(calib, corr, po.inlier, po.T_curr_ref, o, seed, threads)
+								: Matrix6d::Zero(),
 		o.cov_scale, o.bootstrap_samples);
 }
 
@@ -174,13 +197,13 @@ bool withinFixBounds(const TLocaliserOptions& o, const Matrix6d& cov)
 void describeSolve(
 	const TLocaliserOptions& o, const geometry::TStereoCalib& calib,
 	const std::vector<geometry::TStereoCorrespondence>& corr, const vo::TRelativePoseOutput& po, size_t frame,
-	TLocaliserResult& r)
+	TLocaliserResult& r, int threads)
 {
 	r.solved = true;
 	r.var_factor = varianceFactor(calib, corr, po.inlier, po.T_curr_ref, solverOptionsFor(o));
 	r.T_kf_live = po.T_curr_ref.inverse();
 	const uint32_t seed = static_cast<uint32_t>(frame * 2654435761u + 7) ^ 0x9e3779b9u;
-	r.cov = solveCovariance(o, calib, corr, po, seed);
+	r.cov = solveCovariance(o, calib, corr, po, seed, threads);
 	r.sigma_m = translationSigma(r.cov);
 	r.sigma_deg = rotationSigma(r.cov) / kDeg;
 }

@@ -9,10 +9,11 @@
 namespace shadyloc::localisation
 {
 JointLocaliser::JointLocaliser(
-	const CKeyframeMap& map, const std::vector<std::string>& channels, const TLocaliserOptions& o)
+	const CKeyframeMap& map, const std::vector<std::string>& channels, const TLocaliserOptions& o, int threads)
 	: m_map(map),
 	  m_channels(channels),
 	  m_opts(o),
+	  m_threads(threads),
 	  m_estimator(estimatorOptionsFor(o)),
 	  m_accept(TAcceptanceOptions{o.prediction_chi2, o.motion_chi2, o.consistent_frames})
 {
@@ -84,7 +85,7 @@ TLocaliserResult JointLocaliser::localise(
 	if (po.status == vo::RelativePoseStatus::SolverFailed) return fail(LocaliserStatus::SolverFailed);
 	if (!po.ok() || r.inliers < m_opts.min_inliers) return fail(LocaliserStatus::FewInliers);
 
-	describeSolve(m_opts, in.calib, corr, po, in.frame, r);
+	describeSolve(m_opts, in.calib, corr, po, in.frame, r, m_threads);
 	acceptSolve(m_accept, m_opts, in, [this](uint32_t a, uint32_t b) { return between(a, b); }, r);
 	r.ms = core::msSince(t0);
 	return r;

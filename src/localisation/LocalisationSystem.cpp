@@ -212,7 +212,7 @@ LocalisationSystem::LocalisationSystem(
 				if (m_pipes[i].setup.channel.label == l && m_pipes[i].localiser) pipes.push_back(i);
 		if (pipes.size() == m_opts.joint.size())
 		{
-			m_joint = std::make_unique<JointLocaliser>(*m_map, m_opts.joint, *joint);
+			m_joint = std::make_unique<JointLocaliser>(*m_map, m_opts.joint, *joint, m_opts.threads);
 			m_jointPipes = pipes;
 		}
 	}
@@ -629,6 +629,7 @@ TLocalisationUpdate LocalisationSystem::processChannels(
 	const auto tAll = Clock::now();
 	std::vector<features::TStereoFrame> meas;
 	frontEnd(images, calib, timestamp, meas, u);
+	u.ms_front_end = msSince(tAll);
 
 	// ---- the predictor: the track composed with VO's step
 	const TKeyframePose pred = m_track.predict(u.motion);
@@ -689,7 +690,12 @@ TLocalisationUpdate LocalisationSystem::processChannels(
 		m_track.noFix(seeds);
 		// ---- relocalisation, on this frame
 		const SearchScope scope = m_track.searchNeeded(allLost);
-		if (scope != SearchScope::None) searchPlace(scope, meas, calib, order, u);
+		if (scope != SearchScope::None)
+		{
+			const auto tSearch = Clock::now();
+			searchPlace(scope, meas, calib, order, u);
+			u.ms_relocalise = msSince(tSearch);
+		}
 	}
 	u.frames_since_fix = m_track.framesSinceFix();
 	const TKeyframePose& shown = m_track.estimate();

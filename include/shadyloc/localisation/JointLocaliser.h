@@ -29,8 +29,12 @@ class JointLocaliser
 	static constexpr const char* kLabel = "joint";
 
 	/** `channels` (two or more, each a map channel) name the localisers
-	 * whose searches it joins. The map must outlive the localiser. */
-	JointLocaliser(const CKeyframeMap& map, const std::vector<std::string>& channels, const TLocaliserOptions& o);
+	 * whose searches it joins. The map must outlive the localiser. It runs
+	 * after the channels, when their threads are idle: with `threads` >= 2
+	 * its bootstrap uses two (the same result as one). */
+	JointLocaliser(
+		const CKeyframeMap& map, const std::vector<std::string>& channels, const TLocaliserOptions& o,
+		int threads = 1);
 
 	/** One frame: `parts` are the channels' searches of this frame in
 	 * channels() order (null or empty: that channel did not search). The
@@ -54,6 +58,7 @@ class JointLocaliser
 	const CKeyframeMap& m_map;
 	std::vector<std::string> m_channels;
 	TLocaliserOptions m_opts;
+	int m_threads;
 	vo::RelativePoseEstimator m_estimator;
 	FixAcceptance m_accept;
 };

@@ -126,6 +126,8 @@ struct TLocalisationUpdate
 	std::vector<int8_t> oracle;
 	double ms_total = 0;  //!< channel conversion, features, VO, localisers and policy (decoding excluded) [ms]
 	double ms_convert = 0;	//!< of which channel conversion, summed over the channels [ms]
+	double ms_front_end = 0;  //!< of which the front end: conversion, features and VO of every channel [ms]
+	double ms_relocalise = 0;  //!< of which the place search of a frame without a fix [ms]
 
 	/** The localiser result of a channel, or nullptr. */
 	const TLocaliserResult* result(const std::string& channel) const;
