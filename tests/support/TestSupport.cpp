@@ -94,6 +94,25 @@ std::string fileContents(const std::string& path)
 	return s.str();
 }
 
+std::string defaultDatasetDir()
+{
+	auto complete = [](const std::string& dir) {
+		for (const char* t : {"evening_warm", "morning_low_sun", "noon", "overcast"})
+			for (const char* ext : {".rawlog", ".tum"})
+				if (!std::filesystem::is_regular_file(dir + "/" + t + ext)) return false;
+		return true;
+	};
+	const std::string generated = std::string(SHADYLOC_SOURCE_DIR) + "/rawlogs/generated";
+	if (complete(generated)) return generated;
+	const char* fixtures = std::getenv("SHADYLOC_FIXTURE_DIR");
+	if (fixtures && *fixtures)
+	{
+		const std::string dir = std::string(fixtures) + "/default_data";
+		if (std::filesystem::exists(dir + "/.complete") && complete(dir)) return dir;
+	}
+	return {};
+}
+
 std::string appPath()
 {
 	const char* other = std::getenv("SHADYLOC_TEST_APP");

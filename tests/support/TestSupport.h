@@ -27,6 +27,21 @@ std::string sharedDataDir();
 						 << "' is absent (fresh clone?): test skipped";              \
 	} while (0)
 
+/** The default dataset (scripts/make-default-dataset.sh: evening_warm,
+ * morning_low_sun, noon, overcast, each .rawlog and .tum): the checkout's
+ * rawlogs/generated when complete, else the ctest fixture's rendering
+ * (SHADYLOC_FIXTURE_DIR/default_data, FIXTURES default_data), else "". */
+std::string defaultDatasetDir();
+
+/** Skips the current test with a clear message if the default dataset is missing. */
+#define SHADYLOC_REQUIRE_DEFAULT_DATASET()                                                          \
+	do {                                                                                            \
+		if (shadyloc::test::defaultDatasetDir().empty())                                            \
+			GTEST_SKIP() << "the default dataset is absent (neither rawlogs/generated nor the "       \
+							"ctest fixture default_data): make it with scripts/make-default-dataset.sh " \
+							"or run the test through ctest; test skipped";                             \
+	} while (0)
+
 /** A fresh empty directory for this test (removed at the next call with the same name). */
 std::string tempDir(const std::string& name);
 

@@ -571,15 +571,13 @@ int acceptedBy(const std::string& summaryPath, const std::string& channel)
 // The 1-point target is not reached: the mosaic costs the invariant channel
 // most (115 accepted fixes on the simulator's rawlogs, 14 / 19 / 5 on the
 // replicas) and mono some (115 -> 97 / 110 / 87). The bounds below guard
-// those figures (docs/datasets.md). Needs rawlogs/generated (skipped
-// without); about two minutes on two cores.
+// those figures (docs/datasets.md). Needs the default dataset
+// (rawlogs/generated or the ctest fixture default_data; skipped without
+// either); about two minutes on two cores.
 TEST(LocalisationRobotCarReplica, CoverageAgainstTheSimulatorsRawlogs)
 {
-	const std::string src = SHADYLOC_SOURCE_DIR, data = src + "/rawlogs/generated";
-	for (const char* f : {"noon.rawlog", "noon.tum", "overcast.rawlog", "overcast.tum"})
-		if (!fs::exists(data + "/" + f))
-			GTEST_SKIP() << "default dataset '" << data << "/" << f
-						 << "' is absent: make it with scripts/make-default-dataset.sh; test skipped";
+	SHADYLOC_REQUIRE_DEFAULT_DATASET();
+	const std::string src = SHADYLOC_SOURCE_DIR, data = shadyloc::test::defaultDatasetDir();
 	const std::string dir = shadyloc::test::tempDir("robotcar_replica_localise");
 	const std::string app = "'" + shadyloc::test::appPath() + "' ";
 	const std::string cfg = " -c '" + src + "/config/vo_sim.ini' ";

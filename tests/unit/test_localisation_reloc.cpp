@@ -7,8 +7,9 @@
  * is found; prints the fraction found and the distance to the first fix
  * (docs/localisation.md, "Relocalisation").
  *
- * Needs rawlogs/generated (scripts/make-default-dataset.sh); skipped with a
- * message when it is absent. Slow: about 10 s on two cores. */
+ * Needs the default dataset: rawlogs/generated, or the ctest fixture that
+ * renders it (default_data); skipped with a message without either. Slow:
+ * about 10 s on two cores. */
 #include "../support/TestSupport.h"
 
 #include <shadyloc/eval/Evaluation.h>
@@ -34,11 +35,8 @@ namespace fs = std::filesystem;
 
 TEST(LocalisationRelocalisation, TwentyStartsWithNoPoseAlongALiveRunNoneWrong)
 {
-	const std::string src = SHADYLOC_SOURCE_DIR, data = src + "/rawlogs/generated";
-	for (const char* f : {"noon.rawlog", "noon.tum", "overcast.rawlog", "overcast.tum"})
-		if (!fs::exists(data + "/" + f))
-			GTEST_SKIP() << "default dataset '" << data << "/" << f
-						 << "' is absent: make it with scripts/make-default-dataset.sh; test skipped";
+	SHADYLOC_REQUIRE_DEFAULT_DATASET();
+	const std::string src = SHADYLOC_SOURCE_DIR, data = shadyloc::test::defaultDatasetDir();
 
 	// The map, as `shadyloc survey` makes it.
 	const std::string dir = test::tempDir("localisation_reloc"), mapPath = dir + "/noon.kfmap";
