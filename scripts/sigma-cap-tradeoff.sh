@@ -14,7 +14,8 @@
 #
 # CAPS (m) default to 0.14 0.13 0.12 0.11 0.10 0.09. SYSTEM (environment)
 # chooses the evaluated system: combined (default) or baseline. Prints a
-# markdown table.
+# markdown table; PLOT=OUT.png (environment) also draws it (gnuplot): per
+# localiser, the false-fix bound and the share of fixes kept against the cap.
 set -euo pipefail
 die() { echo "sigma-cap-tradeoff: $*" >&2; exit 1; }
 [ $# -ge 1 ] || die "usage: scripts/sigma-cap-tradeoff.sh EVAL_DIR [CAPS...]"
@@ -31,7 +32,10 @@ system="${SYSTEM:-combined}"
 files=("$dir"/jobs/pair_*__"$system"/solves.csv)
 [ ${#files[@]} -gt 0 ] || die "'$dir/jobs' has no pair_*__${system}/solves.csv"
 
-awk -v caps="${caps[*]}" '
+if [ -n "${PLOT:-}" ]; then
+  command -v gnuplot >/dev/null || die "PLOT: gnuplot not found (apt-get install gnuplot-nox)"
+fi
+table="$(awk -v caps="${caps[*]}" '
   # The exact upper end of the 95 % interval of k false in n (as the evaluation reports it).
   function cdf(k, n, p,   i, lt, m, s) {
     lt[0] = n * log(1 - p); m = lt[0]
@@ -71,4 +75,34 @@ awk -v caps="${caps[*]}" '
         printf "| %s | %s | %d | %.1f | %d | %.3f |\n", ch, cap[c], n, 100 * n / all[ch], k, 100 * upper(k, n)
       }
     }
-  }' FS=, "${files[@]}"
+  }' FS=, "${files[@]}")"
+echo "$table"
+[ -n "${PLOT:-}" ] || exit 0
+tmp="$(mktemp -d)"; trap 'rm -rf "$tmp" "$PLOT.partial.png"' EXIT
+# One data file per localiser: cap, kept %, bound %.
+echo "$table" | awk -F'|' -v d="$tmp" 'NR > 2 { gsub(/ /, "", $2); print $3 + 0, $5 + 0, $7 + 0 > (d "/" $2 ".dat") }'
+plots=""
+colours=("#d62728" "#2ca02c" "#1f77b4" "#9467bd")
+i=0
+for f in "$tmp"/*.dat; do
+  l="$(basename "$f" .dat)"; c="${colours[$(( i % 4 ))]}"; i=$(( i + 1 ))
+  plots="$plots${plots:+, }\"$f\" using 1:3 with linespoints pt 7 lc rgb \"$c\" title \"$l: false-fix bound\", \"$f\" using 1:2 axes x1y2 with linespoints dt 2 pt 6 lc rgb \"$c\" title \"$l: fixes kept\""
+done
+gnuplot <<GP
+set terminal pngcairo size 900,540 font "DejaVu Sans,10"
+set output "$PLOT.partial.png"
+set termoption noenhanced
+set title "Each localiser's sigma cap: false fixes against fixes kept ($system system, $(basename "$dir"))"
+set xlabel "max_sigma_m: no fix above this sigma [m]"
+set ylabel "exact 95 % upper bound on false fixes [%]"
+set y2label "accepted fixes kept [%]"
+set ytics nomirror
+set y2tics
+set grid
+set key outside bottom center horizontal
+set bmargin 7
+set arrow from graph 0, first 0.1 to graph 1, first 0.1 nohead dt 3 lc rgb "black"
+set label "0.1 %" at graph 0.01, first 0.1 offset 0,0.6
+plot $plots
+GP
+mv "$PLOT.partial.png" "$PLOT"
