@@ -221,6 +221,7 @@ void inMapFromEstimate(TEvaluation& ev, const Updates& ups, const CKeyframeMap& 
 		auto& f = ev.frames[i];
 		f.distance_m = ups[i].distance_m;
 		f.channel.assign(ev.channels.size(), FixTruth::None);
+		q.same_frame_as = ups[i].placeKnown ? int64_t(ups[i].kf_id) : -1;	// T_map_live is in its keyframe's frame
 		f.in_map = !ups[i].placeKnown || !map.nearestKeyframes(ups[i].T_map_live, q).empty();
 	}
 }

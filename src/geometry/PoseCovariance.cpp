@@ -4,9 +4,13 @@
 #include <mrpt/math/CMatrixFixed.h>
 #include <mrpt/poses/CPose3D.h>
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace shadyloc::geometry
@@ -96,5 +100,26 @@ mrpt::poses::CPose3DPDFGaussian toCPose3DPDFGaussian(const TPoseWithCov& p)
 	out.cov = mrpt::math::CMatrixDouble66(C);
 	return out;
 }
+
+double mahalanobis2(const Vector6d& xi, const Matrix6d& S)
+{
+	if (!S.allFinite() || !xi.allFinite()) return std::numeric_limits<double>::infinity();
+	const Eigen::LDLT<Matrix6d> ldlt(0.5 * (S + S.transpose()));
+	if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return std::numeric_limits<double>::infinity();
+	const double d2 = xi.dot(ldlt.solve(xi));
+	return std::isfinite(d2) && d2 >= 0 ? d2 : std::numeric_limits<double>::infinity();
+}
+
+namespace
+{
+double largestSigma(const Eigen::Matrix3d& block)
+{
+	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(block, Eigen::EigenvaluesOnly);
+	return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
+}
+}  // namespace
+
+double translationSigma(const Matrix6d& cov) { return largestSigma(cov.topLeftCorner<3, 3>()); }
+double rotationSigma(const Matrix6d& cov) { return largestSigma(cov.bottomRightCorner<3, 3>()); }
 
 }  // namespace shadyloc::geometry

@@ -3,6 +3,7 @@
 
 #include <Eigen/Cholesky>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -11,14 +12,6 @@ namespace shadyloc::localisation
 using geometry::Matrix6d;
 using geometry::TPoseWithCov;
 using geometry::Vector6d;
-
-double mahalanobis2(const Vector6d& xi, const Matrix6d& S)
-{
-	const Eigen::LDLT<Matrix6d> ldlt(0.5 * (S + S.transpose()));
-	if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return std::numeric_limits<double>::infinity();
-	const double d2 = xi.dot(ldlt.solve(xi));
-	return std::isfinite(d2) && d2 >= 0 ? d2 : std::numeric_limits<double>::infinity();
-}
 
 double predictionDistance2(const TKeyframePose& solve, const TKeyframePose& pred, const KeyframeLink& link)
 {
@@ -54,6 +47,15 @@ std::string toString(AcceptanceVerdict v)
 	return "?";
 }
 
+double FixAcceptance::predictionGate(const TSolve& s) const
+{
+	// The near misses that pass the 99 % gate are uncertain solves 3-4 sigma
+	// from a good prediction (docs/localisation.md, "Uncertain solves"): an
+	// uncertain solve must agree more closely before it counts.
+	const bool uncertain = m_opts.uncertain_sigma_m > 0 && geometry::translationSigma(s.pose.cov) >= m_opts.uncertain_sigma_m;
+	return uncertain ? std::min(m_opts.prediction_chi2, m_opts.uncertain_prediction_chi2) : m_opts.prediction_chi2;
+}
+
 TAcceptance FixAcceptance::judge(
 	const TSolve& s, const TKeyframePose& pred, const TMotion& motion, bool trackConfirmed, bool countable,
 	const KeyframeLink& link)
@@ -63,7 +65,7 @@ TAcceptance FixAcceptance::judge(
 	if (pred.valid)
 	{
 		a.prediction_d2 = predictionDistance2(s.pose, pred, link);
-		if (a.prediction_d2 > m_opts.prediction_chi2)
+		if (a.prediction_d2 > predictionGate(s))
 		{
 			consistent = false;
 			a.verdict = AcceptanceVerdict::PredictionInconsistent;

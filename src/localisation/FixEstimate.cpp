@@ -158,17 +158,6 @@ LocaliserStatus statusOf(AcceptanceVerdict v)
 }
 }  // namespace
 
-double translationSigma(const Matrix6d& cov)
-{
-	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
-	return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
-}
-
-double rotationSigma(const Matrix6d& cov)
-{
-	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov.bottomRightCorner<3, 3>(), Eigen::EigenvaluesOnly);
-	return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
-}
 Matrix6d fixCovariance(const Matrix6d& solver, const Matrix6d& bootstrap, double cov_scale, int samples)
 {
 	const Matrix6d scaled = cov_scale * solver;
@@ -234,11 +223,17 @@ TPoseWithCov keyframeLink(const CKeyframeMap& map, const TLocaliserOptions& o, u
 {
 	TPoseWithCov r;
 	if (a == b) return r;
-	if (map.sameSegment(a, b))
+	if (const auto rp = map.measuredRelativePose(a, b))
 	{
-		const auto rp = map.relativePose(a, b);
-		r.T = rp.T_a_b;
-		r.cov = rp.cov;
+		r.T = rp->T_a_b;
+		r.cov = rp->cov;
+		return r;
+	}
+	if (map.frameOf(a) != map.frameOf(b))
+	{
+		// Experiences in frames of their own: nothing relates them, so no
+		// test across them can pass (an infinite covariance).
+		r.cov.setConstant(std::numeric_limits<double>::infinity());
 		return r;
 	}
 	// Across a VO break: the map poses (one of them only predicted), with a

@@ -15,7 +15,7 @@ JointLocaliser::JointLocaliser(
 	  m_opts(o),
 	  m_threads(threads),
 	  m_estimator(estimatorOptionsFor(o)),
-	  m_accept(TAcceptanceOptions{o.prediction_chi2, o.motion_chi2, o.consistent_frames})
+	  m_accept(acceptanceOptionsFor(o))
 {
 	m_opts.validate();
 	if (m_channels.size() < 2) throw std::invalid_argument("joint: names fewer than two channels");

@@ -541,6 +541,7 @@ std::vector<uint32_t> keyframesAroundDeadReckoning(
 	q.max_distance_m = window_m;
 	q.max_angle_deg = max_angle_deg;
 	q.max_results = map.keyframeCount();
+	q.same_frame_as = deadReckoning.kf;
 	const Eigen::Isometry3d T_map_live = map.keyframe(deadReckoning.kf).T_map_kf * deadReckoning.T_kf_live;
 	for (const auto& h : map.nearestKeyframes(T_map_live, q))
 		if (std::find(among.begin(), among.end(), h.id) == among.end()) among.push_back(h.id);

@@ -65,6 +65,9 @@ void TLocaliserOptions::keys(core::KeyVisitor& v)
 	v("max_sigma_deg", max_sigma_deg, "deg", Range::atLeast(0), "(0 = no cap)");
 	v("uncertain_breaks_chain", uncertain_breaks_chain, "", Range::any(), "an uncertain solve needs K consistent frames again");
 	v("prediction_chi2", prediction_chi2, "", Range::above(0), "chi^2, 6 dof");
+	v("uncertain_sigma_m", uncertain_sigma_m, "m", Range::atLeast(0),
+	  "a solve at least this uncertain must pass the prediction test at uncertain_prediction_chi2 (0 = off)");
+	v("uncertain_prediction_chi2", uncertain_prediction_chi2, "", Range::above(0), "chi^2, 6 dof");
 	v("motion_chi2", motion_chi2, "", Range::above(0), "chi^2, 6 dof");
 	v("consistent_frames", consistent_frames, "", Range::atLeast(0), "K");
 	v("global_vote_hamming", global_vote_hamming, "bits", Range::openClosed(0, 256), "");

@@ -257,12 +257,6 @@ int reselectInliers(
 	return n;
 }
 
-/** Square root of the largest eigenvalue of a 3x3 covariance block. */
-double largestSigma(const Eigen::Matrix3d& block)
-{
-	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(block, Eigen::EigenvaluesOnly);
-	return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
-}
 }  // namespace
 
 // ---- the camera ------------------------------------------------------------------------------------
@@ -547,8 +541,8 @@ TMonocularLocaliserResult MonocularLocaliser::localise(
 	r.T_kf_live = sol.T_curr_ref.inverse();
 	r.cov = o.cov_scale * sol.cov_T_ref_curr;
 	r.rms_px = sol.rms_px;
-	r.sigma_m = largestSigma(r.cov.topLeftCorner<3, 3>());
-	r.sigma_deg = largestSigma(r.cov.bottomRightCorner<3, 3>()) / kDeg;
+	r.sigma_m = geometry::translationSigma(r.cov);
+	r.sigma_deg = geometry::rotationSigma(r.cov) / kDeg;
 	if (r.sigma_m > o.max_sigma_m || r.sigma_deg > o.max_sigma_deg) return done(LocaliserStatus::Uncertain);
 	return done(LocaliserStatus::Ok);
 }

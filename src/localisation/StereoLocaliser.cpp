@@ -91,6 +91,17 @@ vo::TRelativePoseOptions estimatorOptionsFor(const TLocaliserOptions& o)
 	return p;
 }
 
+TAcceptanceOptions acceptanceOptionsFor(const TLocaliserOptions& o)
+{
+	TAcceptanceOptions a;
+	a.prediction_chi2 = o.prediction_chi2;
+	a.uncertain_sigma_m = o.uncertain_sigma_m;
+	a.uncertain_prediction_chi2 = o.uncertain_prediction_chi2;
+	a.motion_chi2 = o.motion_chi2;
+	a.consistent_frames = o.consistent_frames;
+	return a;
+}
+
 std::string toString(SearchMode m)
 {
 	switch (m)
@@ -133,7 +144,7 @@ StereoLocaliser::StereoLocaliser(const CKeyframeMap& map, const std::string& cha
 	  m_brief(
 		  map.channels()[map.channelIndex(channel)].brief_patch_size,
 		  map.channels()[map.channelIndex(channel)].brief_seed),
-	  m_accept(TAcceptanceOptions{o.prediction_chi2, o.motion_chi2, o.consistent_frames})
+	  m_accept(acceptanceOptionsFor(o))
 {
 	m_opts.validate();
 	map.channelIndex(channel);	// throws naming the map's channels
@@ -162,6 +173,7 @@ TKeyframePose StereoLocaliser::chooseKeyframe(const TKeyframePose& pred) const
 	q.max_distance_m = o.kf_max_distance_m;
 	q.max_angle_deg = o.kf_max_angle_deg;
 	q.max_results = 5;
+	q.same_frame_as = pred.kf;
 	for (const auto& h : m_map.nearestKeyframes(T_map_pred, q))
 		if (std::find(cands.begin(), cands.end(), h.id) == cands.end()) cands.push_back(h.id);
 	double best = std::numeric_limits<double>::infinity();
@@ -629,8 +641,12 @@ TGlobalPlace StereoLocaliser::bestPlace(
 		return a.inliers < b.inliers || (a.inliers == b.inliers && a.kf > b.kf);
 	});
 	const TVerifiedPlace& best = *bestIt;
+	// Distance means something only within one frame: a place in an
+	// experience linked nowhere may be this very place, so it is no rival.
+	const uint32_t frame = m_map.frameOf(best.kf);
 	for (const auto& v : ver)
-		if ((v.T_map_live.translation() - best.T_map_live.translation()).norm() > o.global_distinct_m)
+		if (m_map.frameOf(v.kf) == frame &&
+			(v.T_map_live.translation() - best.T_map_live.translation()).norm() > o.global_distinct_m)
 			out.runner_up_inliers = std::max(out.runner_up_inliers, v.inliers);
 	out.inliers = best.inliers;
 	out.matches = static_cast<int>(best.corr.size());

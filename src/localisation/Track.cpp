@@ -31,11 +31,6 @@ TKeyframePose propagate(const TKeyframePose& p, const TMotion& m, const Matrix6d
 	return out;
 }
 
-double largestSigma(const Matrix6d& cov)
-{
-	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov.topLeftCorner<3, 3>(), Eigen::EigenvaluesOnly);
-	return std::sqrt(std::max(0.0, es.eigenvalues().maxCoeff()));
-}
 }  // namespace
 
 Matrix6d driftCovariance(double before, double step, double k_m, double k_deg)
@@ -72,7 +67,7 @@ TKeyframePose Track::predict(const TMotion& motion)
 
 bool Track::confirmed() const
 {
-	return m_confirmed && m_pred.valid && largestSigma(m_pred.cov) <= m_opts.confirmed_max_sigma_m;
+	return m_confirmed && m_pred.valid && geometry::translationSigma(m_pred.cov) <= m_opts.confirmed_max_sigma_m;
 }
 
 void Track::fix(const TKeyframePose& f)
@@ -137,7 +132,7 @@ PlaceOutcome Track::placeFound(const TKeyframePose& place, const PlaceTest& agre
 	}
 	int places = agrees && !confirmedTrack ? m_places + 1 : 1;
 	if (confirmedTrack && m_opts.confirmed_track_outranks_places &&
-		largestSigma(withPlaceSigma(place.cov)) >= largestSigma(m_pred.cov))
+		geometry::translationSigma(withPlaceSigma(place.cov)) >= geometry::translationSigma(m_pred.cov))
 	{
 		if (agrees) return PlaceOutcome::Outranked;  // it supports the track: nothing to change
 		if (!(m_rival.valid && agreesWith(m_rival)))

@@ -28,6 +28,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <limits>
 #include <memory>
 #include <set>
 #include <sstream>
@@ -393,13 +394,79 @@ void CKeyframeMap::checkCompatible(const map::TChannelParams& live) const
 			"): map " + m_channels[i].asString() + "; live " + live.asString());
 }
 
-uint16_t CKeyframeMap::addRun(const std::string& name)
+uint16_t CKeyframeMap::addRun(const std::string& name, bool anchored)
 {
 	for (size_t i = 0; i < m_runs.size(); i++)
 		if (m_runs[i] == name) return static_cast<uint16_t>(i);
 	if (m_runs.size() >= 65535) throw std::length_error(std::string(kClass) + ": too many runs");
+	// The first run defines the map frame.
+	if (m_runs.empty() && !anchored)
+		throw std::invalid_argument(std::string(kClass) + "::addRun: the first run '" + name + "' defines the map frame");
 	m_runs.push_back(name);
+	m_runAnchored.push_back(anchored ? 1 : 0);
 	return static_cast<uint16_t>(m_runs.size() - 1);
+}
+
+bool CKeyframeMap::runAnchored(uint16_t run) const
+{
+	if (run >= m_runs.size())
+		throw std::out_of_range(std::string(kClass) + ": no run " + std::to_string(run) + " (" + std::to_string(m_runs.size()) + " runs)");
+	return m_runAnchored[run] != 0;
+}
+
+uint32_t CKeyframeMap::frameOf(uint32_t id) const
+{
+	const uint16_t run = keyframe(id).run;
+	return m_runAnchored[run] ? 0u : run;
+}
+
+void CKeyframeMap::addLink(const map::TExperienceLink& link)
+{
+	const auto name = [&](uint32_t id) { return "keyframe " + std::to_string(id); };
+	if (link.a >= m_keyframes.size() || link.b >= m_keyframes.size())
+		throw std::out_of_range(
+			std::string(kClass) + "::addLink: " + name(link.a) + " to " + name(link.b) + ": the map has " +
+			std::to_string(m_keyframes.size()) + " keyframes");
+	if (m_keyframes[link.a].run == m_keyframes[link.b].run)
+		throw std::invalid_argument(
+			std::string(kClass) + "::addLink: " + name(link.a) + " and " + name(link.b) + " are of one run ('" +
+			m_runs[m_keyframes[link.a].run] + "'): links join experiences");
+	if (!link.T_a_b.matrix().allFinite() || !link.cov.allFinite())
+		throw std::invalid_argument(std::string(kClass) + "::addLink: " + name(link.a) + " to " + name(link.b) + " not finite");
+	m_links.push_back(link);
+}
+
+std::optional<map::TRelativePose> CKeyframeMap::measuredRelativePose(uint32_t a, uint32_t b) const
+{
+	if (sameSegment(a, b)) return relativePose(a, b);
+	// The link between the two segments with the shortest chains on either side.
+	const map::TExperienceLink* best = nullptr;
+	bool flipped = false;
+	double bestLen = std::numeric_limits<double>::infinity();
+	for (const auto& l : m_links)
+		for (const bool flip : {false, true})
+		{
+			const uint32_t la = flip ? l.b : l.a, lb = flip ? l.a : l.b;
+			if (!sameSegment(a, la) || !sameSegment(lb, b)) continue;
+			const double len = std::abs(m_chainDist[a] - m_chainDist[la]) + std::abs(m_chainDist[lb] - m_chainDist[b]);
+			if (len < bestLen)
+			{
+				bestLen = len;
+				best = &l;
+				flipped = flip;
+			}
+		}
+	if (!best) return std::nullopt;
+	geometry::TPoseWithCov link{best->T_a_b, best->cov};
+	if (flipped) link = geometry::inverse(link);
+	const uint32_t la = flipped ? best->b : best->a, lb = flipped ? best->a : best->b;
+	const auto ra = relativePose(a, la), rb = relativePose(lb, b);
+	const auto c = geometry::compose(geometry::compose({ra.T_a_b, ra.cov}, link), {rb.T_a_b, rb.cov});
+	map::TRelativePose r;
+	r.T_a_b = c.T;
+	r.cov = c.cov;
+	r.chain_length_m = bestLen;
+	return r;
 }
 
 bool CKeyframeMap::quantise(features::TStereoMeasurement& m, const map::TChannelParams& ch) const
@@ -500,6 +567,7 @@ std::vector<map::TKeyframeHit> CKeyframeMap::nearestKeyframes(
 	const Eigen::Vector3d zq = T_map_query.linear().col(2);
 	const double r = q.max_distance_m, cell = options.index_cell_m;
 	const double cosMax = std::cos(q.max_angle_deg * M_PI / 180.0);
+	const uint32_t frame = q.same_frame_as >= 0 ? frameOf(static_cast<uint32_t>(q.same_frame_as)) : 0;
 	auto range = [&](double x) {
 		return std::make_pair(
 			static_cast<int64_t>(std::floor((x - r) / cell)), static_cast<int64_t>(std::floor((x + r) / cell)));
@@ -520,6 +588,7 @@ std::vector<map::TKeyframeHit> CKeyframeMap::nearestKeyframes(
 				{
 					const auto& k = m_keyframes[id];
 					if (k.predicted && !q.include_predicted) continue;
+					if (q.same_frame_as >= 0 && frameOf(id) != frame) continue;
 					const double d = (k.T_map_kf.translation() - p).norm();
 					if (d > r) continue;
 					const double c = std::clamp(zq.dot(k.T_map_kf.linear().col(2)), -1.0, 1.0);
@@ -626,6 +695,7 @@ struct TBlocks
 static TBlocks encode(
 	const TKeyframeMapOptions& o, const geometry::TStereoCalib& cal, int w, int h,
 	const std::vector<map::TChannelParams>& channels, const std::vector<std::string>& runs,
+	const std::vector<uint8_t>& runAnchored, const std::vector<map::TExperienceLink>& links,
 	const std::vector<map::TMapKeyframe>& kfs)
 {
 	ByteWriter m;
@@ -637,6 +707,7 @@ static TBlocks encode(
 	for (const auto& c : channels) putChannel(m, c);
 	m.put<uint16_t>(static_cast<uint16_t>(runs.size()));
 	for (const auto& r : runs) m.str(r);
+	for (const auto a : runAnchored) m.put<uint8_t>(a);	 // version 5
 	m.put<uint32_t>(static_cast<uint32_t>(kfs.size()));
 	for (const auto& k : kfs)
 	{
@@ -649,6 +720,15 @@ static TBlocks encode(
 		putPose(m, k.T_prev_kf);
 		putCov(m, k.cov_prev_kf);
 		if (k.T_gt_kf) putPose(m, *k.T_gt_kf);
+	}
+	// version 5
+	m.put<uint32_t>(static_cast<uint32_t>(links.size()));
+	for (const auto& l : links)
+	{
+		m.put<uint32_t>(l.a);
+		m.put<uint32_t>(l.b);
+		putPose(m, l.T_a_b);
+		putCov(m, l.cov);
 	}
 	TBlocks b;
 	b.meta = std::move(m.buf);
@@ -703,11 +783,15 @@ static TBlocks encode(
 //    warped matching; each channel records its descriptor kind (FAST +
 //    BRIEF or ORB) and ORB's pyramid (levels, scale factor). Maps of
 //    versions 1-3 load without normals, as BRIEF.
-uint8_t CKeyframeMap::serializeGetVersion() const { return 4; }
+// 5: experiences: after the run names a flag per run (anchored in the map
+//    frame or in its own), after the keyframes the links between runs
+//    (keyframe ids, T_a_b, covariance). Maps of versions 1-4 load as one
+//    anchored run per name, without links.
+uint8_t CKeyframeMap::serializeGetVersion() const { return 5; }
 
 void CKeyframeMap::serializeTo(mrpt::serialization::CArchive& out) const
 {
-	const TBlocks b = encode(options, m_calib, m_width, m_height, m_channels, m_runs, m_keyframes);
+	const TBlocks b = encode(options, m_calib, m_width, m_height, m_channels, m_runs, m_runAnchored, m_links, m_keyframes);
 	std::vector<const std::vector<uint8_t>*> blocks{&b.meta};
 	for (const auto& c : b.channels) blocks.push_back(&c);
 	out << static_cast<uint8_t>(blocks.size());
@@ -733,6 +817,7 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 		case 2:
 		case 3:
 		case 4:
+		case 5:
 		{
 			// The stream's size is unknown here: the budget is the largest map
 			// (kMaxSerializedBytes); offsets count from the object's data.
@@ -779,6 +864,14 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 			const auto nr = r.get<uint16_t>();
 			std::vector<std::string> runs;
 			for (int i = 0; i < nr; i++) runs.push_back(r.str());
+			std::vector<uint8_t> anchored(nr, 1);
+			if (version >= 5)
+				for (int i = 0; i < nr; i++)
+				{
+					anchored[i] = r.get<uint8_t>();
+					if (anchored[i] > 1 || (i == 0 && !anchored[i]))
+						r.fail("run " + std::to_string(i) + " ('" + runs[i] + "'): anchoring flag " + std::to_string(anchored[i]));
+				}
 			const auto nk = r.get<uint32_t>();
 			if (!setUp && nk > 0) r.fail(std::to_string(nk) + " keyframes in a map without channels");
 			r.requireItems(nk, 2 + 4 + 8 + 8 + 1 + 2 * 96 + 21 * 8, "keyframe");
@@ -789,6 +882,7 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 			tmp.m_height = h;
 			tmp.m_channels = channels;
 			tmp.m_runs = runs;
+			tmp.m_runAnchored = anchored;
 			std::vector<map::TMapKeyframe> kfs(nk);
 			for (uint32_t i = 0; i < nk; i++)
 			{
@@ -808,6 +902,25 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 				if (flags & 2) k.T_gt_kf = getPose(r, "T_gt_kf");
 				k.channels.resize(nc);
 			}
+			std::vector<map::TExperienceLink> links;
+			if (version >= 5)
+			{
+				const auto nl = r.get<uint32_t>();
+				r.requireItems(nl, 4 + 4 + 96 + 21 * 8, "link");
+				for (uint32_t i = 0; i < nl; i++)
+				{
+					map::TExperienceLink l;
+					l.a = r.get<uint32_t>();
+					l.b = r.get<uint32_t>();
+					const std::string what = "link " + std::to_string(i) + " (keyframes " + std::to_string(l.a) + ", " + std::to_string(l.b) + ")";
+					if (l.a >= nk || l.b >= nk) r.fail(what + ": the map has " + std::to_string(nk) + " keyframes");
+					if (kfs[l.a].run == kfs[l.b].run) r.fail(what + ": both of run '" + runs[kfs[l.a].run] + "'");
+					l.T_a_b = getPose(r, "link T_a_b");
+					l.cov = getCov(r);
+					links.push_back(l);
+				}
+			}
+			tmp.m_links = std::move(links);
 			if (r.remaining()) r.fail(std::to_string(r.remaining()) + " bytes left over");
 			for (int c = 0; c < nc; c++)
 			{
@@ -879,7 +992,7 @@ void CKeyframeMap::appendLoaded(map::TMapKeyframe kf)
 CKeyframeMap::TSizeReport CKeyframeMap::sizeReport() const
 {
 	TSizeReport s;
-	const TBlocks b = encode(options, m_calib, m_width, m_height, m_channels, m_runs, m_keyframes);
+	const TBlocks b = encode(options, m_calib, m_width, m_height, m_channels, m_runs, m_runAnchored, m_links, m_keyframes);
 	s.meta_bytes = compressBlock(b.meta, options.compression_level).size();
 	for (size_t c = 0; c < b.channels.size(); c++)
 	{
@@ -1041,6 +1154,8 @@ void CKeyframeMap::internal_clear()
 	m_chainDist.clear();
 	m_grid.clear();
 	m_runs.clear();
+	m_runAnchored.clear();
+	m_links.clear();
 }
 
 bool CKeyframeMap::internal_insertObservation(
@@ -1185,8 +1300,11 @@ std::string CKeyframeMap::asString() const
 	const double L = pathLength();
 	s << kClass << ": " << m_keyframes.size() << " keyframes, " << std::fixed << std::setprecision(1) << L
 	  << " m of path, " << m_runs.size() << " run(s)";
-	for (size_t i = 0; i < m_runs.size(); i++) s << (i ? ", " : " (") << "'" << m_runs[i] << "'" << (i + 1 == m_runs.size() ? ")" : "");
+	for (size_t i = 0; i < m_runs.size(); i++)
+		s << (i ? ", " : " (") << "'" << m_runs[i] << "'" << (m_runAnchored[i] ? "" : " in its own frame, linked nowhere")
+		  << (i + 1 == m_runs.size() ? ")" : "");
 	s << ", " << segs.size() << " segment(s)";
+	if (m_runs.size() > 1) s << ", " << m_links.size() << " link(s) between runs";
 	if (predicted) s << " (" << predicted << " keyframes after VO breaks: map pose predicted)";
 	s << "\n  ground truth beside " << gt << " keyframes (evaluation only)\n";
 	if (!m_channels.empty())

@@ -130,6 +130,39 @@ TEST(LocalisationStages, RejectedSolveIsNeverAReference)
 	EXPECT_EQ(next.verdict, AcceptanceVerdict::Fix);
 }
 
+// An uncertain solve must agree more closely with the prediction: the near
+// misses the 99 % gate let through were solves 3-4 sigma from a good
+// prediction with sigma 0.09-0.14 m (docs/localisation.md, "Uncertain
+// solves"). A certain solve as far off in sigmas still passes.
+TEST(LocalisationStages, AnUncertainSolveMustAgreeMoreClosely)
+{
+	const TMotion m = step(0.5);
+	TAcceptanceOptions strict;
+	strict.uncertain_sigma_m = 0.09;
+	strict.uncertain_prediction_chi2 = 10;
+	const auto pred = poseAt(1.0, 0.03);
+	// 0.45 m ahead with sigma 0.12: d2 = 0.45^2 / (0.03^2 + 0.12^2) = 13.2.
+	const TSolve uncertain = solveAt(1, 1.45, 0.12);
+	// 0.2 m ahead with sigma 0.05: d2 = 0.2^2 / (0.03^2 + 0.05^2) = 11.8.
+	const TSolve certain = solveAt(1, 1.2, 0.05);
+	for (const TSolve& s : {uncertain, certain})
+	{
+		FixAcceptance usual({16.81, 22.46, 2});
+		const auto a = usual.judge(s, pred, m, true, true, identityLink);
+		EXPECT_GT(a.prediction_d2, 10.0);
+		EXPECT_EQ(a.verdict, AcceptanceVerdict::Fix) << "without the rule, d2 " << a.prediction_d2;
+	}
+	FixAcceptance accU(strict), accC(strict);
+	EXPECT_EQ(accU.judge(uncertain, pred, m, true, true, identityLink).verdict, AcceptanceVerdict::PredictionInconsistent);
+	EXPECT_EQ(accC.judge(certain, pred, m, true, true, identityLink).verdict, AcceptanceVerdict::Fix);
+	// The stricter gate never loosens the usual one.
+	strict.uncertain_prediction_chi2 = 30;
+	FixAcceptance loose(strict);
+	EXPECT_EQ(
+		loose.judge(solveAt(1, 1.7, 0.12), pred, m, true, true, identityLink).verdict,
+		AcceptanceVerdict::PredictionInconsistent);
+}
+
 // K consistent frames for a new place; while the track is confirmed a
 // consistent solve is a fix at once (the monochrome localiser no longer
 // waits after a failure while the system knows where it is).

@@ -301,7 +301,7 @@ TEST(MapFormat, OldVersionAndLyingBlockSizesAreRefused)
 	const std::string name = "shadyloc::CKeyframeMap";
 	const size_t ver = 1 + name.size();	 // MRPT's header: 0x80 | length, the name, the version
 	ASSERT_EQ(std::string(good.begin() + 1, good.begin() + 1 + name.size()), name);
-	ASSERT_EQ(good[ver], 4);
+	ASSERT_EQ(good[ver], 5);
 	// The loader on bytes in memory (the fuzz entry point) loads them as the file loader does.
 	EXPECT_EQ(CKeyframeMap::LoadFromBytes(good.data(), good.size())->keyframeCount(), 6u);
 	try
@@ -399,26 +399,26 @@ TEST(MapFormat, Version1MapsStillLoad)
 	EXPECT_EQ(m->channels()[1].label, "inv9");
 	EXPECT_EQ(m->runs(), (std::vector<std::string>{"dawn", "dusk"}));
 	EXPECT_EQ(m->keyframe(2).channels[1].size(), 3u);
-	const auto v4 = bytesOf(*m);
-	EXPECT_EQ(v4[1 + name.size()], 4);
-	const auto back = CKeyframeMap::LoadFromBytes(v4.data(), v4.size());
+	const auto now = bytesOf(*m);
+	EXPECT_EQ(now[1 + name.size()], 5);
+	const auto back = CKeyframeMap::LoadFromBytes(now.data(), now.size());
 	EXPECT_TRUE(back->options == m->options);
-	EXPECT_EQ(bytesOf(*back), v4);
+	EXPECT_EQ(bytesOf(*back), now);
 }
 
 // tests/golden/CKeyframeMap_v2.bin: the format-test map as version 2 wrote it
 // (checksums of the bytes alone). It loads, to the content the current
-// golden file (version 4) holds.
+// golden file (version 5) holds.
 TEST(MapFormat, Version2MapsStillLoad)
 {
 	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
-	const auto v2 = fileBytes(golden + "CKeyframeMap_v2.bin"), v4 = fileBytes(golden + "CKeyframeMap.bin");
+	const auto v2 = fileBytes(golden + "CKeyframeMap_v2.bin"), now = fileBytes(golden + "CKeyframeMap.bin");
 	const std::string name = "shadyloc::CKeyframeMap";
 	ASSERT_GT(v2.size(), 2 + name.size());
 	ASSERT_EQ(v2[1 + name.size()], 2) << "the fixture is not a version 2 map";
-	ASSERT_EQ(v4[1 + name.size()], 4);
+	ASSERT_EQ(now[1 + name.size()], 5);
 	const auto m = CKeyframeMap::LoadFromBytes(v2.data(), v2.size(), "CKeyframeMap_v2.bin");
-	EXPECT_EQ(bytesOf(*m), v4);
+	EXPECT_EQ(bytesOf(*m), now);
 }
 
 // tests/golden/CKeyframeMap_v3.bin: the format-test map as version 3 wrote
@@ -428,7 +428,7 @@ TEST(MapFormat, Version2MapsStillLoad)
 TEST(MapFormat, Version3MapsStillLoadAsBrief)
 {
 	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
-	const auto v3 = fileBytes(golden + "CKeyframeMap_v3.bin"), v4 = fileBytes(golden + "CKeyframeMap.bin");
+	const auto v3 = fileBytes(golden + "CKeyframeMap_v3.bin"), now = fileBytes(golden + "CKeyframeMap.bin");
 	const std::string name = "shadyloc::CKeyframeMap";
 	ASSERT_GT(v3.size(), 2 + name.size());
 	ASSERT_EQ(v3[1 + name.size()], 3) << "the fixture is not a version 3 map";
@@ -438,7 +438,25 @@ TEST(MapFormat, Version3MapsStillLoadAsBrief)
 	for (const auto& k : m->keyframes())
 		for (const auto& ch : k.channels)
 			for (const auto& meas : ch) EXPECT_TRUE(meas.normal.isZero());
-	EXPECT_EQ(bytesOf(*m), v4);
+	EXPECT_EQ(bytesOf(*m), now);
+}
+
+// tests/golden/CKeyframeMap_v4.bin: the format-test map as version 4 wrote
+// it, before maps held several experiences. It loads as one anchored
+// experience per run, without links, to the content the current golden
+// file holds.
+TEST(MapFormat, Version4MapsLoadAsAnchoredRunsWithoutLinks)
+{
+	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
+	const auto v4 = fileBytes(golden + "CKeyframeMap_v4.bin"), now = fileBytes(golden + "CKeyframeMap.bin");
+	const std::string name = "shadyloc::CKeyframeMap";
+	ASSERT_GT(v4.size(), 2 + name.size());
+	ASSERT_EQ(v4[1 + name.size()], 4) << "the fixture is not a version 4 map";
+	const auto m = CKeyframeMap::LoadFromBytes(v4.data(), v4.size(), "CKeyframeMap_v4.bin");
+	ASSERT_GE(m->runs().size(), 2u);
+	for (uint16_t r = 0; r < m->runs().size(); r++) EXPECT_TRUE(m->runAnchored(r));
+	EXPECT_TRUE(m->links().empty());
+	EXPECT_EQ(bytesOf(*m), now);
 }
 
 TEST(MapFormat, DescriptorKindRoundTrips)

@@ -54,4 +54,13 @@ Matrix6d jacobianYPRWrtLeft(const Eigen::Isometry3d& T);
  * J cov J^T with J = jacobianYPRWrtLeft(T)). */
 mrpt::poses::CPose3DPDFGaussian toCPose3DPDFGaussian(const TPoseWithCov& p);
 
+/** Mahalanobis distance^2 xi^T S^-1 xi; infinity if S is not finite and
+ * positive definite (e.g. poses in frames nothing relates). */
+double mahalanobis2(const Vector6d& xi, const Matrix6d& S);
+
+/** The largest standard deviation of a pose covariance's translation [m]. */
+double translationSigma(const Matrix6d& cov);
+/** ... and of its rotation [rad]. */
+double rotationSigma(const Matrix6d& cov);
+
 }  // namespace shadyloc::geometry

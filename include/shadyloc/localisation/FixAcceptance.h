@@ -58,6 +58,10 @@ struct TAcceptanceOptions
 	double prediction_chi2 = 16.81;	 //!< chi^2 with 6 dof (99 %) [-]
 	double motion_chi2 = 22.46;	 //!< [-]
 	int consistent_frames = 2;	//!< K: motion-tested consistent frames that confirm a new place
+	/** A solve whose translation sigma is at least this (0 = off) must pass
+	 * the prediction test at uncertain_prediction_chi2 instead [m]. */
+	double uncertain_sigma_m = 0;
+	double uncertain_prediction_chi2 = 16.81;  //!< [-]
 };
 
 /** One localiser's solve of one frame. */
@@ -113,14 +117,15 @@ class FixAcceptance
 	int consistent() const { return m_consistent; }
 
    private:
+	double predictionGate(const TSolve& s) const;
+
 	TAcceptanceOptions m_opts;
 	std::optional<TSolve> m_ref;  //!< the last consistent solve (the motion test's reference)
 	int m_consistent = 0;
 	bool m_confirmed = false;
 };
 
-/** Mahalanobis distance^2 xi^T S^-1 xi; infinity if S is not positive definite. */
-double mahalanobis2(const geometry::Vector6d& xi, const geometry::Matrix6d& S);
+using geometry::mahalanobis2;
 /** The prediction test's statistic: `solve` against `pred` re-expressed in
  * the solve's keyframe through `link`, on the sum of their covariances. */
 double predictionDistance2(const TKeyframePose& solve, const TKeyframePose& pred, const KeyframeLink& link);

@@ -14,10 +14,8 @@
 
 namespace shadyloc::localisation
 {
-/** The largest standard deviation of a pose covariance's translation [m]. */
-double translationSigma(const geometry::Matrix6d& cov);
-/** ... and of its rotation [rad]. */
-double rotationSigma(const geometry::Matrix6d& cov);
+using geometry::rotationSigma;
+using geometry::translationSigma;
 
 /** The localiser's measurement model for the pose solver. */
 geometry::TPoseSolverOptions solverOptionsFor(const TLocaliserOptions& o);

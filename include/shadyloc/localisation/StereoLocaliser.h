@@ -176,6 +176,12 @@ struct TLocaliserOptions
 	/** Fix against prediction: Mahalanobis distance^2 bound, chi^2 with 6 dof
 	 * (16.81 = 99 %) [-]. */
 	double prediction_chi2 = 16.81;
+	/** A solve whose translation sigma is at least this (0 = off) must pass
+	 * the prediction test at uncertain_prediction_chi2 instead: the near
+	 * misses the 99 % gate lets through are uncertain solves 3-4 sigma from
+	 * a good prediction [m]. */
+	double uncertain_sigma_m = 0;
+	double uncertain_prediction_chi2 = 16.81;  //!< [-]
 	/** Frame-to-frame motion of two consecutive solves against VO's [-]. */
 	double motion_chi2 = 22.46;
 	int consistent_frames = 3;	//!< K: consecutive consistent frames before fixes are accepted again
@@ -223,6 +229,8 @@ geometry::Matrix6d fixCovariance(
  * without the motion prior). Diagnostic tools build the same stages. */
 vo::TKeyframeMatcherOptions matcherOptionsFor(const TLocaliserOptions& o, SearchMode mode);
 vo::TRelativePoseOptions estimatorOptionsFor(const TLocaliserOptions& o);
+/** ... and the accept stage. */
+TAcceptanceOptions acceptanceOptionsFor(const TLocaliserOptions& o);
 
 /** One frame's input. */
 struct TLocaliserInput

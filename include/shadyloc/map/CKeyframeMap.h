@@ -23,6 +23,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -126,10 +127,25 @@ class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
 	 * with `live` is not comparable with this map's channel of the same label. */
 	void checkCompatible(const map::TChannelParams& live) const;
 
-	/** Survey runs (a keyframe's `run` indexes this). */
+	/** Survey runs (a keyframe's `run` indexes this): the map's experiences. */
 	const std::vector<std::string>& runs() const { return m_runs; }
-	/** Index of a run, adding it if new. */
-	uint16_t addRun(const std::string& name);
+	/** Index of a run, adding it if new. An anchored run's keyframe poses are
+	 * in the map frame (the first run's, or placed there through links); a
+	 * run that is not keeps its own frame and is never chained to the others. */
+	uint16_t addRun(const std::string& name, bool anchored = true);
+	bool runAnchored(uint16_t run) const;
+	/** The frame keyframe `id`'s map pose is in: 0 the map frame, else its
+	 * run's own (the run index). Poses in different frames are unrelated. */
+	uint32_t frameOf(uint32_t id) const;
+	/** Verified relative poses between keyframes of different runs. */
+	const std::vector<map::TExperienceLink>& links() const { return m_links; }
+	/** Adds a link; throws naming the keyframes if either is unknown or both
+	 * are of one run. */
+	void addLink(const map::TExperienceLink& link);
+	/** T_a_b with covariance where measurements relate a and b: along the
+	 * chain in one segment, else through the link between their segments
+	 * nearest both (chains composed on either side); none otherwise. */
+	std::optional<map::TRelativePose> measuredRelativePose(uint32_t a, uint32_t b) const;
 
 	// ---- building --------------------------------------------------------------
 	/** Appends a keyframe (id set here). Its measurements are quantised and
@@ -235,6 +251,8 @@ class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
 	int m_width = 0, m_height = 0;	//!< image size [px]
 	std::vector<map::TChannelParams> m_channels;
 	std::vector<std::string> m_runs;
+	std::vector<uint8_t> m_runAnchored;	 //!< per run
+	std::vector<map::TExperienceLink> m_links;
 	std::vector<map::TMapKeyframe> m_keyframes;
 	std::vector<double> m_chainDist;  //!< per keyframe, see chainDistance()
 	/** Spatial hash grid over camera centres: cell key -> keyframe ids. */

@@ -110,6 +110,20 @@ struct TNearestQuery
 	size_t max_results = 5;	 //!< best first (by distance + angle_weight_m_per_deg * angle)
 	double angle_weight_m_per_deg = 0.1;  //!< ranking: metres a degree of heading is worth [m/deg]
 	bool include_predicted = true;	//!< also keyframes whose map pose is only predicted
+	/** Only keyframes whose poses share a frame with this keyframe's (an
+	 * experience linked nowhere has a frame of its own); -1: any. A query
+	 * pose is always in some keyframe's frame: pass that keyframe. */
+	int64_t same_frame_as = -1;
+};
+
+/** A verified relative pose between keyframes of two experiences (survey
+ * runs of one map): keyframe b's left camera in keyframe a's, from
+ * localising b's run against the map that held a (`survey --append`). */
+struct TExperienceLink
+{
+	uint32_t a = 0, b = 0;	//!< map keyframe ids, of different runs
+	Eigen::Isometry3d T_a_b = Eigen::Isometry3d::Identity();
+	geometry::Matrix6d cov = geometry::Matrix6d::Zero();  //!< of T_a_b, left perturbation [m^2, rad^2]
 };
 
 /** The pose of one keyframe in another's frame, composed along the chain. */
