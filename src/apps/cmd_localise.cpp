@@ -3,6 +3,7 @@
 #include "Command.h"
 #include "CommandLine.h"
 #include "LocalisedFrame.h"
+#include "LearnExperience.h"
 #include "LocalisedView.h"
 
 #include <shadyloc/core/ConfigLocation.h>
@@ -32,6 +33,8 @@ namespace
 {
 using namespace shadyloc;
 using namespace shadyloc::localisation;
+using shadyloc::apps::learnExperience;
+using shadyloc::apps::TLearnOptions;
 namespace fs = std::filesystem;
 
 std::vector<std::string> splitList(const std::string& s)
@@ -278,6 +281,16 @@ int run(int argc, char** argv)
 		"every N frames, a top-down picture of the map and the live path so far (offscreen) in OUTDIR/view/", 0, "N", 0,
 		1000000);
 	TPictureArgs pictureArgs(cli);
+	TCLAP::ValueArg<std::string> learnArg(
+		"", "learn",
+		"where the run goes blind for more than --learn-blind-m, add its keyframes there to a copy of the map as a "
+		"new experience, written to this file (never over the map)",
+		false, "", "OUT.kfmap", cmd);
+	shadyloc::apps::NumberArg<double> learnBlind(
+		cli, "", "learn-blind-m", "with --learn: blind stretches longer than this are learnt [m]", 10.0, "m", 0.0, 1e6);
+	shadyloc::apps::NumberArg<double> learnMargin(
+		cli, "", "learn-margin-m", "with --learn: ... with this much of the run on either side, to link them [m]", 5.0,
+		"m", 0.0, 1e6);
 	TCLAP::SwitchArg quiet("q", "quiet", "no progress output", cmd);
 	TCLAP::SwitchArg debug(
 		"", "debug",
@@ -290,6 +303,12 @@ int run(int argc, char** argv)
 	const bool live = liveArg.isSet();
 	checkLiveArguments(in.isSet(), live, cameraArg.isSet(), liveRight.isSet() || fpsArg.isSet() || realtime.isSet() || queueArg.isSet());
 	pictureArgs.check(viewArg.getValue() > 0);
+	if (learnArg.isSet() && live) throw std::runtime_error("--learn: only with a live rawlog (-i), which it surveys");
+	if ((learnBlind.isSet() || learnMargin.isSet()) && !learnArg.isSet())
+		throw std::runtime_error("--learn-blind-m, --learn-margin-m: only with --learn");
+	if (learnArg.isSet() && !(learnArg.getValue().size() > 6 &&
+							  learnArg.getValue().substr(learnArg.getValue().size() - 6) == CKeyframeMap::kFileExtension))
+		throw std::runtime_error("--learn '" + learnArg.getValue() + "': map files end in " + CKeyframeMap::kFileExtension);
 	if (!fs::exists(mapPath)) throw std::runtime_error("map '" + mapPath + "' does not exist");
 	if (!live && !fs::exists(livePath)) throw std::runtime_error("live rawlog '" + livePath + "' does not exist");
 	std::string cfgText, cfgWhat;
@@ -329,6 +348,7 @@ int run(int argc, char** argv)
 	for (const auto& c : cfgArgs.getValue()) outputs.addInput(c, "config");
 	const fs::path dir = outputs.addDirectory(out.getValue(), "output folder", "shadyloc localise output");
 	const std::string gifTmp = pictureArgs.gif.isSet() ? outputs.addFile(pictureArgs.gif.getValue(), "--gif") : "";
+	const std::string learnTmp = learnArg.isSet() ? outputs.addFile(learnArg.getValue(), "--learn map") : "";
 
 	const CKeyframeMap::Ptr map = loadMap(mapPath);
 
@@ -400,6 +420,14 @@ int run(int argc, char** argv)
 	if (capture) recordLiveCapture(*capture, prov);
 	eval::writeLocaliseOutputs(dir.string(), ups, ev, *map, sys.options(), prov);
 	if (pictures) pictures->finish();
+	if (learnArg.isSet())
+	{
+		TLearnOptions lo;
+		lo.blind_m = learnBlind.getValue();
+		lo.margin_m = learnMargin.getValue();
+		const auto learnt = learnExperience(cfg, cfgWhat, *map, livePath, gt, label.getValue(), ups, lo, std::cout);
+		(learnt ? *learnt : *map).saveToFile(learnTmp);
+	}
 	outputs.commit();
 
 	printResult(ups, ev, gt.has_value(), capture.get(), out.getValue());
@@ -411,6 +439,7 @@ int run(int argc, char** argv)
 shadyloc::apps::RegisterCommand reg(
 	"localise",
 	{"a live run against a keyframe map, combined system (-m MAP -i live.rawlog -o OUTDIR [-c ini] [--gt live.tum] "
-	 "[--localisers mono,invariant] [--view N [--view-images]] [--gif OUT.gif [--gif-every N] [--gif-fps F]])",
+	 "[--localisers mono,invariant] [--view N [--view-images]] [--gif OUT.gif [--gif-every N] [--gif-fps F]] "
+	 "[--learn OUT.kfmap])",
 	 run});
 }  // namespace

@@ -107,15 +107,22 @@ void checkAppendable(
 
 TAppendReport appendExperience(
 	CKeyframeMap& map, const CKeyframeMap& run, const std::string& name, const std::vector<TRunFix>& fixes,
-	const TAppendOptions& o)
+	const TAppendOptions& o, const std::vector<TFrameRange>& keep)
 {
+	const auto kept = [&](uint64_t frame) {
+		return keep.empty() ||
+			   std::any_of(keep.begin(), keep.end(), [&](const TFrameRange& r) { return frame >= r.first && frame <= r.last; });
+	};
+	if (std::none_of(run.keyframes().begin(), run.keyframes().end(), [&](const auto& k) { return kept(k.frame); }))
+		throw std::runtime_error("run '" + name + "': no keyframe in the frames to add");
 	checkAppendable(map, run, "the map", "run '" + name + "'");
 	for (const auto& r : map.runs())
 		if (r == name) throw std::runtime_error("the map already holds a run named '" + name + "': name the new one otherwise");
 
 	// ---- candidates: fixes at the run's keyframes
 	std::unordered_map<uint64_t, uint32_t> kfAtFrame;
-	for (const auto& k : run.keyframes()) kfAtFrame.emplace(k.frame, k.id);
+	for (const auto& k : run.keyframes())
+		if (kept(k.frame)) kfAtFrame.emplace(k.frame, k.id);
 	std::vector<TCandidate> cands;
 	for (const auto& f : fixes)
 	{
@@ -143,15 +150,20 @@ TAppendReport appendExperience(
 	TAppendReport rep;
 	rep.run = name;
 	rep.anchored = static_cast<int>(verified.size()) >= o.min_links;
-	const uint32_t first = static_cast<uint32_t>(map.keyframeCount());
-	const uint32_t segOffset = map.keyframes().back().segment + 1 - run.keyframes().front().segment;
 	CKeyframeMap out = map;	 // the map stays as it was if anything throws
 	rep.run_index = out.addRun(name, rep.anchored);
+	// A segment per stretch of consecutive kept keyframes of one run segment.
+	std::unordered_map<uint32_t, uint32_t> idOf;  // run keyframe -> output map keyframe
+	uint32_t segment = map.keyframes().back().segment;
+	const map::TMapKeyframe* prev = nullptr;
 	for (const auto& k0 : run.keyframes())
 	{
+		if (!kept(k0.frame)) continue;
+		if (!prev || prev->segment != k0.segment || prev->id + 1 != k0.id) segment++;
+		prev = &k0;
 		map::TMapKeyframe k = k0;
 		k.run = rep.run_index;
-		k.segment = k0.segment + segOffset;
+		k.segment = segment;
 		if (rep.anchored)
 		{
 			const auto [l, sameSegment] = nearestLink(run, verified, k0.id);
@@ -163,16 +175,17 @@ TAppendReport appendExperience(
 			k.predicted = k0.predicted || !sameSegment || map.keyframe(l->a).predicted;
 			rep.placed_from_other_segment += !sameSegment;
 		}
+		idOf[k0.id] = static_cast<uint32_t>(out.keyframeCount());
 		out.appendKeyframe(std::move(k));
 	}
-	rep.keyframes = run.keyframeCount();
+	rep.keyframes = idOf.size();
 
 	// ---- links: every verified candidate, reported with its truth
 	for (size_t i = 0; i < cands.size(); i++)
 	{
 		TLinkReport lr;
 		lr.link.a = cands[i].a;
-		lr.link.b = first + cands[i].b;
+		lr.link.b = idOf.at(cands[i].b);
 		lr.link.T_a_b = cands[i].T_a_b.T;
 		lr.link.cov = cands[i].T_a_b.cov;
 		lr.agreeing = agreeing[i];

@@ -266,3 +266,43 @@ TEST(ExperiencesApp, AppendedRunIsLinkedAndTheInputMapIsUntouched)
 	EXPECT_NE(out.find("already holds a run named 'overcast'"), std::string::npos) << out;
 	EXPECT_FALSE(std::filesystem::exists(three));
 }
+
+// `shadyloc localise --learn`: the evening run against the noon map with the
+// baseline (which goes blind at the start of the run) adds its keyframes
+// there, and only there, linked by the fixes after them; a run with no blind
+// stretch that long adds nothing; the map is never the output.
+TEST(ExperiencesApp, LearnAddsKeyframesOnlyWhereTheRunWentBlind)
+{
+	SHADYLOC_REQUIRE_DEFAULT_DATASET();
+	const std::string src = SHADYLOC_SOURCE_DIR, data = test::defaultDatasetDir(), app = test::appPath();
+	const std::string dir = test::tempDir("experiences_learn");
+	const std::string map = dir + "/noon.kfmap", learnt = dir + "/learnt.kfmap";
+	const std::string cfg = " -c " + src + "/config/vo_sim.ini -c " + src + "/config/localise_sim.ini";
+	std::string out;
+	ASSERT_EQ(
+		test::runCommand(app + " survey -q -i " + data + "/noon.rawlog --gt " + data + "/noon.tum -o " + map + " -c " + src + "/config/vo_sim.ini", &out),
+		0)
+		<< out;
+	const std::string before = test::fileContents(map);
+	const std::string loc = app + " localise -m " + map + " -i " + data + "/evening_warm.rawlog --gt " + data +
+							"/evening_warm.tum --localisers mono" + cfg;
+	ASSERT_EQ(test::runCommand(loc + " -o " + dir + "/loc --learn " + learnt + " --learn-blind-m 2", &out), 0) << out;
+	EXPECT_NE(out.find("learn: "), std::string::npos) << out;
+	const auto base = CKeyframeMap::LoadFromFile(map), m = CKeyframeMap::LoadFromFile(learnt);
+	ASSERT_EQ(m->runs(), (std::vector<std::string>{"noon", "evening_warm"}));
+	const size_t added = m->keyframeCount() - base->keyframeCount();
+	EXPECT_GT(added, 0u) << out;
+	EXPECT_LT(added, base->keyframeCount() / 2) << "only the blind stretches, not the run: " << out;
+	EXPECT_TRUE(m->runAnchored(1)) << out;
+	EXPECT_FALSE(m->links().empty());
+	EXPECT_EQ(test::fileContents(map), before);
+	// Nothing that long: the output is the map as it was.
+	ASSERT_EQ(test::runCommand(loc + " -o " + dir + "/loc2 --learn " + dir + "/same.kfmap --learn-blind-m 1000", &out), 0) << out;
+	EXPECT_NE(out.find("nothing to learn"), std::string::npos) << out;
+	EXPECT_EQ(CKeyframeMap::LoadFromFile(dir + "/same.kfmap")->keyframeCount(), base->keyframeCount());
+	// The map as the output: refused before any work, the map untouched.
+	EXPECT_NE(test::runCommand(loc + " -o " + dir + "/loc3 --learn " + map, &out), 0);
+	EXPECT_NE(out.find(map), std::string::npos) << out;
+	EXPECT_EQ(test::fileContents(map), before);
+	EXPECT_FALSE(std::filesystem::exists(dir + "/loc3"));
+}

@@ -38,6 +38,12 @@ struct TRunFix
 	geometry::Matrix6d cov = geometry::Matrix6d::Zero();
 };
 
+/** Frames first..last of a run (inclusive). */
+struct TFrameRange
+{
+	uint64_t first = 0, last = 0;
+};
+
 struct TAppendOptions
 {
 	/** Two candidate links agree when the loop they close passes this
@@ -79,9 +85,12 @@ void checkAppendable(
 /** Appends the single-run map `run` to `map` as experience `name` (a name
  * the map does not hold yet), its keyframes after the map's, linked by the
  * verified `fixes` (fixes at frames that are no keyframe of `run` are not
- * used). Checks as checkAppendable first; on any error `map` is unchanged. */
+ * used). With `keep`, only the keyframes of those frames are added, each
+ * stretch a segment of its own (`localise --learn`: where the run went
+ * blind, with the fixes around it as links). Checks as checkAppendable
+ * first; throws if `keep` holds no keyframe; on any error `map` is unchanged. */
 TAppendReport appendExperience(
 	CKeyframeMap& map, const CKeyframeMap& run, const std::string& name, const std::vector<TRunFix>& fixes,
-	const TAppendOptions& o = {});
+	const TAppendOptions& o = {}, const std::vector<TFrameRange>& keep = {});
 
 }  // namespace shadyloc::survey
