@@ -180,8 +180,8 @@ struct TLocaliserOptions
 	 * the prediction test at uncertain_prediction_chi2 instead: the near
 	 * misses the 99 % gate lets through are uncertain solves 3-4 sigma from
 	 * a good prediction [m]. */
-	double uncertain_sigma_m = 0;
-	double uncertain_prediction_chi2 = 16.81;  //!< [-]
+	double uncertain_sigma_m = 0.09;
+	double uncertain_prediction_chi2 = 10.0;  //!< [-]
 	/** Frame-to-frame motion of two consecutive solves against VO's [-]. */
 	double motion_chi2 = 22.46;
 	int consistent_frames = 3;	//!< K: consecutive consistent frames before fixes are accepted again
