@@ -18,6 +18,8 @@ void TLocaliserOptions::keys(core::KeyVisitor& v)
 	v("kf_window_max", kf_window_max, "", Range::closed(1, 20), "... at most this many");
 	v("kf_max_angle_deg", kf_max_angle_deg, "deg", Range::openClosed(0, 180), "optical axes within this");
 	v("kf_angle_weight_m_per_deg", kf_angle_weight_m_per_deg, "m/deg", Range::atLeast(0), "");
+	v("kf_stay_in_experience", kf_stay_in_experience, "", Range::any(),
+	  "several experiences: the prediction's while it has a keyframe in range");
 	v("cross_segment_sigma_m", cross_segment_sigma_m, "m", Range::above(0), "");
 	v("cross_segment_sigma_deg", cross_segment_sigma_deg, "deg", Range::above(0), "");
 	v.choice("search", search, {{"gate", SearchMode::Gate}, {"window", SearchMode::Window}, {"global", SearchMode::Global}},

@@ -176,22 +176,31 @@ TKeyframePose StereoLocaliser::chooseKeyframe(const TKeyframePose& pred) const
 	q.same_frame_as = pred.kf;
 	for (const auto& h : m_map.nearestKeyframes(T_map_pred, q))
 		if (std::find(cands.begin(), cands.end(), h.id) == cands.end()) cands.push_back(h.id);
-	double best = std::numeric_limits<double>::infinity();
-	int bestId = -1;
-	for (const uint32_t c : cands)
-	{
-		const auto& T_map_c = m_map.keyframe(c).T_map_kf;
-		const double ang = angleBetweenAxesDeg(T_map_c, T_map_pred);
-		const double dist = (T_map_c.translation() - T_map_pred.translation()).norm();
-		if (ang > o.kf_max_angle_deg || dist > o.kf_max_distance_m) continue;
-		const double score = (T_map_c.translation() - ahead).norm() + o.kf_angle_weight_m_per_deg * ang;
-		// Ties (identical scores) go to the smaller id: deterministic.
-		if (score < best)
+	// The best candidate by distance from the look-ahead point and heading,
+	// among those `eligible` lets through; -1 if none is in range.
+	const auto bestOf = [&](const auto& eligible) {
+		double best = std::numeric_limits<double>::infinity();
+		int bestId = -1;
+		for (const uint32_t c : cands)
 		{
-			best = score;
-			bestId = static_cast<int>(c);
+			if (!eligible(c)) continue;
+			const auto& T_map_c = m_map.keyframe(c).T_map_kf;
+			const double ang = angleBetweenAxesDeg(T_map_c, T_map_pred);
+			const double dist = (T_map_c.translation() - T_map_pred.translation()).norm();
+			if (ang > o.kf_max_angle_deg || dist > o.kf_max_distance_m) continue;
+			const double score = (T_map_c.translation() - ahead).norm() + o.kf_angle_weight_m_per_deg * ang;
+			// Ties (identical scores) go to the smaller id: deterministic.
+			if (score < best)
+			{
+				best = score;
+				bestId = static_cast<int>(c);
+			}
 		}
-	}
+		return bestId;
+	};
+	const uint16_t run = m_map.keyframe(pred.kf).run;
+	int bestId = o.kf_stay_in_experience ? bestOf([&](uint32_t c) { return m_map.keyframe(c).run == run; }) : -1;
+	if (bestId < 0) bestId = bestOf([](uint32_t) { return true; });
 	TKeyframePose out;
 	if (bestId < 0) return out;
 	const uint32_t c = static_cast<uint32_t>(bestId);

@@ -85,6 +85,13 @@ struct TLocaliserOptions
 	int kf_window_max = 2;	//!< at most this many keyframes, nearest the prediction first
 	double kf_max_angle_deg = 30.0;	 //!< optical axes farther apart are not used [deg]
 	double kf_angle_weight_m_per_deg = 0.1;	 //!< ranking: metres a degree of heading is worth [m/deg]
+	/** In a map of several experiences, a keyframe of the prediction's
+	 * experience (the one that localised last) while it has one in range;
+	 * another only where it has none. A lost frame's relocalisation searches
+	 * every experience, so a failing one is left there. Off: the nearest of
+	 * any experience (it alternated between two every frame and lost
+	 * coverage through the links). */
+	bool kf_stay_in_experience = true;
 	/** Covariance added when the prediction crosses from one chain segment to
 	 * another (their link is not measured): standard deviations [m], [deg]. */
 	double cross_segment_sigma_m = 2.0;
