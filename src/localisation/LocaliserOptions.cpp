@@ -20,6 +20,8 @@ void TLocaliserOptions::keys(core::KeyVisitor& v)
 	v("kf_angle_weight_m_per_deg", kf_angle_weight_m_per_deg, "m/deg", Range::atLeast(0), "");
 	v("kf_stay_in_experience", kf_stay_in_experience, "", Range::any(),
 	  "several experiences: the prediction's while it has a keyframe in range");
+	v("kf_experiences_per_frame", kf_experiences_per_frame, "", Range::closed(1, 16),
+	  "... and up to this many experiences searched per frame, the solve with most inliers kept");
 	v("cross_segment_sigma_m", cross_segment_sigma_m, "m", Range::above(0), "");
 	v("cross_segment_sigma_deg", cross_segment_sigma_deg, "deg", Range::above(0), "");
 	v.choice("search", search, {{"gate", SearchMode::Gate}, {"window", SearchMode::Window}, {"global", SearchMode::Global}},

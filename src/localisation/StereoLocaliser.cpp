@@ -160,7 +160,31 @@ const features::BriefExtractor* StereoLocaliser::briefPattern() const
 
 TPoseWithCov StereoLocaliser::between(uint32_t a, uint32_t b) const { return keyframeLink(m_map, m_opts, a, b); }
 
+namespace
+{
+/** T_kf_live of `pred` re-expressed in keyframe c through `link`. */
+TKeyframePose inKeyframe(uint32_t c, const TKeyframePose& pred, const TPoseWithCov& T_c_predkf)
+{
+	TPoseWithCov p;
+	p.T = pred.T_kf_live;
+	p.cov = pred.cov;
+	const TPoseWithCov q = geometry::compose(T_c_predkf, p);
+	TKeyframePose out;
+	out.valid = true;
+	out.kf = c;
+	out.T_kf_live = q.T;
+	out.cov = q.cov;
+	return out;
+}
+}  // namespace
+
 TKeyframePose StereoLocaliser::chooseKeyframe(const TKeyframePose& pred) const
+{
+	const auto ks = chooseKeyframes(pred);
+	return ks.empty() ? TKeyframePose() : ks.front();
+}
+
+std::vector<TKeyframePose> StereoLocaliser::chooseKeyframes(const TKeyframePose& pred) const
 {
 	const auto& o = m_opts;
 	const Eigen::Isometry3d T_map_pred = m_map.keyframe(pred.kf).T_map_kf * pred.T_kf_live;
@@ -168,50 +192,48 @@ TKeyframePose StereoLocaliser::chooseKeyframe(const TKeyframePose& pred) const
 	const Eigen::Vector3d ahead = T_map_pred * Eigen::Vector3d(0, 0, o.kf_lookahead_m);
 	std::vector<uint32_t> cands = m_map.keyframesAlongChain(pred.kf, o.kf_back_m, o.kf_ahead_m);
 	// At a segment's end (or a VO break) the chain does not go on: also the
-	// spatially nearest keyframes of any segment.
+	// spatially nearest keyframes of any segment (and experience) of its frame.
 	map::TNearestQuery q;
 	q.max_distance_m = o.kf_max_distance_m;
 	q.max_angle_deg = o.kf_max_angle_deg;
-	q.max_results = 5;
+	q.max_results = 5 * static_cast<size_t>(o.kf_experiences_per_frame);
 	q.same_frame_as = pred.kf;
 	for (const auto& h : m_map.nearestKeyframes(T_map_pred, q))
 		if (std::find(cands.begin(), cands.end(), h.id) == cands.end()) cands.push_back(h.id);
-	// The best candidate by distance from the look-ahead point and heading,
-	// among those `eligible` lets through; -1 if none is in range.
-	const auto bestOf = [&](const auto& eligible) {
-		double best = std::numeric_limits<double>::infinity();
-		int bestId = -1;
-		for (const uint32_t c : cands)
-		{
-			if (!eligible(c)) continue;
-			const auto& T_map_c = m_map.keyframe(c).T_map_kf;
-			const double ang = angleBetweenAxesDeg(T_map_c, T_map_pred);
-			const double dist = (T_map_c.translation() - T_map_pred.translation()).norm();
-			if (ang > o.kf_max_angle_deg || dist > o.kf_max_distance_m) continue;
-			const double score = (T_map_c.translation() - ahead).norm() + o.kf_angle_weight_m_per_deg * ang;
-			// Ties (identical scores) go to the smaller id: deterministic.
-			if (score < best)
+	// Each candidate in range with its score: distance from the look-ahead
+	// point plus heading; ties (identical scores) go to the smaller id.
+	std::vector<std::pair<double, uint32_t>> scored;
+	for (const uint32_t c : cands)
+	{
+		const auto& T_map_c = m_map.keyframe(c).T_map_kf;
+		const double ang = angleBetweenAxesDeg(T_map_c, T_map_pred);
+		const double dist = (T_map_c.translation() - T_map_pred.translation()).norm();
+		if (ang > o.kf_max_angle_deg || dist > o.kf_max_distance_m) continue;
+		scored.push_back({(T_map_c.translation() - ahead).norm() + o.kf_angle_weight_m_per_deg * ang, c});
+	}
+	std::sort(scored.begin(), scored.end());
+	// The best of each experience, the prediction's first (kf_stay_in_experience).
+	const uint16_t own = m_map.keyframe(pred.kf).run;
+	std::vector<uint32_t> chosen;
+	std::vector<uint16_t> runs;
+	if (o.kf_stay_in_experience)
+		for (const auto& [score, c] : scored)
+			if (m_map.keyframe(c).run == own)
 			{
-				best = score;
-				bestId = static_cast<int>(c);
+				chosen.push_back(c);
+				runs.push_back(own);
+				break;
 			}
-		}
-		return bestId;
-	};
-	const uint16_t run = m_map.keyframe(pred.kf).run;
-	int bestId = o.kf_stay_in_experience ? bestOf([&](uint32_t c) { return m_map.keyframe(c).run == run; }) : -1;
-	if (bestId < 0) bestId = bestOf([](uint32_t) { return true; });
-	TKeyframePose out;
-	if (bestId < 0) return out;
-	const uint32_t c = static_cast<uint32_t>(bestId);
-	TPoseWithCov p;
-	p.T = pred.T_kf_live;
-	p.cov = pred.cov;
-	const TPoseWithCov q2 = geometry::compose(between(c, pred.kf), p);
-	out.valid = true;
-	out.kf = c;
-	out.T_kf_live = q2.T;
-	out.cov = q2.cov;
+	for (const auto& [score, c] : scored)
+	{
+		if (static_cast<int>(chosen.size()) >= o.kf_experiences_per_frame) break;
+		const uint16_t run = m_map.keyframe(c).run;
+		if (std::find(runs.begin(), runs.end(), run) != runs.end()) continue;
+		chosen.push_back(c);
+		runs.push_back(run);
+	}
+	std::vector<TKeyframePose> out;
+	for (const uint32_t c : chosen) out.push_back(inKeyframe(c, pred, between(c, pred.kf)));
 	return out;
 }
 
@@ -352,28 +374,25 @@ TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in, TSearchedC
 	};
 	if (!in.prediction.valid) return fail(LocaliserStatus::NoPrediction);
 
-	// ---- 1. keyframe choice, around where to search ------------------------------------
-	const TKeyframePose pred = chooseKeyframe(in.search.valid ? in.search : in.prediction);
-	if (!pred.valid) return fail(LocaliserStatus::NoKeyframe);
-	const auto& kf = m_map.keyframe(pred.kf);
-	r.kf_id = kf.id;
-	r.kf_run = kf.run;
-	r.kf_frame = kf.frame;
-	r.kf_stamp = kf.timestamp;
-	uint32_t matchKf = pred.kf;
-	if (o.fault_keyframe_offset != 0)
-	{
-		const long long f = static_cast<long long>(pred.kf) + o.fault_keyframe_offset;
-		matchKf = static_cast<uint32_t>(std::clamp<long long>(f, 0, static_cast<long long>(m_map.keyframeCount()) - 1));
-		// Clamped at the chain's end onto the chosen keyframe itself: no fault
-		// to inject, and a sound solve here would count as a rejected fault.
-		if (matchKf == pred.kf) return fail(LocaliserStatus::NoKeyframe);
-	}
+	// ---- 1. keyframe choice (one per experience searched), around where to search ------
+	const auto preds = chooseKeyframes(in.search.valid ? in.search : in.prediction);
+	if (preds.empty()) return fail(LocaliserStatus::NoKeyframe);
 
 	// ---- 2. active search in the local map, 3. RANSAC and the robust solve ---------------
-	vo::TKeyframeMatchOutput mo;
-	vo::TRelativePoseOutput po;
-	const LocaliserStatus searchStatus = searchAndSolve(in, matchKf, pred, mo, po, r);
+	// In each experience chosen; the solve with the most inliers is the frame's.
+	TSearchAttempt best;
+	for (const TKeyframePose& pred : preds)
+	{
+		TSearchAttempt a = searchAttempt(in, pred, r);
+		const bool better = !best.tried || (a.status == LocaliserStatus::Ok &&
+											(best.status != LocaliserStatus::Ok || a.po.inliers > best.po.inliers));
+		if (better) best = std::move(a);
+	}
+	r = std::move(best.r);
+	vo::TKeyframeMatchOutput& mo = best.mo;
+	const vo::TRelativePoseOutput& po = best.po;
+	const LocaliserStatus searchStatus = best.status;
+	if (searchStatus == LocaliserStatus::NoKeyframe) return fail(LocaliserStatus::NoKeyframe);
 	r.live_matches = liveMatchesOf(mo, po);
 	// What the search found, solved or not, handed on once this frame is done
 	// with it: the joint localiser's share (correspondences in the matched
@@ -395,6 +414,34 @@ TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in, TSearchedC
 	acceptSolve(m_accept, o, in, [this](uint32_t a, uint32_t b) { return between(a, b); }, r);
 	r.ms = msSince(t0);
 	return r;
+}
+
+StereoLocaliser::TSearchAttempt StereoLocaliser::searchAttempt(
+	const TLocaliserInput& in, const TKeyframePose& pred, const TLocaliserResult& r0) const
+{
+	TSearchAttempt a;
+	a.tried = true;
+	a.r = r0;
+	const auto& kf = m_map.keyframe(pred.kf);
+	a.r.kf_id = kf.id;
+	a.r.kf_run = kf.run;
+	a.r.kf_frame = kf.frame;
+	a.r.kf_stamp = kf.timestamp;
+	uint32_t matchKf = pred.kf;
+	if (m_opts.fault_keyframe_offset != 0)
+	{
+		const long long f = static_cast<long long>(pred.kf) + m_opts.fault_keyframe_offset;
+		matchKf = static_cast<uint32_t>(std::clamp<long long>(f, 0, static_cast<long long>(m_map.keyframeCount()) - 1));
+		// Clamped at the chain's end onto the chosen keyframe itself: no fault
+		// to inject, and a sound solve here would count as a rejected fault.
+		if (matchKf == pred.kf)
+		{
+			a.status = LocaliserStatus::NoKeyframe;
+			return a;
+		}
+	}
+	a.status = searchAndSolve(in, matchKf, pred, a.mo, a.po, a.r);
+	return a;
 }
 
 LocaliserStatus StereoLocaliser::searchAndSolve(

@@ -92,6 +92,11 @@ struct TLocaliserOptions
 	 * any experience (it alternated between two every frame and lost
 	 * coverage through the links). */
 	bool kf_stay_in_experience = true;
+	/** ... and up to this many experiences searched per frame: the
+	 * prediction's, then the others with a keyframe in range, nearest first;
+	 * the solve with the most inliers is the frame's (the cost per frame is
+	 * bounded by this, however many experiences the map holds). */
+	int kf_experiences_per_frame = 1;
 	/** Covariance added when the prediction crosses from one chain segment to
 	 * another (their link is not measured): standard deviations [m], [deg]. */
 	double cross_segment_sigma_m = 2.0;
@@ -392,6 +397,20 @@ class StereoLocaliser
    private:
 	/** The keyframe to localise against and the prediction in it; invalid if none. */
 	TKeyframePose chooseKeyframe(const TKeyframePose& pred) const;
+	/** chooseKeyframe's keyframe, then that of each other experience with
+	 * one in range, nearest first: at most kf_experiences_per_frame. */
+	std::vector<TKeyframePose> chooseKeyframes(const TKeyframePose& pred) const;
+	/** One experience's search and solve around `pred` (fault injection
+	 * applied), on a copy of the frame's result `r0`. */
+	struct TSearchAttempt
+	{
+		bool tried = false;
+		LocaliserStatus status = LocaliserStatus::NoKeyframe;
+		TLocaliserResult r;
+		vo::TKeyframeMatchOutput mo;
+		vo::TRelativePoseOutput po;
+	};
+	TSearchAttempt searchAttempt(const TLocaliserInput& in, const TKeyframePose& pred, const TLocaliserResult& r0) const;
 	/** The local map's keyframes around `ref` (ref first, then by distance
 	 * from the predicted camera). */
 	std::vector<uint32_t> window(uint32_t ref, const Eigen::Isometry3d& T_map_pred) const;
