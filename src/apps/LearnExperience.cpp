@@ -66,7 +66,7 @@ CKeyframeMap::Ptr learnExperience(
 	log << "learn: " << frames.size() << " blind stretch(es) longer than " << o.blind_m << " m -> experience '"
 		<< rep.run << "': " << rep.keyframes << " keyframes, " << rep.verified() << " of " << rep.candidates.size()
 		<< " candidate links verified, "
-		<< (rep.anchored ? "anchored in the map frame" : "linked nowhere (its own frame)") << "\n";
+		<< (rep.anchored ? "anchored in the frame of '" + rep.frame_of + "'" : std::string("linked nowhere (its own frame)")) << "\n";
 	return learnt;
 }
 

@@ -85,7 +85,7 @@ void printAppendReport(const survey::TAppendReport& rep, const CKeyframeMap& out
 	std::cout << "experience '" << rep.run << "': " << rep.keyframes << " keyframes, " << rep.candidates.size()
 			  << " candidate links, " << rep.verified() << " verified by a loop with a neighbour; ";
 	if (rep.anchored)
-		std::cout << "anchored in the map frame (" << rep.placed_from_other_segment
+		std::cout << "anchored in the frame of '" << rep.frame_of << "' (" << rep.placed_from_other_segment
 				  << " keyframes placed from another segment's link, marked predicted)\n";
 	else
 		std::cout << "too few links: kept in its own frame, linked nowhere (found by the global search only)\n";
@@ -120,7 +120,7 @@ int run(int argc, char** argv)
 		"c", "config",
 		"options .ini, may be repeated (sections of all files together): [vo], [features], [features.<channel>], the "
 		"channel sections [mono] [invariant], [map] (see config/vo.ini); with --append also [localise], [localiser], "
-		"[localiser.<channel>] (config/localise.ini)",
+		"[localiser.<channel>] (config/localise_sim.ini)",
 		false, "vo.ini", cmd);
 	TCLAP::ValueArg<std::string> appendArg(
 		"", "append",

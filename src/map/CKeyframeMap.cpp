@@ -394,31 +394,29 @@ void CKeyframeMap::checkCompatible(const map::TChannelParams& live) const
 			"): map " + m_channels[i].asString() + "; live " + live.asString());
 }
 
-uint16_t CKeyframeMap::addRun(const std::string& name, bool anchored)
+uint16_t CKeyframeMap::addRun(const std::string& name, int frame)
 {
 	for (size_t i = 0; i < m_runs.size(); i++)
 		if (m_runs[i] == name) return static_cast<uint16_t>(i);
 	if (m_runs.size() >= 65535) throw std::length_error(std::string(kClass) + ": too many runs");
-	// The first run defines the map frame.
-	if (m_runs.empty() && !anchored)
-		throw std::invalid_argument(std::string(kClass) + "::addRun: the first run '" + name + "' defines the map frame");
+	const auto index = static_cast<uint16_t>(m_runs.size());
+	// The first run defines the map frame; another shares the frame of one that founded it.
+	if (m_runs.empty() ? frame > 0 : (frame >= int(m_runs.size()) || (frame > 0 && m_runFrame[frame] != frame)))
+		throw std::invalid_argument(
+			std::string(kClass) + "::addRun: run '" + name + "' cannot be in the frame of run " + std::to_string(frame));
 	m_runs.push_back(name);
-	m_runAnchored.push_back(anchored ? 1 : 0);
-	return static_cast<uint16_t>(m_runs.size() - 1);
+	m_runFrame.push_back(frame == kOwnFrame && index > 0 ? index : static_cast<uint16_t>(std::max(frame, 0)));
+	return index;
 }
 
-bool CKeyframeMap::runAnchored(uint16_t run) const
+uint16_t CKeyframeMap::runFrame(uint16_t run) const
 {
 	if (run >= m_runs.size())
 		throw std::out_of_range(std::string(kClass) + ": no run " + std::to_string(run) + " (" + std::to_string(m_runs.size()) + " runs)");
-	return m_runAnchored[run] != 0;
+	return m_runFrame[run];
 }
 
-uint32_t CKeyframeMap::frameOf(uint32_t id) const
-{
-	const uint16_t run = keyframe(id).run;
-	return m_runAnchored[run] ? 0u : run;
-}
+uint32_t CKeyframeMap::frameOf(uint32_t id) const { return m_runFrame[keyframe(id).run]; }
 
 void CKeyframeMap::addLink(const map::TExperienceLink& link)
 {
@@ -695,7 +693,7 @@ struct TBlocks
 static TBlocks encode(
 	const TKeyframeMapOptions& o, const geometry::TStereoCalib& cal, int w, int h,
 	const std::vector<map::TChannelParams>& channels, const std::vector<std::string>& runs,
-	const std::vector<uint8_t>& runAnchored, const std::vector<map::TExperienceLink>& links,
+	const std::vector<uint16_t>& runFrame, const std::vector<map::TExperienceLink>& links,
 	const std::vector<map::TMapKeyframe>& kfs)
 {
 	ByteWriter m;
@@ -707,7 +705,7 @@ static TBlocks encode(
 	for (const auto& c : channels) putChannel(m, c);
 	m.put<uint16_t>(static_cast<uint16_t>(runs.size()));
 	for (const auto& r : runs) m.str(r);
-	for (const auto a : runAnchored) m.put<uint8_t>(a);	 // version 5
+	for (const auto f : runFrame) m.put<uint16_t>(f);  // version 5
 	m.put<uint32_t>(static_cast<uint32_t>(kfs.size()));
 	for (const auto& k : kfs)
 	{
@@ -791,7 +789,7 @@ uint8_t CKeyframeMap::serializeGetVersion() const { return 5; }
 
 void CKeyframeMap::serializeTo(mrpt::serialization::CArchive& out) const
 {
-	const TBlocks b = encode(options, m_calib, m_width, m_height, m_channels, m_runs, m_runAnchored, m_links, m_keyframes);
+	const TBlocks b = encode(options, m_calib, m_width, m_height, m_channels, m_runs, m_runFrame, m_links, m_keyframes);
 	std::vector<const std::vector<uint8_t>*> blocks{&b.meta};
 	for (const auto& c : b.channels) blocks.push_back(&c);
 	out << static_cast<uint8_t>(blocks.size());
@@ -864,13 +862,14 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 			const auto nr = r.get<uint16_t>();
 			std::vector<std::string> runs;
 			for (int i = 0; i < nr; i++) runs.push_back(r.str());
-			std::vector<uint8_t> anchored(nr, 1);
+			std::vector<uint16_t> frames(nr, 0);
 			if (version >= 5)
 				for (int i = 0; i < nr; i++)
 				{
-					anchored[i] = r.get<uint8_t>();
-					if (anchored[i] > 1 || (i == 0 && !anchored[i]))
-						r.fail("run " + std::to_string(i) + " ('" + runs[i] + "'): anchoring flag " + std::to_string(anchored[i]));
+					// 0, itself (a frame of its own) or an earlier run that founded its frame.
+					frames[i] = r.get<uint16_t>();
+					if (frames[i] > i || (frames[i] > 0 && frames[frames[i]] != frames[i]))
+						r.fail("run " + std::to_string(i) + " ('" + runs[i] + "'): frame of run " + std::to_string(frames[i]));
 				}
 			const auto nk = r.get<uint32_t>();
 			if (!setUp && nk > 0) r.fail(std::to_string(nk) + " keyframes in a map without channels");
@@ -882,7 +881,7 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 			tmp.m_height = h;
 			tmp.m_channels = channels;
 			tmp.m_runs = runs;
-			tmp.m_runAnchored = anchored;
+			tmp.m_runFrame = frames;
 			std::vector<map::TMapKeyframe> kfs(nk);
 			for (uint32_t i = 0; i < nk; i++)
 			{
@@ -992,7 +991,7 @@ void CKeyframeMap::appendLoaded(map::TMapKeyframe kf)
 CKeyframeMap::TSizeReport CKeyframeMap::sizeReport() const
 {
 	TSizeReport s;
-	const TBlocks b = encode(options, m_calib, m_width, m_height, m_channels, m_runs, m_runAnchored, m_links, m_keyframes);
+	const TBlocks b = encode(options, m_calib, m_width, m_height, m_channels, m_runs, m_runFrame, m_links, m_keyframes);
 	s.meta_bytes = compressBlock(b.meta, options.compression_level).size();
 	for (size_t c = 0; c < b.channels.size(); c++)
 	{
@@ -1154,7 +1153,7 @@ void CKeyframeMap::internal_clear()
 	m_chainDist.clear();
 	m_grid.clear();
 	m_runs.clear();
-	m_runAnchored.clear();
+	m_runFrame.clear();
 	m_links.clear();
 }
 
@@ -1301,7 +1300,7 @@ std::string CKeyframeMap::asString() const
 	s << kClass << ": " << m_keyframes.size() << " keyframes, " << std::fixed << std::setprecision(1) << L
 	  << " m of path, " << m_runs.size() << " run(s)";
 	for (size_t i = 0; i < m_runs.size(); i++)
-		s << (i ? ", " : " (") << "'" << m_runs[i] << "'" << (m_runAnchored[i] ? "" : " in its own frame, linked nowhere")
+		s << (i ? ", " : " (") << "'" << m_runs[i] << "'" << (m_runFrame[i] == 0 ? "" : m_runFrame[i] == i ? " in its own frame" : " in the frame of '" + m_runs[m_runFrame[i]] + "'")
 		  << (i + 1 == m_runs.size() ? ")" : "");
 	s << ", " << segs.size() << " segment(s)";
 	if (m_runs.size() > 1) s << ", " << m_links.size() << " link(s) between runs";

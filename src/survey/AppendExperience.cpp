@@ -6,6 +6,7 @@
 #include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <map>
 #include <unordered_map>
 
 namespace shadyloc::survey
@@ -142,16 +143,26 @@ TAppendReport appendExperience(
 				continue;
 			if (loopCloses(map, run, cands[i], cands[j], o.loop_chi2)) agreeing[i]++, agreeing[j]++;
 		}
+	// The frame the run is placed in: that of most verified links (a map
+	// may hold experiences in frames of their own); only its links place it.
+	std::map<uint32_t, int> linksInFrame;
+	for (size_t i = 0; i < cands.size(); i++)
+		if (agreeing[i] > 0) linksInFrame[map.frameOf(cands[i].a)]++;
+	uint32_t frame = 0;
+	int most = 0;
+	for (const auto& [f, n] : linksInFrame)
+		if (n > most) most = n, frame = f;
 	std::vector<const TCandidate*> verified;
 	for (size_t i = 0; i < cands.size(); i++)
-		if (agreeing[i] > 0) verified.push_back(&cands[i]);
+		if (agreeing[i] > 0 && map.frameOf(cands[i].a) == frame) verified.push_back(&cands[i]);
 
 	// ---- the new run's keyframes, after the map's
 	TAppendReport rep;
 	rep.run = name;
 	rep.anchored = static_cast<int>(verified.size()) >= o.min_links;
+	rep.frame_of = rep.anchored ? map.runs()[frame] : name;
 	CKeyframeMap out = map;	 // the map stays as it was if anything throws
-	rep.run_index = out.addRun(name, rep.anchored);
+	rep.run_index = out.addRun(name, rep.anchored ? static_cast<int>(frame) : CKeyframeMap::kOwnFrame);
 	// A segment per stretch of consecutive kept keyframes of one run segment.
 	std::unordered_map<uint32_t, uint32_t> idOf;  // run keyframe -> output map keyframe
 	uint32_t segment = map.keyframes().back().segment;

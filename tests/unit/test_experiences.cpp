@@ -143,6 +143,38 @@ TEST(Experiences, ARunLocalisedNowhereKeepsItsOwnFrameAndIsNeverRelated)
 	EXPECT_TRUE(within.cov.allFinite());
 }
 
+// A run that localises against an experience kept in a frame of its own is
+// placed in that frame, not in the map frame its keyframes' poses do not
+// belong to.
+TEST(Experiences, ARunLinkedToAnExperienceInItsOwnFrameIsPlacedInThatFrame)
+{
+	const auto base = test::makeSyntheticMap(16, 10, 0);
+	const Eigen::Isometry3d G = elsewhere(), O = aside(0.5);
+	const auto lane = drivenAgain(*base, G, aside(3.5));
+	CKeyframeMap m = *base;
+	survey::appendExperience(m, *lane, "other_lane", {});
+	ASSERT_EQ(m.frameOf(16), 1u);
+	// The next run: fixes in the other-lane experience's keyframes (ids 16..31).
+	const auto next = drivenAgain(*lane, Eigen::Isometry3d::Identity(), O);
+	std::vector<survey::TRunFix> fixes;
+	for (const auto& k : next->keyframes()) fixes.push_back({k.frame, 16 + k.id, O, geometry::Matrix6d::Identity() * 4e-4});
+	const auto rep = survey::appendExperience(m, *next, "other_lane_again", fixes);
+	ASSERT_TRUE(rep.anchored);
+	EXPECT_EQ(rep.frame_of, "other_lane");
+	EXPECT_EQ(m.runFrame(2), 1u);
+	EXPECT_FALSE(m.runAnchored(2));
+	for (uint32_t i = 0; i < 16; i++)
+	{
+		EXPECT_EQ(m.frameOf(32 + i), 1u);
+		const Eigen::Isometry3d want = m.keyframe(16 + i).T_map_kf * O;
+		EXPECT_LT((m.keyframe(32 + i).T_map_kf.translation() - want.translation()).norm(), 1e-9) << "keyframe " << i;
+	}
+	// A frame that does not exist, or is not a founder, is refused.
+	CKeyframeMap bad = m;
+	EXPECT_THROW(bad.addRun("x", 7), std::invalid_argument);
+	EXPECT_THROW(bad.addRun("y", 2), std::invalid_argument);
+}
+
 TEST(Experiences, AnotherCameraOrDescriptorIsRefusedNamingBoth)
 {
 	const auto base = test::makeSyntheticMap(12, 10, 0);
@@ -203,6 +235,7 @@ TEST(Experiences, ExperiencesAndLinksSurviveSavingAndLoading)
 		EXPECT_TRUE(loaded.links()[i].cov.isApprox(m.links()[i].cov, 0));
 	}
 	EXPECT_EQ(loaded.frameOf(40), 2u);
+	EXPECT_EQ(loaded.runFrame(2), 2u);
 }
 
 // `shadyloc survey --append` on the default dataset: the overcast run added
@@ -222,7 +255,7 @@ TEST(ExperiencesApp, AppendedRunIsLinkedAndTheInputMapIsUntouched)
 	const std::string before = test::fileContents(one);
 	const std::string append = app + " survey --append " + one + " -i " + data + "/overcast.rawlog --gt " + data + "/overcast.tum";
 	ASSERT_EQ(test::runCommand(append + " -o " + two + " --links " + links + loc, &out), 0) << out;
-	EXPECT_NE(out.find("anchored in the map frame"), std::string::npos) << out;
+	EXPECT_NE(out.find("anchored in the frame of 'noon'"), std::string::npos) << out;
 	const auto m = CKeyframeMap::LoadFromFile(two);
 	ASSERT_EQ(m->runs(), (std::vector<std::string>{"noon", "overcast"}));
 	EXPECT_TRUE(m->runAnchored(1));

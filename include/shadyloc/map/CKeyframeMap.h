@@ -129,13 +129,18 @@ class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
 
 	/** Survey runs (a keyframe's `run` indexes this): the map's experiences. */
 	const std::vector<std::string>& runs() const { return m_runs; }
-	/** Index of a run, adding it if new. An anchored run's keyframe poses are
-	 * in the map frame (the first run's, or placed there through links); a
-	 * run that is not keeps its own frame and is never chained to the others. */
-	uint16_t addRun(const std::string& name, bool anchored = true);
-	bool runAnchored(uint16_t run) const;
-	/** The frame keyframe `id`'s map pose is in: 0 the map frame, else its
-	 * run's own (the run index). Poses in different frames are unrelated. */
+	/** Index of a run, adding it if new. Its keyframe poses are in the frame
+	 * of run `frame`: kMapFrame (0), the first run's; an earlier run that
+	 * keeps a frame of its own (placed there through links); or kOwnFrame,
+	 * a new frame of its own, never chained to the others. */
+	uint16_t addRun(const std::string& name, int frame = kMapFrame);
+	static constexpr int kMapFrame = 0;
+	static constexpr int kOwnFrame = -1;
+	/** The run whose frame run `run`'s poses are in (0: the map frame). */
+	uint16_t runFrame(uint16_t run) const;
+	bool runAnchored(uint16_t run) const { return runFrame(run) == 0; }
+	/** The frame keyframe `id`'s map pose is in (runFrame of its run).
+	 * Poses in different frames are unrelated. */
 	uint32_t frameOf(uint32_t id) const;
 	/** Verified relative poses between keyframes of different runs. */
 	const std::vector<map::TExperienceLink>& links() const { return m_links; }
@@ -251,7 +256,7 @@ class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
 	int m_width = 0, m_height = 0;	//!< image size [px]
 	std::vector<map::TChannelParams> m_channels;
 	std::vector<std::string> m_runs;
-	std::vector<uint8_t> m_runAnchored;	 //!< per run
+	std::vector<uint16_t> m_runFrame;  //!< per run: see runFrame()
 	std::vector<map::TExperienceLink> m_links;
 	std::vector<map::TMapKeyframe> m_keyframes;
 	std::vector<double> m_chainDist;  //!< per keyframe, see chainDistance()

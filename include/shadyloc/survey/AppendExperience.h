@@ -10,8 +10,9 @@
  * only where the loop it closes with another candidate nearby (the map's
  * chain between the two a's, the new run's between the two b's) agrees
  * within chi^2: one wrong fix closes no loop. With enough verified links
- * the run is anchored: each of its keyframes is placed in the map frame
- * from the link nearest it along its chain. Without, it keeps its own frame
+ * into one frame (the map's, or that of an experience kept in its own) the
+ * run is anchored there: each of its keyframes is placed from the link
+ * nearest it along its chain. Without, it keeps its own frame
  * ("linked nowhere": never chained to the others, found by the global
  * search alone). Pure: no images, tested alone.
  */
@@ -69,7 +70,8 @@ struct TAppendReport
 {
 	std::string run;  //!< the new experience's name
 	uint16_t run_index = 0;
-	bool anchored = false;
+	bool anchored = false;	//!< placed in a frame of the map through its links
+	std::string frame_of;  //!< the run whose frame it is in (its own name when not anchored)
 	size_t keyframes = 0;  //!< added
 	size_t placed_from_other_segment = 0;  //!< anchored keyframes of a segment without a link (predicted)
 	std::vector<TLinkReport> candidates;
