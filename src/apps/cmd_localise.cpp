@@ -306,8 +306,7 @@ int run(int argc, char** argv)
 	if (learnArg.isSet() && live) throw std::runtime_error("--learn: only with a live rawlog (-i), which it surveys");
 	if ((learnBlind.isSet() || learnMargin.isSet()) && !learnArg.isSet())
 		throw std::runtime_error("--learn-blind-m, --learn-margin-m: only with --learn");
-	if (learnArg.isSet() && !(learnArg.getValue().size() > 6 &&
-							  learnArg.getValue().substr(learnArg.getValue().size() - 6) == CKeyframeMap::kFileExtension))
+	if (learnArg.isSet() && fs::path(learnArg.getValue()).extension() != CKeyframeMap::kFileExtension)
 		throw std::runtime_error("--learn '" + learnArg.getValue() + "': map files end in " + CKeyframeMap::kFileExtension);
 	if (!fs::exists(mapPath)) throw std::runtime_error("map '" + mapPath + "' does not exist");
 	if (!live && !fs::exists(livePath)) throw std::runtime_error("live rawlog '" + livePath + "' does not exist");

@@ -159,7 +159,6 @@ int run(int argc, char** argv)
 	for (const auto& c : cfgArgs.getValue())
 		if (!std::filesystem::exists(c)) throw std::runtime_error("config file '" + c + "' does not exist");
 	mrpt::config::CConfigFileMemory cfgMem(core::layeredConfigText(cfgArgs.getValue()));
-	const mrpt::config::CConfigFileBase* cfg = &cfgMem;
 	try
 	{
 		if (append)
@@ -196,7 +195,7 @@ int run(int argc, char** argv)
 	const bool talk = !quiet.getValue();
 
 	// ---- channels: the first one's VO makes the chain, every one is stored ------
-	survey::SurveyRun surveyRun(inPath, *cfg, so);
+	survey::SurveyRun surveyRun(inPath, cfgMem, so);
 	for (const auto& w : surveyRun.warnings()) std::cerr << "warning: " << w << "\n";
 	if (append)
 		for (const auto& r : base->runs())
@@ -223,7 +222,7 @@ int run(int argc, char** argv)
 	{
 		// The run's map is complete: check it fits before localising.
 		survey::checkAppendable(*base, kfmap, "map '" + appendArg.getValue() + "'", "run '" + inPath + "'");
-		const auto rep = appendRun(*cfg, cfgWhat, base, appendArg.getValue(), inPath, kfmap, surveyRun.runName(), label.getValue(), talk);
+		const auto rep = appendRun(cfgMem, cfgWhat, base, appendArg.getValue(), inPath, kfmap, surveyRun.runName(), label.getValue(), talk);
 		if (!linksTmp.empty()) writeLinksCsv(linksTmp, rep);
 		printAppendReport(rep, *base);
 		mapPtr = base;
