@@ -188,6 +188,56 @@ BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_patch_pass, 2, "[localiser]\npat
 	->UseManualTime()
 	->Iterations(600);
 
+/** The search of the whole map for the place of one live frame (a lost run:
+ * LocalisationSystem searches so after global_search_after_frames without a
+ * fix), per channel: frame 60 of the live run, measured by the system's own
+ * front end. Counters: the map's keyframes and the channel's landmarks, and
+ * the time per keyframe, which is what grows with a map of several
+ * experiences. */
+void BM_WholeMapSearch(benchmark::State& st, const char* channel)
+{
+	const auto& d = data();
+	if (!d.skip.empty())
+	{
+		st.SkipWithError(d.skip.c_str());
+		return;
+	}
+	mrpt::config::CConfigFileMemory cfg(d.cfgText);
+	auto sys = localisation::LocalisationSystem::FromConfig(cfg, d.map, {}, 1, "vo_sim.ini + localise_sim.ini");
+	const auto labels = sys->channelLabels();
+	const size_t c = static_cast<size_t>(std::find(labels.begin(), labels.end(), channel) - labels.begin());
+	const auto* L = sys->localiser(channel);
+	if (c == labels.size() || !L)
+	{
+		st.SkipWithError("no such channel localiser");
+		return;
+	}
+	features::TStereoFrame meas;
+	sys->setFrameHook([&](auto&, const auto& m, const auto&) { meas = m[c]; });
+	for (size_t i = 0; i <= 60 && i < d.frames.size(); i++)
+		sys->processFrame(d.frames[i].left, d.frames[i].right, d.frames[i].calib, d.frames[i].timestamp);
+	const auto& calib = d.frames.front().calib;
+	size_t found = 0, runs = 0;
+	double seconds = 0;
+	for (auto _ : st)
+	{
+		const auto t0 = Clock::now();
+		found += L->globalSearch(meas, calib, 17).ok;
+		seconds += std::chrono::duration<double>(Clock::now() - t0).count();
+		runs++;
+	}
+	size_t landmarks = 0;
+	for (uint32_t k = 0; k < d.map->keyframeCount(); k++) landmarks += d.map->measurements(k, channel).size();
+	st.counters["keyframes"] = static_cast<double>(d.map->keyframeCount());
+	st.counters["landmarks"] = static_cast<double>(landmarks);
+	st.counters["live_features"] = static_cast<double>(meas.meas.size());
+	st.counters["found_share"] = runs ? static_cast<double>(found) / static_cast<double>(runs) : 0.0;
+	st.counters["ms_per_keyframe"] =
+		runs ? 1e3 * seconds / static_cast<double>(runs) / static_cast<double>(d.map->keyframeCount()) : 0.0;
+}
+BENCHMARK_CAPTURE(BM_WholeMapSearch, mono, "mono")->Unit(benchmark::kMillisecond)->Iterations(20);
+BENCHMARK_CAPTURE(BM_WholeMapSearch, invariant, "invariant")->Unit(benchmark::kMillisecond)->Iterations(20);
+
 /** The monochrome channel's conversion and the stereo VO alone, on the same frames. */
 void BM_VOFrameMono(benchmark::State& st)
 {

@@ -178,6 +178,7 @@ CKeyframeMap::Ptr loadMap(const std::string& mapPath)
 		throw std::runtime_error(std::string("map: ") + e.what());
 	}
 	if (map->isEmpty()) throw std::runtime_error("map '" + mapPath + "' has no keyframes: nothing to localise against");
+	map->reportLoadProblems(std::cerr, mapPath);
 	return map;
 }
 

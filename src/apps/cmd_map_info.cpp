@@ -31,6 +31,7 @@ int run(int argc, char** argv)
 	if (const auto rc = cli.parse(argc, argv)) return *rc;
 
 	const auto m = CKeyframeMap::LoadFromFile(in.getValue());
+	m->reportLoadProblems(std::cerr, in.getValue());
 	if (stripGt.isSet())
 	{
 		// The copy differs from the map in the ground truth alone: localising

@@ -180,7 +180,11 @@ int run(int argc, char** argv)
 	const std::string outTmp = outputs.addFile(outPath, "output map");
 	const std::string linksTmp = linksArg.isSet() ? outputs.addFile(linksArg.getValue(), "--links") : "";
 	CKeyframeMap::Ptr base;
-	if (append) base = CKeyframeMap::LoadFromFile(appendArg.getValue());
+	if (append)
+	{
+		base = CKeyframeMap::LoadFromFile(appendArg.getValue());
+		base->reportLoadProblems(std::cerr, appendArg.getValue());
+	}
 	survey::TSurveyRunOptions so;
 	so.configName = cfgWhat;
 	if (gtArg.isSet())

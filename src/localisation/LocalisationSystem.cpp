@@ -99,6 +99,8 @@ void TSystemOptions::keys(core::KeyVisitor& v)
 	  "a place that is no fix replaces a confirmed track only when the more certain");
 	v("global_search_after_frames", track.global_search_after_frames, "frames", Range::any(),
 	  "... and the whole map after this");
+	v("global_keyframes_per_frame", track.global_keyframes_per_frame, "keyframes", Range::atLeast(0),
+	  "... at most this many keyframes a frame, the next slice of the map each time (0: the whole map)");
 	v("seed_with_unconfirmed", track.seed_with_unconfirmed, "", Range::any(),
 	  "a consistent but unconfirmed solve narrows the next search (never a fix, never validates)");
 	v("global_sigma_m", track.global_sigma_m, "m", Range::atLeast(0), "");
@@ -166,10 +168,12 @@ LocalisationSystem::LocalisationSystem(
 	  // The VO runs on the VO channel's shared measurements (track() with a
 	  // measured frame): its own extractor only holds the options.
 	  m_vo(vopt, featuresOf(channels, o.vo_channel)),
-	  m_track(o.track)
+	  m_track(o.track),
+	  m_sweep(0, 0)
 {
 	m_opts.validate();
 	if (!m_map) throw std::invalid_argument("LocalisationSystem: no map");
+	m_sweep = MapSweep(m_map->keyframeCount(), m_opts.track.global_keyframes_per_frame);
 	if (m_map->isEmpty()) throw std::invalid_argument("LocalisationSystem: the map has no keyframes");
 	auto find = [&](const std::string& l) -> const TChannelSetup* {
 		for (const auto& c : channels)
@@ -316,6 +320,7 @@ void LocalisationSystem::reset()
 	m_frame = 0;
 	m_track.reset();
 	m_searchAmong.clear();
+	m_sweep.restart();
 	m_distance = 0;
 }
 
@@ -564,6 +569,8 @@ void LocalisationSystem::searchPlace(
 		if (m_opts.track.relocalise_at_dead_reckoning && (m_track.confirmed() || m_track.hypothesisPlaces() >= 1))
 			guess = m_map->keyframe(dr.kf).T_map_kf * dr.T_kf_live;
 	}
+	else if (among.empty())
+		among = m_sweep.next();
 	const auto seed = static_cast<uint32_t>(u.frame * 7919u + 3);
 	std::vector<TGlobalPlace> places(m_pipes.size());
 	std::vector<double> ms(m_pipes.size(), 0);

@@ -148,6 +148,8 @@ StereoLocaliser::StereoLocaliser(const CKeyframeMap& map, const std::string& cha
 {
 	m_opts.validate();
 	map.channelIndex(channel);	// throws naming the map's channels
+	for (uint32_t k = 0; k < map.keyframeCount(); k++)
+		m_placeIndex.addGroup(map.measurements(k, channel), [](const features::TStereoMeasurement& m) { return m.desc; });
 }
 
 void StereoLocaliser::reset() { m_accept.reset(); }
@@ -583,23 +585,12 @@ std::vector<std::pair<int, uint32_t>> StereoLocaliser::placeVotes(
 	// keyframe's landmarks vote in any frame (BRIEF of natural images is far
 	// from uniform), so the keyframes with the most landmarks won everywhere
 	// (on the simulator the street of buildings was never a candidate).
+	std::vector<features::TBriefDescriptor> live;
+	live.reserve(meas.meas.size());
+	for (const auto& m : meas.meas) live.push_back(m.desc);
 	std::vector<int> count(among.size(), 0);
-	for (const auto& m : meas.meas)
-	{
-		int best = m_opts.global_vote_hamming + 1;
-		int bestK = -1;
-		for (size_t a = 0; a < among.size(); a++)
-			for (const auto& lm : m_map.measurements(among[a], m_channel))
-			{
-				const int d = features::hamming(lm.desc, m.desc);
-				if (d < best)
-				{
-					best = d;
-					bestK = static_cast<int>(a);
-				}
-			}
-		if (bestK >= 0) count[static_cast<size_t>(bestK)]++;
-	}
+	for (const int a : m_placeIndex.nearestGroup(live, among, m_opts.global_vote_hamming))
+		if (a >= 0) count[static_cast<size_t>(a)]++;
 	std::vector<std::pair<int, uint32_t>> votes;
 	votes.reserve(among.size());
 	for (size_t a = 0; a < among.size(); a++) votes.emplace_back(-count[a], among[a]);

@@ -94,6 +94,16 @@ void Track::noFix(const std::vector<TKeyframePose>& seeds)
 	m_framesSinceFix++;
 }
 
+std::vector<uint32_t> MapSweep::next()
+{
+	const uint32_t n = m_budget > 0 ? std::min(m_keyframes, static_cast<uint32_t>(m_budget)) : m_keyframes;
+	std::vector<uint32_t> slice(n);
+	for (uint32_t i = 0; i < n; i++) slice[i] = (m_next + i) % m_keyframes;
+	if (m_keyframes > 0) m_next = (m_next + n) % m_keyframes;
+	std::sort(slice.begin(), slice.end());	// a slice that wraps: still ascending (the votes' tie order)
+	return slice;
+}
+
 SearchScope Track::searchNeeded(bool allLost) const
 {
 	if (!m_est.valid || m_framesSinceFix > m_opts.global_search_after_frames) return SearchScope::Whole;

@@ -16,6 +16,8 @@
 #include <mrpt/poses/CPose3D.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <zstd.h>
 
 #include <fcntl.h>
@@ -107,6 +109,37 @@ geometry::Matrix6d getCov(ByteReader& r)
 		for (int j = i; j < 6; j++) C(i, j) = C(j, i) = r.get<double>();
 	if (!C.allFinite()) r.fail("covariance not finite");
 	return C;
+}
+
+/** Why a stored link cannot be used ("" when it can): it names a keyframe
+ * the map lacks or one run twice, is not a pose with a covariance, or
+ * contradicts the map poses it placed. appendExperience places each
+ * keyframe a link reaches at exactly T_map_a T_a_b, so within one frame an
+ * intact link agrees with the stored poses to rounding; the test allows its
+ * covariance (chi^2, 6 dof, 99.9 %). */
+std::string brokenLink(
+	const map::TExperienceLink& l, const std::vector<map::TMapKeyframe>& kfs, const std::vector<uint16_t>& frameOfRun)
+{
+	if (l.a >= kfs.size() || l.b >= kfs.size()) return "the map has " + std::to_string(kfs.size()) + " keyframes";
+	if (kfs[l.a].run == kfs[l.b].run) return "both keyframes of one run";
+	if (!l.T_a_b.matrix().allFinite() || !l.cov.allFinite()) return "not finite";
+	if (!(l.T_a_b.linear().transpose() * l.T_a_b.linear()).isApprox(Eigen::Matrix3d::Identity(), 1e-6))
+		return "rotation not orthonormal";
+	if (Eigen::SelfAdjointEigenSolver<geometry::Matrix6d>(l.cov).eigenvalues().minCoeff() < 0)
+		return "covariance not positive semi-definite";
+	if (frameOfRun[kfs[l.a].run] != frameOfRun[kfs[l.b].run]) return "";  // joins frames: nothing to compare with
+	const Eigen::Isometry3d stored = kfs[l.a].T_map_kf.inverse() * kfs[l.b].T_map_kf;
+	const double d2 = geometry::mahalanobis2(geometry::localLeft(stored, l.T_a_b), l.cov);
+	constexpr double kChi2_6dof_999 = 22.46;
+	if (d2 > kChi2_6dof_999 && (stored.translation() - l.T_a_b.translation()).norm() > 1e-6)
+	{
+		std::ostringstream m;
+		m << "contradicts the map poses it placed (" << std::fixed << std::setprecision(3)
+		  << (stored.translation() - l.T_a_b.translation()).norm() << " m apart, chi^2 " << std::setprecision(1) << d2
+		  << ")";
+		return m.str();
+	}
+	return "";
 }
 
 /** FNV-1a, 64 bit, of a block's position (version 3, channel blocks only)
@@ -414,6 +447,11 @@ uint16_t CKeyframeMap::runFrame(uint16_t run) const
 	if (run >= m_runs.size())
 		throw std::out_of_range(std::string(kClass) + ": no run " + std::to_string(run) + " (" + std::to_string(m_runs.size()) + " runs)");
 	return m_runFrame[run];
+}
+
+void CKeyframeMap::reportLoadProblems(std::ostream& out, const std::string& path) const
+{
+	for (const auto& p : m_loadProblems) out << "warning: map '" << path << "': " << p << "\n";
 }
 
 uint32_t CKeyframeMap::frameOf(uint32_t id) const { return m_runFrame[keyframe(id).run]; }
@@ -863,13 +901,19 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 			std::vector<std::string> runs;
 			for (int i = 0; i < nr; i++) runs.push_back(r.str());
 			std::vector<uint16_t> frames(nr, 0);
+			std::vector<std::string> problems;	// left out, reported; the rest loads
 			if (version >= 5)
 				for (int i = 0; i < nr; i++)
 				{
 					// 0, itself (a frame of its own) or an earlier run that founded its frame.
 					frames[i] = r.get<uint16_t>();
 					if (frames[i] > i || (frames[i] > 0 && frames[frames[i]] != frames[i]))
-						r.fail("run " + std::to_string(i) + " ('" + runs[i] + "'): frame of run " + std::to_string(frames[i]));
+					{
+						problems.push_back(
+							"run " + std::to_string(i) + " ('" + runs[i] + "'): its frame names run " +
+							std::to_string(frames[i]) + ", which founds none: kept in a frame of its own, unlinked");
+						frames[i] = static_cast<uint16_t>(i);
+					}
 				}
 			const auto nk = r.get<uint32_t>();
 			if (!setUp && nk > 0) r.fail(std::to_string(nk) + " keyframes in a map without channels");
@@ -911,15 +955,24 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 					map::TExperienceLink l;
 					l.a = r.get<uint32_t>();
 					l.b = r.get<uint32_t>();
-					const std::string what = "link " + std::to_string(i) + " (keyframes " + std::to_string(l.a) + ", " + std::to_string(l.b) + ")";
-					if (l.a >= nk || l.b >= nk) r.fail(what + ": the map has " + std::to_string(nk) + " keyframes");
-					if (kfs[l.a].run == kfs[l.b].run) r.fail(what + ": both of run '" + runs[kfs[l.a].run] + "'");
-					l.T_a_b = getPose(r, "link T_a_b");
-					l.cov = getCov(r);
-					links.push_back(l);
+					for (int row = 0; row < 3; row++)
+						for (int col = 0; col < 4; col++) l.T_a_b.matrix()(row, col) = r.get<double>();
+					for (int row = 0; row < 6; row++)
+						for (int col = row; col < 6; col++) l.cov(row, col) = l.cov(col, row) = r.get<double>();
+					const std::string why = brokenLink(l, kfs, frames);
+					if (why.empty())
+						links.push_back(l);
+					else
+						problems.push_back(
+							"link " + std::to_string(i) + " (keyframes " + std::to_string(l.a) + ", " + std::to_string(l.b) +
+							"): " + why + ": left out");
 				}
 			}
 			tmp.m_links = std::move(links);
+			for (uint16_t i = 0; i < nr; i++)
+				if (std::none_of(kfs.begin(), kfs.end(), [i](const map::TMapKeyframe& k) { return k.run == i; }))
+					problems.push_back("run " + std::to_string(i) + " ('" + runs[i] + "'): no keyframe (a missing experience)");
+			tmp.m_loadProblems = std::move(problems);
 			if (r.remaining()) r.fail(std::to_string(r.remaining()) + " bytes left over");
 			for (int c = 0; c < nc; c++)
 			{
@@ -1155,6 +1208,7 @@ void CKeyframeMap::internal_clear()
 	m_runs.clear();
 	m_runFrame.clear();
 	m_links.clear();
+	m_loadProblems.clear();
 }
 
 bool CKeyframeMap::internal_insertObservation(

@@ -2,7 +2,8 @@
  * appended through verified links is placed in the map frame, a wrong link
  * closes no loop, a run that localises nowhere keeps its own frame and is
  * never related to the others, other cameras or descriptors are refused
- * naming both, and experiences survive saving and loading. */
+ * naming both, experiences survive saving and loading, and a broken link
+ * or a missing experience is reported and left out while the rest loads. */
 #include <shadyloc/localisation/FixAcceptance.h>
 #include <shadyloc/localisation/FixEstimate.h>
 #include <shadyloc/survey/AppendExperience.h>
@@ -15,6 +16,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <regex>
 #include <sstream>
 
 #include <mrpt/io/CMemoryStream.h>
@@ -238,10 +240,57 @@ TEST(Experiences, ExperiencesAndLinksSurviveSavingAndLoading)
 	EXPECT_EQ(loaded.runFrame(2), 2u);
 }
 
+TEST(Experiences, ABrokenLinkOrAMissingExperienceIsReportedAndLeftOut)
+{
+	const auto base = test::makeSyntheticMap(16, 10, 0);
+	const Eigen::Isometry3d O = aside(1.0);
+	CKeyframeMap m = *base;
+	survey::appendExperience(m, *drivenAgain(*base, elsewhere(), O), "again", fixesOf(*base, O));
+	survey::appendExperience(m, *drivenAgain(*base, elsewhere(), aside(3.5)), "other_lane", {});
+	const size_t intact = m.links().size();
+	ASSERT_GT(intact, 10u);
+	// A link that contradicts the poses it placed (2 m off, sigma 2 cm), one
+	// across frames (nothing to compare it with: kept), and an experience
+	// whose keyframes are gone.
+	map::TExperienceLink wrong = m.links()[4];
+	wrong.T_a_b.translation() += Eigen::Vector3d(2, 0, 0);
+	m.addLink(wrong);
+	map::TExperienceLink across = m.links()[0];
+	across.b = 40;	// a keyframe of other_lane, in a frame of its own
+	m.addLink(across);
+	m.addRun("pruned");
+	mrpt::io::CMemoryStream buf;
+	mrpt::serialization::archiveFrom(buf) << m;
+	buf.Seek(0);
+	CKeyframeMap loaded;
+	mrpt::serialization::archiveFrom(buf) >> loaded;
+	EXPECT_EQ(loaded.links().size(), intact + 1) << "the wrong link left out, the rest kept";
+	ASSERT_EQ(loaded.loadProblems().size(), 2u);
+	const std::string linkMsg = loaded.loadProblems()[0], runMsg = loaded.loadProblems()[1];
+	EXPECT_NE(linkMsg.find("link " + std::to_string(intact) + " (keyframes " + std::to_string(wrong.a) + ", " + std::to_string(wrong.b) + ")"), std::string::npos) << linkMsg;
+	EXPECT_NE(linkMsg.find("2.000 m apart"), std::string::npos) << linkMsg;
+	EXPECT_NE(runMsg.find("run 3 ('pruned'): no keyframe"), std::string::npos) << runMsg;
+	// The rest relates as before: across the runs through the intact links.
+	const auto r = loaded.measuredRelativePose(wrong.a, wrong.b);
+	ASSERT_TRUE(r.has_value());
+	const Eigen::Isometry3d want = m.keyframe(wrong.a).T_map_kf.inverse() * m.keyframe(wrong.b).T_map_kf;
+	EXPECT_LT((r->T_a_b.translation() - want.translation()).norm(), 1e-6);
+	std::ostringstream report;
+	loaded.reportLoadProblems(report, "two.kfmap");
+	EXPECT_EQ(report.str().rfind("warning: map 'two.kfmap': link ", 0), 0u) << report.str();
+	// A sound map reports nothing.
+	mrpt::io::CMemoryStream sound;
+	mrpt::serialization::archiveFrom(sound) << *base;
+	sound.Seek(0);
+	mrpt::serialization::archiveFrom(sound) >> loaded;
+	EXPECT_TRUE(loaded.loadProblems().empty());
+}
+
 // `shadyloc survey --append` on the default dataset: the overcast run added
 // to a map of the noon run is linked where it localises, the links agree
-// with the ground truth, the input map is never touched, and bad input is
-// refused naming what is at fault, with no output left.
+// with the ground truth, the input map is never touched, bad input is
+// refused naming what is at fault, with no output left, and a broken link
+// is reported while the rest of the map localises.
 TEST(ExperiencesApp, AppendedRunIsLinkedAndTheInputMapIsUntouched)
 {
 	SHADYLOC_REQUIRE_DEFAULT_DATASET();
@@ -298,6 +347,23 @@ TEST(ExperiencesApp, AppendedRunIsLinkedAndTheInputMapIsUntouched)
 	EXPECT_NE(test::runCommand(again, &out), 0);
 	EXPECT_NE(out.find("already holds a run named 'overcast'"), std::string::npos) << out;
 	EXPECT_FALSE(std::filesystem::exists(three));
+
+	// A map with a broken link (2 m off the poses it placed) says so, and
+	// localises against the rest exactly as the map without that link.
+	auto broken = CKeyframeMap::LoadFromFile(two);
+	map::TExperienceLink wrong = broken->links()[3];
+	wrong.T_a_b.translation() += Eigen::Vector3d(2, 0, 0);
+	broken->addLink(wrong);
+	const std::string bad = dir + "/broken.kfmap", live = " -i " + data + "/evening_warm.rawlog" + loc;
+	broken->saveToFile(bad);
+	ASSERT_EQ(test::runCommand(app + " localise -q -m " + two + live + " -o " + dir + "/loc_two", &out), 0) << out;
+	std::smatch cov;
+	ASSERT_TRUE(std::regex_search(out, cov, std::regex("coverage ([0-9.]+) %"))) << out;
+	EXPECT_GT(std::stod(cov[1]), 50.0) << out;
+	ASSERT_EQ(test::runCommand(app + " localise -q -m " + bad + live + " -o " + dir + "/loc_broken", &out), 0) << out;
+	EXPECT_NE(out.find("warning: map '" + bad + "': link " + std::to_string(broken->links().size() - 1)), std::string::npos)
+		<< out;
+	EXPECT_EQ(test::fileContents(dir + "/loc_broken/frames.csv"), test::fileContents(dir + "/loc_two/frames.csv"));
 }
 
 // `shadyloc localise --learn`: the evening run against the noon map with the

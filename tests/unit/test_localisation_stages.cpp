@@ -80,6 +80,30 @@ TSolve solveAt(size_t frame, double z, double sm = 0.02)
 // sigma of the drift is k times the distance since the last fix, whatever the
 // step: before, each step added (k s)^2, so sigma was k sqrt(s D) (24 m at
 // 0.8 m steps: 0.09 m instead of 0.48 m) and depended on the frame rate.
+TEST(LocalisationStages, WholeMapSearchSweepsTheMapInBoundedSlices)
+{
+	// 10 keyframes, 4 a frame: 0-3, 4-7, then 8, 9, 0, 1 (ascending), ...
+	MapSweep sweep(10, 4);
+	std::vector<int> seen(10, 0);
+	for (int round = 0; round < 5; round++)
+	{
+		const auto s = sweep.next();
+		ASSERT_EQ(s.size(), 4u);
+		EXPECT_TRUE(std::is_sorted(s.begin(), s.end()));
+		for (const auto k : s) seen[k]++;
+	}
+	EXPECT_EQ(seen, std::vector<int>(10, 2));  // 20 looks: every keyframe twice
+	sweep.restart();
+	EXPECT_EQ(sweep.next(), (std::vector<uint32_t>{0, 1, 2, 3}));
+	// No budget, or one beyond the map: the whole map every time.
+	for (const int budget : {0, 10, 50})
+	{
+		MapSweep whole(10, budget);
+		for (int round = 0; round < 3; round++) EXPECT_EQ(whole.next().size(), 10u) << budget;
+	}
+	EXPECT_TRUE(MapSweep(0, 4).next().empty());
+}
+
 TEST(LocalisationStages, DriftGrowsInProportionToDistanceWhateverTheStep)
 {
 	for (const double s : {0.1, 0.8, 3.0})

@@ -78,7 +78,8 @@ struct TSystemOptions
 	/** The track, its drift, confirmation and relocalisation (Track.h);
 	 * keys vo_sigma_m_per_m, vo_sigma_deg_per_m (drift per metre since the
 	 * last fix), confirmed_max_sigma_m, relocalise_after_frames,
-	 * relocalise_window_m, global_search_after_frames, global_sigma_m,
+	 * relocalise_window_m, global_search_after_frames,
+	 * global_keyframes_per_frame, global_sigma_m,
 	 * global_sigma_deg, seed_with_unconfirmed. */
 	TTrackOptions track;
 
@@ -286,6 +287,7 @@ class LocalisationSystem : public mrpt::system::COutputLogger
 	size_t m_frame = 0;
 	Track m_track;
 	std::vector<uint32_t> m_searchAmong;  //!< keyframes a whole-map search looks at (empty: all)
+	MapSweep m_sweep;  //!< ... the map's slice for each search, where m_searchAmong is empty
 	FrameHook m_hook;
 	double m_distance = 0;
 };

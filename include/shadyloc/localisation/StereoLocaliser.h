@@ -30,6 +30,7 @@
  */
 #pragma once
 
+#include <shadyloc/features/DescriptorGroups.h>
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/localisation/FixAcceptance.h>
 #include <shadyloc/geometry/PoseCovariance.h>
@@ -358,7 +359,8 @@ class StereoLocaliser
 {
    public:
 	/** `channel` names one of the map's channels (throws naming the map's
-	 * channels if absent). The map must outlive the localiser. */
+	 * channels if absent). The map must outlive the localiser, unchanged
+	 * while it localises (its descriptors are indexed here, once). */
 	StereoLocaliser(const CKeyframeMap& map, const std::string& channel, const TLocaliserOptions& o);
 
 	/** One frame (see the file comment). Keeps the state of the failure test.
@@ -471,6 +473,7 @@ class StereoLocaliser
 	vo::RelativePoseEstimator m_estimator;
 	features::BriefExtractor m_brief;  //!< the map channel's BRIEF pattern (warped matching)
 	FixAcceptance m_accept;  //!< the failure test and its state
+	features::DescriptorGroups m_placeIndex;  //!< the channel's landmark descriptors by keyframe (the place vote)
 };
 
 }  // namespace shadyloc::localisation

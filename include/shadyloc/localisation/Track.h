@@ -46,6 +46,9 @@ struct TTrackOptions
 	 * fails, as if at the keyframe): a live run to the side of the survey. */
 	bool relocalise_at_dead_reckoning = true;
 	int global_search_after_frames = 30;  //!< frames without a fix before the whole map is searched [frames]
+	/** A whole-map search looks at most this many keyframes a frame, the
+	 * next slice of the map each time (MapSweep; 0: the whole map). */
+	int global_keyframes_per_frame = 0;
 	/** Added to a global-search place's covariance (one frame's solve) [m], [deg]. */
 	double global_sigma_m = 0.1;
 	double global_sigma_deg = 1.0;
@@ -121,6 +124,26 @@ enum class SearchScope
 	None,
 	Window,	 //!< around dead reckoning
 	Whole  //!< the whole map (or the start keyframes)
+};
+
+/** The keyframes of successive whole-map searches: the map in slices of at
+ * most `budget` consecutive keyframes, round robin, so that a lost run's
+ * search costs a bounded time a frame however many experiences the map
+ * holds; the place is found within keyframes/budget frames (budget 0 or at
+ * least the map's size: the whole map every time). */
+class MapSweep
+{
+   public:
+	MapSweep(uint32_t keyframes, int budget) : m_keyframes(keyframes), m_budget(budget) {}
+	/** The next slice, in ascending keyframe order (empty for an empty map). */
+	std::vector<uint32_t> next();
+	/** The next slice starts at keyframe 0 again (a new run). */
+	void restart() { m_next = 0; }
+
+   private:
+	uint32_t m_keyframes;
+	int m_budget;
+	uint32_t m_next = 0;
 };
 
 class Track

@@ -23,6 +23,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <iosfwd>
 #include <optional>
 #include <string>
 #include <unordered_map>
@@ -147,6 +148,16 @@ class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
 	/** Adds a link; throws naming the keyframes if either is unknown or both
 	 * are of one run. */
 	void addLink(const map::TExperienceLink& link);
+	/** What loading left out and why, one line each: a link that names a
+	 * keyframe the map lacks, is not a pose with a covariance, or
+	 * contradicts the map poses it placed; a run whose frame names a run
+	 * that founds none (kept in a frame of its own); a run without
+	 * keyframes. The rest of the map loads and localises; callers report
+	 * these (map-info, localise). A damaged block (checksum) is still
+	 * refused whole: nothing in it can be trusted. */
+	const std::vector<std::string>& loadProblems() const { return m_loadProblems; }
+	/** loadProblems() as "warning: map '<path>': <problem>" lines. */
+	void reportLoadProblems(std::ostream& out, const std::string& path) const;
 	/** T_a_b with covariance where measurements relate a and b: along the
 	 * chain in one segment, else through the link between their segments
 	 * nearest both (chains composed on either side); none otherwise. */
@@ -258,6 +269,7 @@ class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
 	std::vector<std::string> m_runs;
 	std::vector<uint16_t> m_runFrame;  //!< per run: see runFrame()
 	std::vector<map::TExperienceLink> m_links;
+	std::vector<std::string> m_loadProblems;  //!< see loadProblems()
 	std::vector<map::TMapKeyframe> m_keyframes;
 	std::vector<double> m_chainDist;  //!< per keyframe, see chainDistance()
 	/** Spatial hash grid over camera centres: cell key -> keyframe ids. */
