@@ -1,6 +1,7 @@
 /* Kill tests of every command with a folder output (issue #23, must-show 2):
  * `filter` and `import` (a rawlog's images folder), `export kitti` (the
- * sequence folder), `localise -o` and `eval` (job folders, pairs/, figures/).
+ * sequence folder), `localise -o` (and its `--learn` map) and `eval` (job
+ * folders, pairs/, figures/).
  *
  * Each command runs once to completion; a file is then added to each of its
  * folders, so that the previous output can be told from a new one. The
@@ -286,6 +287,29 @@ TEST(KillFolderOutputsSlow, LocaliseOutputFolder)
 	c.outputs = {dir + "/loc"};
 	c.varying = {"timing.json"};
 	Killer(c, dir).runAll();
+}
+
+// `localise --learn`: the learnt map is written with the folder, both or
+// neither, and the map it learns from is never touched.
+TEST(KillFolderOutputsSlow, LocaliseLearntMap)
+{
+	const auto dir = test::tempDir("kill_learn");
+	const std::string sim = simRuns(dir, "noon,overcast");
+	std::string out;
+	ASSERT_EQ(
+		test::runCommand(
+			test::appPath() + " survey -q -i " + sim + "/noon.rawlog -o " + dir + "/noon.kfmap -c " + src("config/vo_sim.ini") + " --gt " + sim + "/noon.tum",
+			&out),
+		0)
+		<< out;
+	const std::string before = test::fileContents(dir + "/noon.kfmap");
+	TKillCase c;
+	c.args = {"localise", "-q", "-m", dir + "/noon.kfmap", "-i", sim + "/overcast.rawlog", "-o", dir + "/loc",
+			  "-c", src("config/vo_sim.ini"), "-c", src("config/localise_sim.ini"), "--learn", dir + "/learnt.kfmap"};
+	c.outputs = {dir + "/loc", dir + "/learnt.kfmap"};
+	c.varying = {"timing.json"};
+	Killer(c, dir).runAll();
+	EXPECT_EQ(test::fileContents(dir + "/noon.kfmap"), before) << "the map learnt from, byte for byte";
 }
 
 TEST(KillFolderOutputsSlow, EvalJobFoldersPairsAndFigures)

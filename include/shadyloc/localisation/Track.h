@@ -48,7 +48,7 @@ struct TTrackOptions
 	int global_search_after_frames = 30;  //!< frames without a fix before the whole map is searched [frames]
 	/** A whole-map search looks at most this many keyframes a frame, the
 	 * next slice of the map each time (MapSweep; 0: the whole map). */
-	int global_keyframes_per_frame = 0;
+	int global_keyframes_per_frame = 128;
 	/** Added to a global-search place's covariance (one frame's solve) [m], [deg]. */
 	double global_sigma_m = 0.1;
 	double global_sigma_deg = 1.0;
