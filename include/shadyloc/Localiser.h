@@ -72,7 +72,10 @@ std::string toString(LocalisationStatus s);
 struct LocalisationUpdate
 {
 	mrpt::Clock::time_point timestamp;	//!< the observation's own timestamp
-	std::string reference_frame = "map";  //!< the frame `pose` is in
+	/** The frame `pose` is in: "map" (the first experience's), or
+	 * "map/<run>" for a map experience kept in a frame of its own (linked to
+	 * no other: poses in two frames are unrelated). */
+	std::string reference_frame = "map";
 	/** The localiser whose fix was used ("mono", "invariant", or "joint":
 	 * both channels' matches in one solve), "none" otherwise. */
 	std::string method = "none";

@@ -203,8 +203,10 @@ struct Localiser::Impl
 			r.quality = inlierFraction(u);
 		}
 		r.keyframe_id = u.kf_id;
+		const uint32_t frame = map->frameOf(u.kf_id);
+		if (frame != 0) r.reference_frame = "map/" + map->runs()[frame];
 		r.pose_in_keyframe = u.pdf();
-		// The keyframe's place in the map is the map's own frame: taken as exact.
+		// The keyframe's place in its frame: taken as exact.
 		geometry::TPoseWithCov kf, rel;
 		kf.T = map->keyframe(u.kf_id).T_map_kf;
 		rel.T = u.T_kf_live;

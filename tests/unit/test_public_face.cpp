@@ -5,7 +5,8 @@
  * localises the first overcast frames, fed as MRPT observations among the
  * grey channels of a filtered rawlog and another sensor, with the fields an
  * application reads checked against the ground truth; the channels' grey
- * pairs alone localise exactly as the colour pairs. */
+ * pairs alone localise exactly as the colour pairs; a map experience kept in
+ * a frame of its own is localised against and its frame named. */
 #include "../support/Sequences.h"
 #include "../support/TestSupport.h"
 
@@ -13,8 +14,12 @@
 #include <shadyloc/core/Settings.h>
 #include <shadyloc/io/Trajectory.h>
 #include <shadyloc/io/Tum.h>
+#include <shadyloc/filters/Channel.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
+#include <shadyloc/localisation/MonocularLocaliser.h>
+#include <shadyloc/survey/AppendExperience.h>
 #include <shadyloc/survey/SurveyRun.h>
+#include <shadyloc/vo/ChannelOptions.h>
 
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/maps/CSimplePointsMap.h>
@@ -159,6 +164,60 @@ TEST(PublicFace, LocalisesSimulatedFramesAmongOtherObservations)
 	}
 	EXPECT_GE(localised, 8);
 	EXPECT_EQ(loc.sensorLabel(), "CAMERA");
+}
+
+// A map of several experiences: the first run's keyframes without landmarks
+// (nothing to find there), the noon run appended with no link, so kept in a
+// frame of its own. The face localises against it and names that frame; the
+// 2D-3D localiser solves one image against its keyframes by id, unchanged.
+TEST(PublicFace, LocalisesAgainstAnExperienceInAFrameOfItsOwn)
+{
+	const auto noon = noonMap();
+	auto map = CKeyframeMap::Create();
+	map->options = noon->options;
+	map->setup(noon->calibration(), noon->imageWidth(), noon->imageHeight(), noon->channels());
+	const uint16_t bare = map->addRun("bare");
+	for (auto k : noon->keyframes())
+	{
+		k.run = bare;
+		for (auto& c : k.channels) c.clear();
+		map->appendKeyframe(std::move(k));
+	}
+	const auto rep = survey::appendExperience(*map, *noon, "noon", {});
+	ASSERT_FALSE(rep.anchored);
+	const uint32_t first = static_cast<uint32_t>(noon->keyframeCount());
+	ASSERT_EQ(map->frameOf(first), 1u);
+
+	mrpt::config::CConfigFileMemory cfg(simLocaliseConfig());
+	LocaliserOptions opts;
+	opts.loadFromConfigFile(cfg, "");
+	Localiser loc(mrpt::maps::CMetricMap::Ptr(map), opts);
+	const auto ch = filters::channelFromConfig(cfg, "mono", "vo_sim.ini");
+	const localisation::MonocularLocaliser image(*map, ch, vo::featureOptionsFor(cfg, "mono"));
+	const auto& live = test::simSequence("overcast");
+	int localised = 0, imageSolved = 0;
+	for (size_t i = 0; i < 15; i++)
+	{
+		const auto r = loc.process(std::make_shared<mrpt::obs::CObservationStereoImages>(
+			test::stereoObservation(live.left[i], live.right[i], live.calib, live.t[i], "CAMERA")));
+		ASSERT_TRUE(r) << "frame " << i;
+		if (r->status != LocalisationStatus::Localised) continue;
+		localised++;
+		EXPECT_EQ(r->reference_frame, "map/noon") << "frame " << i;
+		ASSERT_GE(r->keyframe_id, first) << "frame " << i;
+		const auto& kf = map->keyframe(r->keyframe_id);
+		const Eigen::Isometry3d T_kf_live = kf.T_gt_kf->inverse() * live.T_world_left[i];
+		const auto [mm, md] = poseError(r->pose.mean, kf.T_map_kf * T_kf_live);
+		EXPECT_LT(mm, 0.1) << "frame " << i;
+		EXPECT_LT(md, 1.0) << "frame " << i;
+		const auto one = image.localise(
+			live.left[i], localisation::TPinholeCalib::LeftOf(live.calib), r->keyframe_id, std::nullopt);
+		if (!one.accepted()) continue;
+		imageSolved++;
+		EXPECT_LT((one.T_kf_live.translation() - T_kf_live.translation()).norm(), 0.25) << "frame " << i;
+	}
+	EXPECT_GE(localised, 8);
+	EXPECT_GE(imageSolved, localised / 2);
 }
 
 // Without the colour pairs (a filtered rawlog's channels alone, or a driver
