@@ -93,7 +93,7 @@ set y2range [0:*]
 set ytics nomirror
 set y2tics
 set xtics 1
-set title 'Runs in time order: ${runs[*]}'
+set title "the first map: ${runs[0]}; then, in order: ${runs[*]:1}" font ',9'
 plot '$out/steps.tsv' using 1:4 skip 1 with linespoints lw 2 pt 7 title 'all runs before: coverage', \
      '' using 1:9 skip 1 with linespoints lw 2 pt 5 title 'learnt map: coverage', \
      '' using 1:6 skip 1 axes x1y2 with lines dt 2 title 'all runs before: MB', \

@@ -375,69 +375,153 @@ TLocalisationUpdate LocalisationSystem::processObservation(const mrpt::obs::CObs
 	return processFrame(l, r, geometry::TStereoCalib::FromObservation(obs), mrpt::Clock::toDouble(obs.timestamp));
 }
 
-void LocalisationSystem::frontEnd(
-	const ChannelImages& images, const geometry::TStereoCalib& calib, double timestamp,
-	std::vector<features::TStereoFrame>& meas, TLocalisationUpdate& u)
+void LocalisationSystem::extractChannel(
+	size_t i, const ChannelImages& images, const geometry::TStereoCalib& calib, size_t frame,
+	std::vector<features::TStereoFrame>& meas, std::vector<double>& msConvert)
 {
-	const bool par = m_opts.threads >= 2 && m_pipes.size() >= 2;
-	const size_t n = m_pipes.size();
-	meas.assign(n, features::TStereoFrame());
-	std::vector<double> msConv(n, 0);
-	// Each channel's images and measurements, once (shared by VO and localiser).
-	auto extract = [&](size_t i) {
-		const auto t0 = Clock::now();
-		cv::Mat gl, gr;
-		try
-		{
-			images(i, gl, gr);
-		}
-		catch (const std::exception& e)
-		{
-			throw std::runtime_error(
-				"frame " + std::to_string(u.frame) + ": channel '" + m_pipes[i].setup.channel.label + "': " + e.what());
-		}
-		if (gl.type() != CV_8UC1)
-			throw std::runtime_error(
-				"frame " + std::to_string(u.frame) + ": channel '" + m_pipes[i].setup.channel.label +
-				"' does not give grey images");
-		msConv[i] = msSince(t0);
-		m_pipes[i].extractor.process(gl, gr, calib, meas[i]);
-	};
-	auto voChannel = [&] {
-		extract(0);
-		m_vo.vo.track(meas[0], calib, timestamp);
-		u.vo = m_vo.vo.commit();
-	};
-	auto others = [&] {
-		for (size_t i = 1; i < n; i++)
-		{
-			extract(i);
-			if (m_voFallback && m_voFallback->pipe == i)
-			{
-				m_voFallback->vo.track(meas[i], calib, timestamp);
-				u.vo_fallback = m_voFallback->vo.commit();
-			}
-		}
-	};
-	both(par, voChannel, others);
-	for (const double c : msConv) u.ms_convert += c;
+	const auto t0 = Clock::now();
+	cv::Mat gl, gr;
+	try
+	{
+		images(i, gl, gr);
+	}
+	catch (const std::exception& e)
+	{
+		throw std::runtime_error(
+			"frame " + std::to_string(frame) + ": channel '" + m_pipes[i].setup.channel.label + "': " + e.what());
+	}
+	if (gl.type() != CV_8UC1)
+		throw std::runtime_error(
+			"frame " + std::to_string(frame) + ": channel '" + m_pipes[i].setup.channel.label + "' does not give grey images");
+	msConvert[i] = msSince(t0);
+	m_pipes[i].extractor.process(gl, gr, calib, meas[i]);
+}
 
-	// The motion source: the VO channel's step, the fallback's where that one could not measure.
+bool LocalisationSystem::voMotion(
+	const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib, double timestamp,
+	TLocalisationUpdate& u)
+{
+	m_vo.vo.track(meas[0], calib, timestamp);
+	u.vo = m_vo.vo.commit();
 	bool measured = false;
 	u.motion = motionOf(u.vo, m_vo, measured);
 	if (u.motion.valid) u.motion_from = m_pipes[0].setup.channel.label;
-	if (m_voFallback)
+	return measured;
+}
+
+void LocalisationSystem::fallbackMotion(
+	const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib, double timestamp,
+	bool voMeasured, TLocalisationUpdate& u)
+{
+	m_voFallback->vo.track(meas[m_voFallback->pipe], calib, timestamp);
+	u.vo_fallback = m_voFallback->vo.commit();
+	bool measured = false;
+	TMotion f = motionOf(u.vo_fallback, *m_voFallback, measured);	// every frame: it advances the track
+	if (!voMeasured && measured)
 	{
-		bool fallbackMeasured = false;
-		TMotion f = motionOf(u.vo_fallback, *m_voFallback, fallbackMeasured);
-		if (!measured && fallbackMeasured)
-		{
-			u.motion = f;
-			u.motion_from = m_pipes[m_voFallback->pipe].setup.channel.label;
-		}
+		u.motion = f;
+		u.motion_from = m_pipes[m_voFallback->pipe].setup.channel.label;
 	}
+}
+
+TLocaliserInput LocalisationSystem::predict(const geometry::TStereoCalib& calib, double timestamp, TLocalisationUpdate& u)
+{
 	if (u.motion.valid) m_distance += u.motion.T_prev_curr.translation().norm();
 	u.distance_m = m_distance;
+	TLocaliserInput in;
+	in.frame = u.frame;
+	in.timestamp = timestamp;
+	in.calib = calib;
+	in.prediction = m_track.predict(u.motion);	// the track composed with VO's step
+	in.search = m_track.searchSeed();
+	in.track_confirmed = u.track_confirmed = m_track.confirmed();
+	in.motion = u.motion;
+	return in;
+}
+
+TLocaliserInput LocalisationSystem::frontEndThenLocalisers(
+	const ChannelImages& images, const geometry::TStereoCalib& calib, double timestamp,
+	std::vector<features::TStereoFrame>& meas, TLocalisationUpdate& u, const LocaliseChannel& localise)
+{
+	const size_t n = m_pipes.size();
+	std::vector<double> msConv(n, 0);
+	const auto t0 = Clock::now();
+	for (size_t i = 0; i < n; i++) extractChannel(i, images, calib, u.frame, meas, msConv);
+	const bool measured = voMotion(meas, calib, timestamp, u);
+	if (m_voFallback) fallbackMotion(meas, calib, timestamp, measured, u);
+	for (const double c : msConv) u.ms_convert += c;
+	u.ms_front_end = msSince(t0);
+	const TLocaliserInput in = predict(calib, timestamp, u);
+	for (size_t i = 0; i < n; i++)
+		if (m_pipes[i].localiser) localise(i, in);
+	return in;
+}
+
+TLocaliserInput LocalisationSystem::frontEndOverlappingLocalisers(
+	const ChannelImages& images, const geometry::TStereoCalib& calib, double timestamp,
+	std::vector<features::TStereoFrame>& meas, TLocalisationUpdate& u, const LocaliseChannel& localise)
+{
+	// Thread 1: the VO channel's features and VO, the prediction, its
+	// localiser. Thread 2: the other channels' features, then (once the
+	// prediction is made) their localisers. The fallback VO, whose step is
+	// needed only where the VO channel's was not measured, runs before the
+	// prediction then, else after thread 1's localiser. The same work as one
+	// thread does in order, so the same results.
+	const size_t n = m_pipes.size();
+	std::vector<double> msConv(n, 0), frontEndEnd(2, 0);
+	const auto t0 = Clock::now();
+	std::promise<void> othersExtracted, predicted;
+	std::future<void> othersReady = othersExtracted.get_future(), prediction = predicted.get_future();
+	TLocaliserInput in;
+	auto first = [&] {
+		bool inputReady = false;
+		try
+		{
+			extractChannel(0, images, calib, u.frame, meas, msConv);
+			const bool measured = voMotion(meas, calib, timestamp, u);
+			frontEndEnd[0] = msSince(t0);
+			const bool fallbackFirst = m_voFallback && !measured;
+			if (fallbackFirst)
+			{
+				othersReady.get();
+				fallbackMotion(meas, calib, timestamp, measured, u);
+			}
+			in = predict(calib, timestamp, u);
+			inputReady = true;
+			predicted.set_value();
+			if (m_pipes[0].localiser) localise(0, in);
+			if (m_voFallback && !fallbackFirst)
+			{
+				othersReady.get();
+				fallbackMotion(meas, calib, timestamp, measured, u);
+			}
+		}
+		catch (...)
+		{
+			if (!inputReady) predicted.set_exception(std::current_exception());
+			throw;
+		}
+	};
+	auto others = [&] {
+		try
+		{
+			for (size_t i = 1; i < n; i++) extractChannel(i, images, calib, u.frame, meas, msConv);
+			frontEndEnd[1] = msSince(t0);
+			othersExtracted.set_value();
+		}
+		catch (...)
+		{
+			othersExtracted.set_exception(std::current_exception());
+			throw;
+		}
+		prediction.get();  // rethrows the first thread's failure
+		for (size_t i = 1; i < n; i++)
+			if (m_pipes[i].localiser) localise(i, in);
+	};
+	both(true, first, others);
+	for (const double c : msConv) u.ms_convert += c;
+	u.ms_front_end = std::max(frontEndEnd[0], frontEndEnd[1]);
+	return in;
 }
 
 template <typename F>
@@ -635,30 +719,21 @@ TLocalisationUpdate LocalisationSystem::processChannels(
 	u.timestamp = timestamp;
 	const size_t n = m_pipes.size();
 	const auto tAll = Clock::now();
-	std::vector<features::TStereoFrame> meas;
-	frontEnd(images, calib, timestamp, meas, u);
-	u.ms_front_end = msSince(tAll);
+	std::vector<features::TStereoFrame> meas(n);
 
-	// ---- the predictor: the track composed with VO's step
-	const TKeyframePose pred = m_track.predict(u.motion);
-	u.track_confirmed = m_track.confirmed();
-
-	// ---- the localisers, in parallel (no prediction: each records a failure)
+	// ---- the front end, the predictor and the localisers (no prediction:
+	// each records a failure)
 	std::vector<TLocaliserResult> res(n);
 	std::vector<TSearchedCorrespondences> searched(m_joint ? n : 0);
-	TLocaliserInput in;
-	in.frame = u.frame;
-	in.timestamp = timestamp;
-	in.calib = calib;
-	in.prediction = pred;
-	in.search = m_track.searchSeed();
-	in.track_confirmed = u.track_confirmed;
-	in.motion = u.motion;
-	forLocalisers([&](size_t i) {
+	const LocaliseChannel localise = [&](size_t i, const TLocaliserInput& in) {
 		TLocaliserInput mine = in;
 		mine.meas = &meas[i];
 		res[i] = m_pipes[i].localiser->localise(mine, m_joint ? &searched[i] : nullptr);
-	});
+	};
+	const bool parallel = m_opts.threads >= 2 && n >= 2;
+	const TLocaliserInput in = parallel ? frontEndOverlappingLocalisers(images, calib, timestamp, meas, u, localise)
+										: frontEndThenLocalisers(images, calib, timestamp, meas, u, localise);
+	const TKeyframePose& pred = in.prediction;
 	std::vector<size_t> order;	// the channel localisers in policy order
 	for (size_t i = 0; i < n; i++)
 		if (m_pipes[i].localiser) order.push_back(i);

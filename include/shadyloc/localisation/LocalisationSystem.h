@@ -11,8 +11,11 @@
  * comes first, each landmark counting by its own geometry.
  *
  * Stages per frame: the channels' front end and the motion source
- * (frontEnd), the predictor and policy (Track, Track.h), the localisers,
- * relocalisation (searchPlace). Starting and recovering: with no known
+ * (extractChannel, voMotion, fallbackMotion), the predictor (predict) and
+ * policy (Track, Track.h), the localisers, relocalisation (searchPlace).
+ * With two threads the VO channel's localiser starts once its own VO has
+ * the step, beside the other channels' front end
+ * (frontEndOverlappingLocalisers). Starting and recovering: with no known
  * place, and on a frame without a fix after relocalise_after_frames (or
  * when every localiser is lost), every localiser's global search runs on
  * that frame, around dead reckoning or in the whole map; the first
@@ -255,10 +258,33 @@ class LocalisationSystem : public mrpt::system::COutputLogger
 	std::unique_ptr<TVOTrack> m_voFallback;	 //!< null: no fallback VO
 	std::unique_ptr<JointLocaliser> m_joint;  //!< null: no joint localiser
 	std::vector<size_t> m_jointPipes;  //!< the pipes whose searches it joins, in its channels' order
-	/** Each channel's live measurements and their VO's motion (the front end). */
-	void frontEnd(
+	/** Channel i's grey pair made and measured (meas[i]); its conversion time in msConvert[i]. */
+	void extractChannel(
+		size_t i, const ChannelImages& images, const geometry::TStereoCalib& calib, size_t frame,
+		std::vector<features::TStereoFrame>& meas, std::vector<double>& msConvert);
+	/** The VO channel's VO on its measurements: u.vo, u.motion; whether it measured the step. */
+	bool voMotion(
+		const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib, double timestamp,
+		TLocalisationUpdate& u);
+	/** The fallback VO on its channel's measurements (every frame): its step
+	 * replaces u.motion where the VO channel's was not measured. */
+	void fallbackMotion(
+		const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib, double timestamp,
+		bool voMeasured, TLocalisationUpdate& u);
+	/** The predictor: the distance travelled, the track moved by u.motion,
+	 * and the localisers' input made from them. */
+	TLocaliserInput predict(const geometry::TStereoCalib& calib, double timestamp, TLocalisationUpdate& u);
+	/** Localises channel i's measurements with the frame's input. */
+	using LocaliseChannel = std::function<void(size_t, const TLocaliserInput&)>;
+	/** The front end, the predictor and every channel localiser, in order on this thread. */
+	TLocaliserInput frontEndThenLocalisers(
 		const ChannelImages& images, const geometry::TStereoCalib& calib, double timestamp,
-		std::vector<features::TStereoFrame>& meas, TLocalisationUpdate& u);
+		std::vector<features::TStereoFrame>& meas, TLocalisationUpdate& u, const LocaliseChannel& localise);
+	/** The same on two threads, the VO channel's localiser overlapping the
+	 * other channels' front end (the same results). */
+	TLocaliserInput frontEndOverlappingLocalisers(
+		const ChannelImages& images, const geometry::TStereoCalib& calib, double timestamp,
+		std::vector<features::TStereoFrame>& meas, TLocalisationUpdate& u, const LocaliseChannel& localise);
 	/** Runs fn(i) for every localiser's pipe, the first on this thread and
 	 * the others on a second one when threads >= 2. */
 	template <typename F>
