@@ -130,7 +130,11 @@ struct TLocalisationUpdate
 	std::vector<int8_t> oracle;
 	double ms_total = 0;  //!< channel conversion, features, VO, localisers and policy (decoding excluded) [ms]
 	double ms_convert = 0;	//!< of which channel conversion, summed over the channels [ms]
-	double ms_front_end = 0;  //!< of which the front end: conversion, features and VO of every channel [ms]
+	/** Of which the front end: conversion, features and the VO of every
+	 * channel (with two threads: until every channel's features and the VO
+	 * channel's VO are done; the fallback VO counts only where it ran before
+	 * the prediction) [ms]. */
+	double ms_front_end = 0;
 	double ms_relocalise = 0;  //!< of which the place search of a frame without a fix [ms]
 
 	/** The localiser result of a channel, or nullptr. */
