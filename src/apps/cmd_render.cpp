@@ -17,6 +17,7 @@
 
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
@@ -184,15 +185,22 @@ render::TObjectLayer mapLayer(
 	for (const auto& k : m->keyframes()) predicted += k.predicted;
 	if (predicted) legend << " (orange: " << predicted << " after a VO break, predicted)";
 	legend << "; chevrons every " << std::setprecision(0) << m->options.draw_frame_every_m << " m";
+	// Experiences kept in frames of their own are not drawn (their poses are unrelated to the map frame).
+	const auto drawn = [&m](const map::TMapKeyframe& k) { return m->frameOf(k.id) == 0; };
+	const auto elsewhere = std::count_if(m->keyframes().begin(), m->keyframes().end(), [&](const auto& k) { return !drawn(k); });
 	l.legend.push_back({legend.str(), CKeyframeMap::kDrawColourMeasured});
-	for (const auto& k : m->keyframes()) l.extent.push_back(toPoint(T_ref_map * k.T_map_kf.translation()));
+	if (elsewhere)
+		l.legend.push_back(
+			{"   not drawn: " + std::to_string(elsewhere) + " keyframes in frames of their own", CKeyframeMap::kDrawColourMeasured});
+	for (const auto& k : m->keyframes())
+		if (drawn(k)) l.extent.push_back(toPoint(T_ref_map * k.T_map_kf.translation()));
 	if (landmarks)
 		for (size_t c = 0; c < m->channels().size(); c++)
 		{
 			size_t n = 0;
 			for (const auto& k : m->keyframes())
 				for (const auto& s : k.channels[c])
-					if (s.P.z() <= m->options.draw_landmark_max_depth_m)
+					if (drawn(k) && s.P.z() <= m->options.draw_landmark_max_depth_m)
 					{
 						l.extent.push_back(toPoint(T_ref_map * (k.T_map_kf * s.P)));
 						n++;

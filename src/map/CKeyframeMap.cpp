@@ -1254,9 +1254,13 @@ void CKeyframeMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const { 
 void CKeyframeMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o, const TDrawStyle& style) const
 {
 	if (!genericMapParams.enableSaveAs3DObject || m_keyframes.empty()) return;
+	// Only the map frame's keyframes: an experience kept in a frame of its
+	// own has poses unrelated to it (drawn here it would lie over the others).
+	const auto inMapFrame = [&](const map::TMapKeyframe& k) { return m_runFrame[k.run] == 0; };
 	Eigen::Vector3d lo = m_keyframes[0].T_map_kf.translation(), hi = lo;
 	for (const auto& k : m_keyframes)
 	{
+		if (!inMapFrame(k)) continue;
 		lo = lo.cwiseMin(k.T_map_kf.translation());
 		hi = hi.cwiseMax(k.T_map_kf.translation());
 	}
@@ -1279,7 +1283,7 @@ void CKeyframeMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o, const TD
 	path->enableLight(false);
 	for (size_t i = 0; i + 1 < m_keyframes.size(); i++)
 	{
-		if (!sameSegment(static_cast<uint32_t>(i), static_cast<uint32_t>(i + 1))) continue;
+		if (!sameSegment(static_cast<uint32_t>(i), static_cast<uint32_t>(i + 1)) || !inMapFrame(m_keyframes[i])) continue;
 		const auto& ka = m_keyframes[i];
 		const Eigen::Vector3d a = ka.T_map_kf.translation(), b = m_keyframes[i + 1].T_map_kf.translation();
 		Eigen::Vector3d d = b - a;
@@ -1301,7 +1305,7 @@ void CKeyframeMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o, const TD
 	for (size_t i = 0; i < m_keyframes.size(); i++)
 	{
 		const auto& k = m_keyframes[i];
-		if (m_chainDist[i] != 0 && m_chainDist[i] - last < options.draw_frame_every_m) continue;
+		if (!inMapFrame(k) || (m_chainDist[i] != 0 && m_chainDist[i] - last < options.draw_frame_every_m)) continue;
 		last = m_chainDist[i];
 		const Eigen::Vector3d p = k.T_map_kf.translation(), down = k.T_map_kf.linear().col(1);
 		Eigen::Vector3d f = k.T_map_kf.linear().col(2);
@@ -1324,7 +1328,7 @@ void CKeyframeMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& o, const TD
 			for (const auto& k : m_keyframes)
 				for (const auto& m : k.channels[c])
 				{
-					if (m.P.z() > options.draw_landmark_max_depth_m) continue;
+					if (!inMapFrame(k) || m.P.z() > options.draw_landmark_max_depth_m) continue;
 					const Eigen::Vector3d p = k.T_map_kf * m.P;
 					pc->push_back(p.x(), p.y(), p.z(), col.R, col.G, col.B);
 				}

@@ -20,6 +20,9 @@
 #include <sstream>
 
 #include <mrpt/io/CMemoryStream.h>
+#include <mrpt/opengl/CPointCloudColoured.h>
+#include <mrpt/opengl/CSetOfObjects.h>
+#include <mrpt/opengl/CSetOfTriangles.h>
 #include <mrpt/serialization/CArchive.h>
 
 using namespace shadyloc;
@@ -284,6 +287,33 @@ TEST(Experiences, ABrokenLinkOrAMissingExperienceIsReportedAndLeftOut)
 	sound.Seek(0);
 	mrpt::serialization::archiveFrom(sound) >> loaded;
 	EXPECT_TRUE(loaded.loadProblems().empty());
+}
+
+TEST(Experiences, AnExperienceInAFrameOfItsOwnIsNotDrawnInTheMapFrame)
+{
+	const auto base = test::makeSyntheticMap(16, 10, 0);
+	CKeyframeMap linked = *base;
+	survey::appendExperience(linked, *drivenAgain(*base, elsewhere(), aside(1.0)), "again", fixesOf(*base, aside(1.0)));
+	CKeyframeMap withOwn = linked;
+	survey::appendExperience(withOwn, *drivenAgain(*base, elsewhere(), aside(3.5)), "other_lane", {});
+	ASSERT_FALSE(withOwn.runAnchored(2));
+	// Triangles (path and chevrons) and landmark points of a drawing.
+	const auto drawn = [](CKeyframeMap m) {
+		m.options.draw_landmarks = true;
+		mrpt::opengl::CSetOfObjects scene;
+		m.getVisualizationInto(scene);
+		std::pair<size_t, size_t> n{0, 0};
+		for (const auto& o : scene)
+			if (const auto t = std::dynamic_pointer_cast<mrpt::opengl::CSetOfTriangles>(o))
+				n.first += t->getTrianglesCount();
+			else if (const auto c = std::dynamic_pointer_cast<mrpt::opengl::CPointCloudColoured>(o))
+				n.second += c->size();
+		return n;
+	};
+	const auto a = drawn(linked), b = drawn(withOwn);
+	EXPECT_GT(a.first, 0u);
+	EXPECT_GT(a.second, 0u);
+	EXPECT_EQ(b, a) << "the other lane's keyframes and landmarks are not in the map frame";
 }
 
 // `shadyloc survey --append` on the default dataset: the overcast run added

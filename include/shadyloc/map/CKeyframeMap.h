@@ -236,7 +236,9 @@ class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
 	/** In the map frame: the path of each segment as a ribbon in the road
 	 * plane (blue where measured, orange where only predicted after a VO
 	 * break), a chevron at a keyframe at most every draw_frame_every_m, and,
-	 * with draw_landmarks, the landmarks coloured by channel. */
+	 * with draw_landmarks, the landmarks coloured by channel. Experiences
+	 * kept in frames of their own are not drawn (their poses are unrelated
+	 * to the map frame). */
 	void getVisualizationInto(mrpt::opengl::CSetOfObjects& o) const override;
 	void getVisualizationInto(mrpt::opengl::CSetOfObjects& o, const TDrawStyle& style) const;
 	/** Colours of the drawing: the path where measured, where predicted, and
