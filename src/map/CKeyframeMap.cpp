@@ -87,14 +87,26 @@ void putPose(ByteWriter& w, const Eigen::Isometry3d& T)
 	for (int i = 0; i < 3; i++)
 		for (int j = 0; j < 4; j++) w.put<double>(T.matrix()(i, j));
 }
-Eigen::Isometry3d getPose(ByteReader& r, const char* what)
+/** A pose as stored, unchecked (poseProblem says what is wrong with it). */
+Eigen::Isometry3d readPose(ByteReader& r)
 {
 	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
 	for (int i = 0; i < 3; i++)
 		for (int j = 0; j < 4; j++) T.matrix()(i, j) = r.get<double>();
-	if (!T.matrix().allFinite()) r.fail(std::string(what) + ": not finite");
+	return T;
+}
+/** Why T is no rigid pose ("" when it is). */
+std::string poseProblem(const Eigen::Isometry3d& T)
+{
+	if (!T.matrix().allFinite()) return "not finite";
 	const Eigen::Matrix3d RtR = T.linear().transpose() * T.linear();
-	if (!RtR.isApprox(Eigen::Matrix3d::Identity(), 1e-6)) r.fail(std::string(what) + ": rotation not orthonormal");
+	if (!RtR.isApprox(Eigen::Matrix3d::Identity(), 1e-6)) return "rotation not orthonormal";
+	return "";
+}
+Eigen::Isometry3d getPose(ByteReader& r, const char* what)
+{
+	const Eigen::Isometry3d T = readPose(r);
+	if (const std::string why = poseProblem(T); !why.empty()) r.fail(std::string(what) + ": " + why);
 	return T;
 }
 void putCov(ByteWriter& w, const geometry::Matrix6d& C)
@@ -102,11 +114,17 @@ void putCov(ByteWriter& w, const geometry::Matrix6d& C)
 	for (int i = 0; i < 6; i++)
 		for (int j = i; j < 6; j++) w.put<double>(C(i, j));
 }
-geometry::Matrix6d getCov(ByteReader& r)
+/** A covariance as stored (its upper triangle), unchecked. */
+geometry::Matrix6d readCov(ByteReader& r)
 {
 	geometry::Matrix6d C;
 	for (int i = 0; i < 6; i++)
 		for (int j = i; j < 6; j++) C(i, j) = C(j, i) = r.get<double>();
+	return C;
+}
+geometry::Matrix6d getCov(ByteReader& r)
+{
+	const geometry::Matrix6d C = readCov(r);
 	if (!C.allFinite()) r.fail("covariance not finite");
 	return C;
 }
@@ -122,9 +140,8 @@ std::string brokenLink(
 {
 	if (l.a >= kfs.size() || l.b >= kfs.size()) return "the map has " + std::to_string(kfs.size()) + " keyframes";
 	if (kfs[l.a].run == kfs[l.b].run) return "both keyframes of one run";
-	if (!l.T_a_b.matrix().allFinite() || !l.cov.allFinite()) return "not finite";
-	if (!(l.T_a_b.linear().transpose() * l.T_a_b.linear()).isApprox(Eigen::Matrix3d::Identity(), 1e-6))
-		return "rotation not orthonormal";
+	if (std::string why = poseProblem(l.T_a_b); !why.empty()) return "pose " + why;
+	if (!l.cov.allFinite()) return "covariance not finite";
 	if (Eigen::SelfAdjointEigenSolver<geometry::Matrix6d>(l.cov).eigenvalues().minCoeff() < 0)
 		return "covariance not positive semi-definite";
 	if (frameOfRun[kfs[l.a].run] != frameOfRun[kfs[l.b].run]) return "";  // joins frames: nothing to compare with
@@ -955,10 +972,8 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 					map::TExperienceLink l;
 					l.a = r.get<uint32_t>();
 					l.b = r.get<uint32_t>();
-					for (int row = 0; row < 3; row++)
-						for (int col = 0; col < 4; col++) l.T_a_b.matrix()(row, col) = r.get<double>();
-					for (int row = 0; row < 6; row++)
-						for (int col = row; col < 6; col++) l.cov(row, col) = l.cov(col, row) = r.get<double>();
+					l.T_a_b = readPose(r);
+					l.cov = readCov(r);
 					const std::string why = brokenLink(l, kfs, frames);
 					if (why.empty())
 						links.push_back(l);
@@ -969,8 +984,10 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 				}
 			}
 			tmp.m_links = std::move(links);
+			std::vector<bool> runHasKeyframes(nr, false);
+			for (const auto& k : kfs) runHasKeyframes[k.run] = true;
 			for (uint16_t i = 0; i < nr; i++)
-				if (std::none_of(kfs.begin(), kfs.end(), [i](const map::TMapKeyframe& k) { return k.run == i; }))
+				if (!runHasKeyframes[i])
 					problems.push_back("run " + std::to_string(i) + " ('" + runs[i] + "'): no keyframe (a missing experience)");
 			tmp.m_loadProblems = std::move(problems);
 			if (r.remaining()) r.fail(std::to_string(r.remaining()) + " bytes left over");

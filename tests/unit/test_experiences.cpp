@@ -74,6 +74,21 @@ std::vector<survey::TRunFix> fixesOf(const CKeyframeMap& run, const Eigen::Isome
 		f.push_back({k.frame, k.id, O, geometry::Matrix6d::Identity() * 4e-4});
 	return f;
 }
+/** `base` and its route driven again 1 m aside, linked at every keyframe (run "again"). */
+CKeyframeMap withLinkedRun(const CKeyframeMap& base)
+{
+	CKeyframeMap m = base;
+	survey::appendExperience(m, *drivenAgain(base, elsewhere(), aside(1.0)), "again", fixesOf(base, aside(1.0)));
+	return m;
+}
+
+/** `m` and the other lane of `base`'s route (3.5 m aside), localised
+ * nowhere, so kept in a frame of its own (run "other_lane"). */
+CKeyframeMap withOtherLane(CKeyframeMap m, const CKeyframeMap& base)
+{
+	survey::appendExperience(m, *drivenAgain(base, elsewhere(), aside(3.5)), "other_lane", {});
+	return m;
+}
 }  // namespace
 
 TEST(Experiences, AppendedRunIsPlacedInTheMapFrameThroughVerifiedLinks)
@@ -218,10 +233,7 @@ TEST(Experiences, AnotherCameraOrDescriptorIsRefusedNamingBoth)
 TEST(Experiences, ExperiencesAndLinksSurviveSavingAndLoading)
 {
 	const auto base = test::makeSyntheticMap(16, 10, 0);
-	const Eigen::Isometry3d O = aside(1.0);
-	CKeyframeMap m = *base;
-	survey::appendExperience(m, *drivenAgain(*base, elsewhere(), O), "again", fixesOf(*base, O));
-	survey::appendExperience(m, *drivenAgain(*base, elsewhere(), aside(3.5)), "other_lane", {});
+	CKeyframeMap m = withOtherLane(withLinkedRun(*base), *base);
 	mrpt::io::CMemoryStream buf;
 	mrpt::serialization::archiveFrom(buf) << m;
 	buf.Seek(0);
@@ -246,10 +258,7 @@ TEST(Experiences, ExperiencesAndLinksSurviveSavingAndLoading)
 TEST(Experiences, ABrokenLinkOrAMissingExperienceIsReportedAndLeftOut)
 {
 	const auto base = test::makeSyntheticMap(16, 10, 0);
-	const Eigen::Isometry3d O = aside(1.0);
-	CKeyframeMap m = *base;
-	survey::appendExperience(m, *drivenAgain(*base, elsewhere(), O), "again", fixesOf(*base, O));
-	survey::appendExperience(m, *drivenAgain(*base, elsewhere(), aside(3.5)), "other_lane", {});
+	CKeyframeMap m = withOtherLane(withLinkedRun(*base), *base);
 	const size_t intact = m.links().size();
 	ASSERT_GT(intact, 10u);
 	// A link that contradicts the poses it placed (2 m off, sigma 2 cm), one
@@ -292,10 +301,7 @@ TEST(Experiences, ABrokenLinkOrAMissingExperienceIsReportedAndLeftOut)
 TEST(Experiences, AnExperienceInAFrameOfItsOwnIsNotDrawnInTheMapFrame)
 {
 	const auto base = test::makeSyntheticMap(16, 10, 0);
-	CKeyframeMap linked = *base;
-	survey::appendExperience(linked, *drivenAgain(*base, elsewhere(), aside(1.0)), "again", fixesOf(*base, aside(1.0)));
-	CKeyframeMap withOwn = linked;
-	survey::appendExperience(withOwn, *drivenAgain(*base, elsewhere(), aside(3.5)), "other_lane", {});
+	const CKeyframeMap linked = withLinkedRun(*base), withOwn = withOtherLane(linked, *base);
 	ASSERT_FALSE(withOwn.runAnchored(2));
 	// Triangles (path and chevrons) and landmark points of a drawing.
 	const auto drawn = [](CKeyframeMap m) {

@@ -238,6 +238,19 @@ std::string simRuns(const std::string& dir, const std::string& traversals)
 	if (rc != 0) throw std::runtime_error("sim failed: " + out);
 	return dir + "/sim";
 }
+
+/** The map of simRuns' noon traversal, surveyed into dir/noon.kfmap. */
+std::string surveyedNoon(const std::string& dir, const std::string& sim)
+{
+	const std::string map = dir + "/noon.kfmap";
+	std::string out;
+	const int rc = test::runCommand(
+		test::appPath() + " survey -q -i " + sim + "/noon.rawlog -o " + map + " -c " + src("config/vo_sim.ini") +
+			" --gt " + sim + "/noon.tum",
+		&out);
+	if (rc != 0) throw std::runtime_error("survey failed: " + out);
+	return map;
+}
 }  // namespace
 
 TEST(KillFolderOutputs, FilterImagesFolder)
@@ -274,15 +287,9 @@ TEST(KillFolderOutputsSlow, LocaliseOutputFolder)
 {
 	const auto dir = test::tempDir("kill_localise");
 	const std::string sim = simRuns(dir, "noon,overcast");
-	std::string out;
-	ASSERT_EQ(
-		test::runCommand(
-			test::appPath() + " survey -q -i " + sim + "/noon.rawlog -o " + dir + "/noon.kfmap -c " + src("config/vo_sim.ini") + " --gt " + sim + "/noon.tum",
-			&out),
-		0)
-		<< out;
+	const std::string map = surveyedNoon(dir, sim);
 	TKillCase c;
-	c.args = {"localise", "-q", "-m", dir + "/noon.kfmap", "-i", sim + "/overcast.rawlog", "-o", dir + "/loc",
+	c.args = {"localise", "-q", "-m", map, "-i", sim + "/overcast.rawlog", "-o", dir + "/loc",
 			  "-c", src("config/vo_sim.ini"), "-c", src("config/localise_sim.ini"), "--gt", sim + "/overcast.tum"};
 	c.outputs = {dir + "/loc"};
 	c.varying = {"timing.json"};
@@ -295,21 +302,15 @@ TEST(KillFolderOutputsSlow, LocaliseLearntMap)
 {
 	const auto dir = test::tempDir("kill_learn");
 	const std::string sim = simRuns(dir, "noon,overcast");
-	std::string out;
-	ASSERT_EQ(
-		test::runCommand(
-			test::appPath() + " survey -q -i " + sim + "/noon.rawlog -o " + dir + "/noon.kfmap -c " + src("config/vo_sim.ini") + " --gt " + sim + "/noon.tum",
-			&out),
-		0)
-		<< out;
-	const std::string before = test::fileContents(dir + "/noon.kfmap");
+	const std::string map = surveyedNoon(dir, sim);
+	const std::string before = test::fileContents(map);
 	TKillCase c;
-	c.args = {"localise", "-q", "-m", dir + "/noon.kfmap", "-i", sim + "/overcast.rawlog", "-o", dir + "/loc",
+	c.args = {"localise", "-q", "-m", map, "-i", sim + "/overcast.rawlog", "-o", dir + "/loc",
 			  "-c", src("config/vo_sim.ini"), "-c", src("config/localise_sim.ini"), "--learn", dir + "/learnt.kfmap"};
 	c.outputs = {dir + "/loc", dir + "/learnt.kfmap"};
 	c.varying = {"timing.json"};
 	Killer(c, dir).runAll();
-	EXPECT_EQ(test::fileContents(dir + "/noon.kfmap"), before) << "the map learnt from, byte for byte";
+	EXPECT_EQ(test::fileContents(map), before) << "the map learnt from, byte for byte";
 }
 
 TEST(KillFolderOutputsSlow, EvalJobFoldersPairsAndFigures)
