@@ -250,6 +250,13 @@ int run(int argc, char** argv)
 			std::cout << " " << kfmap.channels()[c].label << " " << st.meanKeptReobservations[c];
 		std::cout << "\n";
 	}
+	if (kfmap.options.depth_from_reobservations && !st.refinedDepthShare.empty())
+	{
+		std::cout << "kept landmarks with a depth refined by their re-observations:";
+		for (size_t c = 0; c < st.refinedDepthShare.size(); c++)
+			std::cout << " " << kfmap.channels()[c].label << " " << std::setprecision(1) << 100 * st.refinedDepthShare[c] << " %";
+		std::cout << "\n";
+	}
 	return 0;
 }
 shadyloc::apps::RegisterCommand reg(

@@ -47,6 +47,25 @@ Eigen::Matrix3d TStereoCalib::triangulationCovariance(const Eigen::Matrix3d& J, 
 	return (sigma_px * sigma_px) * (J * J.transpose());
 }
 
+Eigen::Matrix3d TStereoCalib::measurementCovariance(double sigma_px, double sigma_disparity_px)
+{
+	const double s2 = sigma_px * sigma_px;
+	if (!(sigma_disparity_px > 0)) return s2 * Eigen::Matrix3d::Identity();
+	// uR = uL + doffs - D with uL, v, D independent.
+	Eigen::Matrix3d C;
+	C << s2, 0, s2,	 //
+		0, s2, 0,  //
+		s2, 0, s2 + sigma_disparity_px * sigma_disparity_px;
+	return C;
+}
+
+Eigen::Matrix3d TStereoCalib::triangulationCovariance(
+	const Eigen::Matrix3d& J, double sigma_px, double sigma_disparity_px) const
+{
+	if (!(sigma_disparity_px > 0)) return triangulationCovariance(J, sigma_px);
+	return J * measurementCovariance(sigma_px, sigma_disparity_px) * J.transpose();
+}
+
 TStereoCalib TStereoCalib::FromObservation(const mrpt::obs::CObservationStereoImages& obs)
 {
 	const auto& L = obs.leftCamera;

@@ -19,6 +19,7 @@
 #include <Eigen/LU>
 
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -31,6 +32,9 @@ struct TLandmarkBlock
 	int idx;  //!< correspondence index
 	Eigen::Vector3d z_ref;	//!< the landmark's stereo measurement in the reference frame [px]
 	const TStereoCalib* calib_ref;	//!< the reference frame's calibration
+	/** Information of z_ref where its disparity was refined by other views
+	 * (sigma_disparity_ref > 0); otherwise the pixel noise model below. */
+	std::optional<Eigen::Matrix3d> W_ref;
 	// Normal-equation blocks at the last linearisation:
 	Eigen::Matrix<double, 6, 3> Hpx = Eigen::Matrix<double, 6, 3>::Zero();  //!< pose-landmark
 	Eigen::Matrix3d Hxx = Eigen::Matrix3d::Zero();	//!< landmark-landmark
@@ -78,11 +82,21 @@ TPoseSolution solveStereoPoseTwoView(
 		b.idx = static_cast<int>(i);
 		b.z_ref = c[i].z_ref;
 		b.calib_ref = &c[i].calib_ref;
+		if (c[i].sigma_disparity_ref > 0)
+			b.W_ref = TStereoCalib::measurementCovariance(o.sigma_px, c[i].sigma_disparity_ref).inverse();
 		L.push_back(b);
 	}
 	if (L.size() < 3) return sol;
 
 	// Robust cost of a pose and landmark set (whitened residual norms, Huber).
+	// The reference term's whitened norm and weighted products: a refined
+	// landmark's by its own information, every other by the pixel model.
+	const auto refNorm = [&](const TLandmarkBlock& b, const Eigen::Vector3d& r) {
+		return b.W_ref ? std::sqrt(r.dot(*b.W_ref * r)) : whitenedNorm(r);
+	};
+	const auto refWeighted = [&](const TLandmarkBlock& b, double hw, const auto& A, const auto& B) {
+		return b.W_ref ? (hw * A.transpose() * *b.W_ref * B).eval() : weighted(hw * s2inv, A, B);
+	};
 	auto cost = [&](const Eigen::Isometry3d& T, const std::vector<Eigen::Vector3d>& X, double* sumSqCurr,
 					int* usedCurr) {
 		double f = 0, ss = 0;
@@ -91,7 +105,7 @@ TPoseSolution solveStereoPoseTwoView(
 		{
 			if (!(X[k].z() > 1e-3)) return HUGE_VAL;
 			const Eigen::Vector3d rr = L[k].calib_ref->project(X[k]) - L[k].z_ref;
-			f += huberCost(whitenedNorm(rr), o.huber_k);
+			f += huberCost(refNorm(L[k], rr), o.huber_k);
 			Eigen::Vector3d r;
 			if (!stereoResidual(calib, T, X[k], c[L[k].idx].z_curr, r)) return HUGE_VAL;
 			f += huberCost(whitenedNorm(r), o.huber_k);
@@ -124,13 +138,13 @@ TPoseSolution solveStereoPoseTwoView(
 			Matrix36d Jc;
 			stereoResidual(calib, T, X[k], c[b.idx].z_curr, rc, &Jc);
 			const Eigen::Matrix3d JcX = Jc.leftCols<3>() * T.linear();
-			const double wk = huberWeight(whitenedNorm(rk), o.huber_k) * s2inv;
+			const double hk = huberWeight(refNorm(b, rk), o.huber_k);
 			const double wc = huberWeight(whitenedNorm(rc), o.huber_k) * s2inv;
 			Hpp += weighted(wc, Jc, Jc);
 			gp += weighted(wc, Jc, rc);
 			b.Hpx = weighted(wc, Jc, JcX);
-			b.Hxx = weighted(wk, Jk, Jk) + weighted(wc, JcX, JcX);
-			b.gx = weighted(wk, Jk, rk) + weighted(wc, JcX, rc);
+			b.Hxx = refWeighted(b, hk, Jk, Jk) + weighted(wc, JcX, JcX);
+			b.gx = refWeighted(b, hk, Jk, rk) + weighted(wc, JcX, rc);
 		}
 	};
 	// Schur complement with Levenberg-Marquardt damping (1 + lambda) on the

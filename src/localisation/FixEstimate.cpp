@@ -250,7 +250,12 @@ bool intoReference(
 	corr.P_ref = T_ref_k * corr.P_ref;
 	corr.cov_ref = T_ref_k.linear() * corr.cov_ref * T_ref_k.linear().transpose();
 	if (!(corr.P_ref.z() > 0.5)) return false;
+	// A refined disparity's sigma follows the depth: D ~ 1/Z, so sigma_D ~ D^2
+	// (along nearly parallel rays: keyframes a window apart).
+	const double D0 = corr.calib_ref.disparity(corr.z_ref.x(), corr.z_ref.z());
 	corr.z_ref = calibKf.project(corr.P_ref);
+	const double D1 = calibKf.disparity(corr.z_ref.x(), corr.z_ref.z());
+	if (corr.sigma_disparity_ref > 0) corr.sigma_disparity_ref *= (D1 / D0) * (D1 / D0);
 	corr.calib_ref = calibKf;
 	return true;
 }

@@ -50,6 +50,16 @@ constexpr const char* kClass = "shadyloc::CKeyframeMap";
 // (i8), BRIEF (32), patch.
 constexpr size_t kMeasBytes = 2 + 2 + 2 + 2 + 1 + 32 + features::kPatchSize * features::kPatchSize;
 constexpr size_t kNormalBytes = 3;	//!< version 4: the surface normal, 3 x int8
+constexpr size_t kDisparitySigmaBytes = 1;	//!< version 6: a refined disparity's sigma
+/** A refined disparity's sigma on disk: 1/128 px steps rounded up (never
+ * more confident than computed), 1..255; 0 = none (the pair's own depth). */
+constexpr double kDisparitySigmaStep = 1.0 / 128;
+uint8_t disparitySigmaCode(double sigma)
+{
+	if (!(sigma > 0)) return 0;
+	return static_cast<uint8_t>(std::clamp(std::ceil(sigma / kDisparitySigmaStep - 1e-9), 1.0, 255.0));
+}
+float disparitySigmaFromCode(uint8_t k) { return static_cast<float>(k * kDisparitySigmaStep); }
 
 /** A unit normal as stored: each component times 127, rounded; (0, 0, 0) = unknown. */
 std::array<int8_t, 3> normalCode(const Eigen::Vector3f& n)
@@ -309,6 +319,9 @@ void putOptions(ByteWriter& w, const TKeyframeMapOptions& o)
 	w.put<double>(o.reobservation_radius_px);
 	w.put<int32_t>(o.min_reobservations);
 	w.put<int32_t>(o.patch_bits);
+	// version 6
+	w.put<uint8_t>(o.depth_from_reobservations);
+	w.put<double>(o.reobservation_sigma_px);
 }
 /** The options as stored by format `version`: version 1 maps were thinned
  * by the strongest corners (the only selection then). */
@@ -342,6 +355,14 @@ TKeyframeMapOptions getOptions(ByteReader& r, uint8_t version)
 		o.landmark_selection = TKeyframeMapOptions::LandmarkSelection::Strongest;
 		o.patch_bits = 8;
 	}
+	o.depth_from_reobservations = false;  // before version 6 every depth was the pair's
+	if (version >= 6)
+	{
+		const auto d = r.get<uint8_t>();
+		if (d > 1) r.fail("depth_from_reobservations is not a bool");
+		o.depth_from_reobservations = d;
+		o.reobservation_sigma_px = r.get<double>();
+	}
 	try
 	{
 		o.validate();
@@ -373,6 +394,10 @@ void TKeyframeMapOptions::keys(core::KeyVisitor& v)
 	  "reobserved: search circle around a landmark's projection at the VO pose");
 	v("min_reobservations", min_reobservations, "", Range::atLeast(0),
 	  "reobserved: landmarks re-found in fewer frames are dropped (0 = as the budget allows)");
+	v("depth_from_reobservations", depth_from_reobservations, "", Range::any(),
+	  "each kept landmark's depth refined by the survey frames that re-found it (matters seen from aside)");
+	v("reobservation_sigma_px", reobservation_sigma_px, "px", Range::above(0),
+	  "depth_from_reobservations: a re-observation's pixel noise (calibrated against true depth)");
 	v("selection_grid_cols", selection_grid_cols, "", Range::closed(1, 256), "landmark selection buckets across the image");
 	v("selection_grid_rows", selection_grid_rows, "", Range::closed(1, 256), "... and down the image");
 	v("patch_bits", patch_bits, "", Range::closed(1, 8), "bits kept of each stored patch pixel, 1..8 (fewer compress better)");
@@ -537,9 +562,17 @@ bool CKeyframeMap::quantise(features::TStereoMeasurement& m, const map::TChannel
 	m.zncc = static_cast<float>(std::clamp<long>(std::lround(m.zncc * 127.f), -127, 127)) / 127.f;
 	for (auto& p : m.patch) p = dequantisePixel(static_cast<uint8_t>(p >> (8 - options.patch_bits)), options.patch_bits);
 	if (!normalFromCode(normalCode(m.normal), m.normal)) m.normal.setZero();  // not unit: unknown
+	if (m.sigma_d > 0)
+	{
+		// The stored disparity is rounded to 1/kPixelQuantum: its variance adds.
+		const double qd = 1.0 / kPixelQuantum;
+		const double sd = std::sqrt(double(m.sigma_d) * m.sigma_d + qd * qd / 12);
+		// Beyond the code's range: the pair's own model, not a clipped sigma.
+		m.sigma_d = sd < 255 * kDisparitySigmaStep ? disparitySigmaFromCode(disparitySigmaCode(sd)) : 0.f;
+	}
 	Eigen::Matrix3d J;
 	if (!m_calib.triangulate(m.uL, m.v, m.uR, m.P, &J)) return false;
-	m.cov = m_calib.triangulationCovariance(J, ch.sigma_px);
+	m.cov = m_calib.triangulationCovariance(J, ch.sigma_px, m.sigma_d);
 	return true;
 }
 
@@ -818,6 +851,7 @@ static TBlocks encode(
 				const auto nc = normalCode(mm.normal);
 				x.bytes(nc.data(), nc.size());
 			}
+			for (const auto& mm : ms) x.put<uint8_t>(disparitySigmaCode(mm.sigma_d));	// version 6
 		}
 		b.channels.push_back(std::move(x.buf));
 	}
@@ -840,7 +874,10 @@ static TBlocks encode(
 //    frame or in its own), after the keyframes the links between runs
 //    (keyframe ids, T_a_b, covariance). Maps of versions 1-4 load as one
 //    anchored run per name, without links.
-uint8_t CKeyframeMap::serializeGetVersion() const { return 5; }
+// 6: the options' depth_from_reobservations; after the normals a refined
+//    disparity's sigma per measurement (uint8, 1/128 px, 0 = the pair's own
+//    depth). Maps of versions 1-5 load with every depth the pair's.
+uint8_t CKeyframeMap::serializeGetVersion() const { return 6; }
 
 void CKeyframeMap::serializeTo(mrpt::serialization::CArchive& out) const
 {
@@ -871,6 +908,7 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 		case 3:
 		case 4:
 		case 5:
+		case 6:
 		{
 			// The stream's size is unknown here: the budget is the largest map
 			// (kMaxSerializedBytes); offsets count from the object's data.
@@ -997,7 +1035,9 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 				for (uint32_t i = 0; i < nk; i++)
 				{
 					const auto n = x.get<uint32_t>();
-					x.requireItems(n, kMeasBytes + (version >= 4 ? kNormalBytes : 0), "measurement");
+					x.requireItems(
+						n, kMeasBytes + (version >= 4 ? kNormalBytes : 0) + (version >= 6 ? kDisparitySigmaBytes : 0),
+						"measurement");
 					auto& ms = kfs[i].channels[c];
 					ms.resize(n);
 					for (auto& m : ms) m.uL = static_cast<float>(x.get<uint16_t>()) / kPixelQuantum;
@@ -1030,12 +1070,14 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 							x.bytes(nc.data(), nc.size());
 							if (!normalFromCode(nc, m.normal)) x.fail("surface normal not of unit length");
 						}
+					if (version >= 6)
+						for (auto& m : ms) m.sigma_d = disparitySigmaFromCode(x.get<uint8_t>());
 					for (size_t j = 0; j < ms.size(); j++)
 					{
 						Eigen::Matrix3d J;
 						if (!cal.triangulate(ms[j].uL, ms[j].v, ms[j].uR, ms[j].P, &J))
 							x.fail("keyframe " + std::to_string(i) + " measurement " + std::to_string(j) + " does not triangulate");
-						ms[j].cov = cal.triangulationCovariance(J, channels[c].sigma_px);
+						ms[j].cov = cal.triangulationCovariance(J, channels[c].sigma_px, ms[j].sigma_d);
 					}
 				}
 				if (x.remaining()) x.fail(std::to_string(x.remaining()) + " bytes left over");

@@ -72,6 +72,25 @@ std::vector<features::TStereoMeasurement> selectLandmarks(
 	return out;
 }
 
+namespace
+{
+/** The landmark's disparity from its re-observations where they agree and
+ * say more than the pair alone (geometry/LandmarkDepth.h). */
+bool refineDepth(
+	features::TStereoMeasurement& m, const geometry::TStereoCalib& calib, double sigma_px, double reobservation_sigma_px,
+	const std::vector<geometry::TDepthObservation>& obs)
+{
+	geometry::TDepthRefinementOptions ro;
+	ro.sigma_px = sigma_px;
+	ro.reobservation_sigma_px = reobservation_sigma_px;
+	const auto r = geometry::refineDisparity(calib, Eigen::Vector3d(m.uL, m.v, m.uR), obs, ro);
+	if (!r.ok || !(r.sigma_disparity < std::sqrt(2.0) * sigma_px)) return false;
+	m.uR = static_cast<float>(m.uL + calib.doffs() - r.disparity);
+	m.sigma_d = static_cast<float>(r.sigma_disparity);
+	return true;
+}
+}  // namespace
+
 TReobservationMatching TReobservationMatching::From(const vo::TStereoVOOptions& vo, double radius_px)
 {
 	TReobservationMatching m;
@@ -91,7 +110,16 @@ std::vector<int> countReobservations(
 	const std::vector<features::TStereoMeasurement>& landmarks, const geometry::TStereoCalib& calib,
 	const std::vector<TReobservingFrame>& frames, const TReobservationMatching& m)
 {
-	std::vector<int> n(landmarks.size(), 0);
+	std::vector<int> n;
+	for (const auto& obs : findReobservations(landmarks, calib, frames, m)) n.push_back(static_cast<int>(obs.size()));
+	return n;
+}
+
+std::vector<std::vector<geometry::TDepthObservation>> findReobservations(
+	const std::vector<features::TStereoMeasurement>& landmarks, const geometry::TStereoCalib& calib,
+	const std::vector<TReobservingFrame>& frames, const TReobservationMatching& m)
+{
+	std::vector<std::vector<geometry::TDepthObservation>> n(landmarks.size());
 	if (landmarks.empty()) return n;
 	const vo::KeyframeMatcher matcher(m.matcher);
 	const vo::RelativePoseEstimator estimator(m.pose);
@@ -114,8 +142,15 @@ std::vector<int> countReobservations(
 		vo::TRelativePoseOutput po;
 		estimator.estimate(pin, po);
 		if (!po.ok()) continue;
+		geometry::TDepthObservation obs;
+		obs.T_obs_kf = po.T_curr_ref;
+		obs.cov_T_obs_kf = geometry::invertCovariance(po.T_curr_ref.inverse(), po.cov_T_ref_curr);
 		for (size_t i = 0; i < out.corr.size(); i++)
-			if (po.inlier[i]) n[static_cast<size_t>(out.landmark[i])]++;
+			if (po.inlier[i])
+			{
+				obs.z = out.corr[i].z_curr;
+				n[static_cast<size_t>(out.landmark[i])].push_back(obs);
+			}
 	}
 	return n;
 }
@@ -263,13 +298,15 @@ void SurveyBuilder::bridge(const geometry::TPoseWithCov& T_last_f)
 	m_bridged++;
 }
 
-bool SurveyBuilder::needsFrames() const
+bool SurveyBuilder::scoresLandmarks() const
 {
 	const auto& o = m_map.options;
 	// Keeping everything needs no score; a floor on it does.
 	return o.landmark_selection == TKeyframeMapOptions::LandmarkSelection::Reobserved &&
 		   (o.landmarks_per_keyframe > 0 || o.min_reobservations > 0);
 }
+
+bool SurveyBuilder::needsFrames() const { return scoresLandmarks() || m_map.options.depth_from_reobservations; }
 
 void SurveyBuilder::addFrame(std::vector<features::TStereoFrame> perChannel)
 {
@@ -326,24 +363,27 @@ void SurveyBuilder::append(TWaiting w)
 {
 	const auto& o = m_map.options;
 	auto& kf = w.kf;
-	const bool scored = needsFrames();
+	const bool observed = needsFrames(), scored = scoresLandmarks();
+	if (m_refined.size() < kf.channels.size()) m_refined.resize(kf.channels.size(), 0);
 	for (size_t c = 0; c < kf.channels.size(); c++)
 	{
 		std::vector<int> score;
-		if (scored)
+		std::vector<std::vector<geometry::TDepthObservation>> reobs;
+		if (observed)
 		{
 			std::vector<TReobservingFrame> frames;
 			for (const auto& f : m_frames)
 				if (f.voSegment == w.voSegment && f.frame != kf.frame && std::abs(f.dist - w.dist) <= o.reobservation_window_m)
 					frames.push_back({&f.channels[c], f.T_world.inverse() * w.T_world});
-			score = countReobservations(kf.channels[c], m_map.calibration(), frames, m_matching);
+			reobs = findReobservations(kf.channels[c], m_map.calibration(), frames, m_matching);
+			for (const auto& r : reobs) score.push_back(static_cast<int>(r.size()));
 		}
 		const auto idx = selectLandmarkIndices(
 			kf.channels[c], o.landmarks_per_keyframe, o.selection_grid_cols, o.selection_grid_rows, m_map.imageWidth(),
 			m_map.imageHeight(), scored ? &score : nullptr, o.min_reobservations);
 		std::vector<features::TStereoMeasurement> kept;
 		kept.reserve(idx.size());
-		if (scored && m_keptSum.size() < kf.channels.size())
+		if (observed && m_keptSum.size() < kf.channels.size())
 		{
 			m_keptSum.resize(kf.channels.size(), 0);
 			m_keptCount.resize(kf.channels.size(), 0);
@@ -351,13 +391,25 @@ void SurveyBuilder::append(TWaiting w)
 		for (size_t i : idx)
 		{
 			kept.push_back(kf.channels[c][i]);
-			if (!scored) continue;
+			if (!observed) continue;
 			m_keptSum[c] += score[i];
 			m_keptCount[c] += 1;
+			const double sigma_px = m_map.channels()[c].sigma_px;
+			if (o.depth_from_reobservations &&
+				refineDepth(kept.back(), m_map.calibration(), sigma_px, o.reobservation_sigma_px, reobs[i]))
+				m_refined[c] += 1;
 		}
 		kf.channels[c] = std::move(kept);
 	}
 	m_map.appendKeyframe(std::move(kf));
+}
+
+std::vector<double> SurveyBuilder::refinedDepthShare() const
+{
+	std::vector<double> out;
+	for (size_t c = 0; c < m_refined.size() && c < m_keptCount.size(); c++)
+		out.push_back(m_keptCount[c] > 0 ? m_refined[c] / m_keptCount[c] : 0.0);
+	return out;
 }
 
 std::vector<double> SurveyBuilder::meanKeptReobservations() const

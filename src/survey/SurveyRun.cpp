@@ -287,6 +287,7 @@ CKeyframeMap::Ptr SurveyRun::run(const std::function<void(size_t, double)>& onFr
 	if (nFrames == 0) throw std::runtime_error(I.source->noFramesMessage());
 	builder->finish();
 	m_stats.meanKeptReobservations = builder->meanKeptReobservations();
+	m_stats.refinedDepthShare = builder->refinedDepthShare();
 	if (kfmap.isEmpty()) throw std::runtime_error(inPath + ": the VO never tracked: no keyframes, no map written");
 	if (I.opts.gt && m_stats.gtKeyframes == 0)
 		throw std::runtime_error(

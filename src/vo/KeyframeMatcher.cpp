@@ -67,6 +67,7 @@ bool correspondenceOf(
 	k.P_ref = lm.P;
 	k.cov_ref = lm.cov;
 	k.z_ref = Eigen::Vector3d(lm.uL, lm.v, lm.uR);
+	k.sigma_disparity_ref = lm.sigma_d;
 	k.calib_ref = in.calib_kf;
 	k.z_curr = z_curr;
 	return in.calib.triangulate(z_curr.x(), z_curr.y(), z_curr.z(), k.P_curr);

@@ -91,13 +91,18 @@ struct TChannelStats
 {
 	long n = 0, wrong = 0, sky = 0;
 	std::vector<double> disparityError, disparityErrorInterior;	 //!< [px], positive = too close
+	/** Disparity errors over their stated sigma: landmarks refined by
+	 * re-observations (sigma_d), and the pair's own (sqrt 2 sigma_px). */
+	std::vector<double> normalisedRefined, normalisedPair;
+	std::vector<double> refinedError, refinedSigma;	//!< [px]
 };
 
 int px(float u) { return static_cast<int>(std::lround(u)); }
 
 /** Compares one keyframe's landmarks of one channel with the true depth;
  * returns the median relative error of its gross errors (0 if none). */
-double probeLandmarks(const map::TMapKeyframe& kf, size_t c, const sim::TRenderAux& aux, TChannelStats& st)
+double probeLandmarks(
+	const map::TMapKeyframe& kf, size_t c, double sigma_px, const sim::TRenderAux& aux, TChannelStats& st)
 {
 	std::vector<double> grossRel;
 	for (const auto& m : kf.channels[c])
@@ -115,6 +120,14 @@ double probeLandmarks(const map::TMapKeyframe& kf, size_t c, const sim::TRenderA
 			const double fxb = m.P.z() * (m.uL - m.uR);	 // fx * b, as the landmark was triangulated
 			const double de = (m.uL - m.uR) - fxb / dTrue;
 			st.disparityError.push_back(de);
+			if (m.sigma_d > 0)
+			{
+				st.normalisedRefined.push_back(de / m.sigma_d);
+				st.refinedError.push_back(de);
+				st.refinedSigma.push_back(m.sigma_d);
+			}
+			else
+				st.normalisedPair.push_back(de / (std::sqrt(2.0) * sigma_px));
 			if (interior(aux.depth, m.uL, m.v)) st.disparityErrorInterior.push_back(de);
 		}
 		if (e * m.P.z() <= 3 * std::sqrt(std::max(0.0, m.cov(2, 2))) || e <= 0.05) continue;
@@ -136,6 +149,23 @@ void printQuantiles(const std::string& what, std::vector<double> d)
 	const auto q = [&](double f) { return d[static_cast<size_t>(f * (d.size() - 1))]; };
 	std::fprintf(stderr, "%s (%zu landmarks within 30 %% of the true depth) [px]: p10 %.3f p25 %.3f median %.3f p75 %.3f p90 %.3f\n",
 		what.c_str(), d.size(), q(0.1), q(0.25), q(0.5), q(0.75), q(0.9));
+}
+/** Mean squared normalised error (NEES, 1 dof) and the share within 3 sigma. */
+void printNormalised(const std::string& what, const std::vector<double>& e)
+{
+	if (e.empty()) return;
+	double ss = 0;
+	size_t in3 = 0;
+	for (double x : e)
+	{
+		ss += x * x;
+		in3 += std::abs(x) <= 3;
+	}
+	std::vector<double> a;
+	for (double x : e) a.push_back(std::abs(x));
+	std::sort(a.begin(), a.end());
+	std::fprintf(stderr, "%s: %zu landmarks, disparity error / sigma: mean square %.2f, median |.| %.2f, within 3 sigma %.1f %%\n",
+		what.c_str(), e.size(), ss / e.size(), a[a.size() / 2], 100.0 * in3 / e.size());
 }
 }  // namespace
 
@@ -175,7 +205,7 @@ int main(int argc, char** argv)
 		for (size_t c = 0; c < nch; c++)
 		{
 			const long n0 = stats[c].n, w0 = stats[c].wrong;
-			const double med = probeLandmarks(kf, c, aux, stats[c]);
+			const double med = probeLandmarks(kf, c, map.channels()[c].sigma_px, aux, stats[c]);
 			std::printf(",%ld,%ld,%.3f", stats[c].n - n0, stats[c].wrong - w0, med);
 		}
 		std::printf("\n");
@@ -191,6 +221,10 @@ int main(int argc, char** argv)
 			st.wrong, st.n ? 100.0 * st.wrong / st.n : 0.0, st.sky);
 		printQuantiles(label + " disparity error", st.disparityError);
 		printQuantiles(label + " disparity error, no depth edge in the 7x7 window", st.disparityErrorInterior);
+		printNormalised(label + " refined by re-observations", st.normalisedRefined);
+		printQuantiles(label + " disparity error of the refined ones", st.refinedError);
+		printQuantiles(label + " sigma of the refined ones", st.refinedSigma);
+		printNormalised(label + " the pair's own", st.normalisedPair);
 	}
 	return 0;
 }

@@ -301,7 +301,7 @@ TEST(MapFormat, OldVersionAndLyingBlockSizesAreRefused)
 	const std::string name = "shadyloc::CKeyframeMap";
 	const size_t ver = 1 + name.size();	 // MRPT's header: 0x80 | length, the name, the version
 	ASSERT_EQ(std::string(good.begin() + 1, good.begin() + 1 + name.size()), name);
-	ASSERT_EQ(good[ver], 5);
+	ASSERT_EQ(good[ver], 6);
 	// The loader on bytes in memory (the fuzz entry point) loads them as the file loader does.
 	EXPECT_EQ(CKeyframeMap::LoadFromBytes(good.data(), good.size())->keyframeCount(), 6u);
 	try
@@ -400,7 +400,7 @@ TEST(MapFormat, Version1MapsStillLoad)
 	EXPECT_EQ(m->runs(), (std::vector<std::string>{"dawn", "dusk"}));
 	EXPECT_EQ(m->keyframe(2).channels[1].size(), 3u);
 	const auto now = bytesOf(*m);
-	EXPECT_EQ(now[1 + name.size()], 5);
+	EXPECT_EQ(now[1 + name.size()], 6);
 	const auto back = CKeyframeMap::LoadFromBytes(now.data(), now.size());
 	EXPECT_TRUE(back->options == m->options);
 	EXPECT_EQ(bytesOf(*back), now);
@@ -408,7 +408,7 @@ TEST(MapFormat, Version1MapsStillLoad)
 
 // tests/golden/CKeyframeMap_v2.bin: the format-test map as version 2 wrote it
 // (checksums of the bytes alone). It loads, to the content the current
-// golden file (version 5) holds.
+// golden file (version 6) holds.
 TEST(MapFormat, Version2MapsStillLoad)
 {
 	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
@@ -416,7 +416,7 @@ TEST(MapFormat, Version2MapsStillLoad)
 	const std::string name = "shadyloc::CKeyframeMap";
 	ASSERT_GT(v2.size(), 2 + name.size());
 	ASSERT_EQ(v2[1 + name.size()], 2) << "the fixture is not a version 2 map";
-	ASSERT_EQ(now[1 + name.size()], 5);
+	ASSERT_EQ(now[1 + name.size()], 6);
 	const auto m = CKeyframeMap::LoadFromBytes(v2.data(), v2.size(), "CKeyframeMap_v2.bin");
 	EXPECT_EQ(bytesOf(*m), now);
 }
@@ -457,6 +457,70 @@ TEST(MapFormat, Version4MapsLoadAsAnchoredRunsWithoutLinks)
 	for (uint16_t r = 0; r < m->runs().size(); r++) EXPECT_TRUE(m->runAnchored(r));
 	EXPECT_TRUE(m->links().empty());
 	EXPECT_EQ(bytesOf(*m), now);
+}
+
+// tests/golden/CKeyframeMap_v5.bin: the format-test map as version 5 wrote
+// it, before landmark depths were refined by re-observations. It loads with
+// every depth the pair's (no disparity sigma), to the content the current
+// golden file holds.
+TEST(MapFormat, Version5MapsLoadWithThePairsDepths)
+{
+	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
+	const auto v5 = fileBytes(golden + "CKeyframeMap_v5.bin"), now = fileBytes(golden + "CKeyframeMap.bin");
+	const std::string name = "shadyloc::CKeyframeMap";
+	ASSERT_GT(v5.size(), 2 + name.size());
+	ASSERT_EQ(v5[1 + name.size()], 5) << "the fixture is not a version 5 map";
+	const auto m = CKeyframeMap::LoadFromBytes(v5.data(), v5.size(), "CKeyframeMap_v5.bin");
+	EXPECT_FALSE(m->options.depth_from_reobservations);
+	for (const auto& k : m->keyframes())
+		for (const auto& ch : k.channels)
+			for (const auto& meas : ch) EXPECT_EQ(meas.sigma_d, 0.f);
+	EXPECT_EQ(bytesOf(*m), now);
+}
+
+// Version 6 stores a refined disparity's sigma per landmark (1/128 px, rounded
+// up, with the disparity's own rounding to 1/16 px added): it comes back as
+// stored, the landmark's covariance follows it (the depth's variance
+// shrinks with it), and the map saves to the same bytes.
+TEST(MapFormat, RefinedDisparitySigmaRoundTrips)
+{
+	auto m = test::makeSyntheticMap(3, 4, 0);
+	auto kf = m->keyframe(0);
+	kf.id = 0;
+	const double qd2 = 1.0 / (16.0 * 16.0 * 12.0);
+	std::vector<double> set;
+	for (size_t j = 0; j < kf.channels[0].size(); j++)
+	{
+		kf.channels[0][j].sigma_d = j == 0 ? 0.f : static_cast<float>(0.01 + 0.05 * j);
+		set.push_back(kf.channels[0][j].sigma_d);
+	}
+	auto refined = CKeyframeMap::Create();
+	refined->options = m->options;
+	refined->setup(m->calibration(), m->imageWidth(), m->imageHeight(), m->channels());
+	for (const auto& r : m->runs()) refined->addRun(r);
+	refined->appendKeyframe(kf);
+	const auto& stored = refined->keyframe(0).channels[0];
+	ASSERT_EQ(stored.size(), set.size());
+	for (size_t j = 0; j < stored.size(); j++)
+	{
+		if (set[j] == 0)
+		{
+			EXPECT_EQ(stored[j].sigma_d, 0.f);
+			continue;
+		}
+		const double want = std::sqrt(set[j] * set[j] + qd2);
+		EXPECT_GE(stored[j].sigma_d, want - 1e-6);
+		EXPECT_LT(stored[j].sigma_d, want + 1.0 / 128);
+		EXPECT_LT(stored[j].cov(2, 2), m->keyframe(0).channels[0][j].cov(2, 2));
+	}
+	const auto b = bytesOf(*refined);
+	const auto back = CKeyframeMap::LoadFromBytes(b.data(), b.size());
+	for (size_t j = 0; j < stored.size(); j++)
+	{
+		EXPECT_EQ(back->keyframe(0).channels[0][j].sigma_d, stored[j].sigma_d);
+		EXPECT_TRUE(back->keyframe(0).channels[0][j].cov.isApprox(stored[j].cov, 1e-6));
+	}
+	EXPECT_EQ(bytesOf(*back), b);
 }
 
 TEST(MapFormat, DescriptorKindRoundTrips)

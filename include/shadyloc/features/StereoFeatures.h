@@ -66,6 +66,10 @@ struct TStereoMeasurement
 	/** Unit normal of the surface at P, facing the camera, in the left camera
 	 * frame; zero when unknown (SurfaceNormals.h: map keyframes only). */
 	Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+	/** Standard deviation of the true disparity where other views refined it
+	 * (map landmarks: geometry/LandmarkDepth.h) [px]; 0 = the pair's own,
+	 * sigma_px on each of uL, v, uR. */
+	float sigma_d = 0;
 };
 
 /** Stage times of one extraction [ms]. */

@@ -46,6 +46,10 @@ struct TStereoCorrespondence
 	 * two-view adjustment needs it. */
 	Eigen::Vector3d z_ref = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
 	TStereoCalib calib_ref;	 //!< the reference frame's calibration (of z_ref)
+	/** Standard deviation of z_ref's true disparity where other views refined
+	 * it [px] (TStereoCalib::measurementCovariance); 0 = sigma_px on each of
+	 * uL, v, uR as measured by the pair. */
+	double sigma_disparity_ref = 0;
 	Eigen::Vector3d z_curr;	 //!< measurement (uL, v, uR) in the current frame [px]
 	Eigen::Vector3d P_curr;	 //!< triangulation of z_curr in the current frame [m]
 

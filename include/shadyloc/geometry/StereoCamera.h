@@ -45,6 +45,15 @@ struct TStereoCalib
 	 * sigma_px on each of uL, v, uR: J diag(s^2) J^T. */
 	Eigen::Matrix3d triangulationCovariance(const Eigen::Matrix3d& J, double sigma_px) const;
 
+	/** Covariance of a point whose disparity was measured apart from its
+	 * pixel (a depth refined by other views, LandmarkDepth.h): uL and v with
+	 * noise sigma_px, the true disparity D with sigma_disparity_px, so uR =
+	 * uL + doffs - D. sigma_disparity_px <= 0 gives the isotropic form above. */
+	Eigen::Matrix3d triangulationCovariance(const Eigen::Matrix3d& J, double sigma_px, double sigma_disparity_px) const;
+
+	/** Covariance of a stereo measurement (uL, v, uR) under that model. */
+	static Eigen::Matrix3d measurementCovariance(double sigma_px, double sigma_disparity_px);
+
 	/** From a rectified MRPT stereo observation: left K, right cx, baseline =
 	 * |rightCameraPose.x|. Throws if the right camera is rotated or offset
 	 * other than along x (not rectified), naming the sensor. */

@@ -71,6 +71,14 @@ struct TKeyframeMapOptions : public mrpt::config::CLoadableOptions
 	/** Reobserved: landmarks re-found in fewer frames than this are dropped
 	 * even when the budget has room (0 = keep them as the budget allows). */
 	int min_reobservations = 0;
+	/** The depth of each kept landmark refined by the survey frames that
+	 * re-found it (geometry/LandmarkDepth.h), with its sigma: matters for a
+	 * live camera to the side of the survey's. */
+	bool depth_from_reobservations = true;
+	/** ... each re-observation's pixel noise [px] (the pair's is the
+	 * channel's sigma_px): calibrated against true depth on the simulator's
+	 * surveys (docs/map.md, "Depth from re-observations"). */
+	double reobservation_sigma_px = 1.25;
 	int selection_grid_cols = 8;  //!< buckets across the image for landmark selection
 	int selection_grid_rows = 6;  //!< buckets down the image
 	/** Bits kept of each pixel of the stored patches, 1..8: the low bits are

@@ -16,6 +16,7 @@
 
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/filters/CObservationFilter.h>
+#include <shadyloc/geometry/LandmarkDepth.h>
 #include <shadyloc/map/CKeyframeMap.h>
 #include <shadyloc/vo/StereoVO.h>
 
@@ -76,6 +77,13 @@ std::vector<int> countReobservations(
 	const std::vector<features::TStereoMeasurement>& landmarks, const geometry::TStereoCalib& calib,
 	const std::vector<TReobservingFrame>& frames, const TReobservationMatching& m);
 
+/** Per landmark, each re-observation that countReobservations counts: the
+ * frame's solved pose relative to the keyframe (with its covariance) and
+ * the landmark's measurement there, for the depth refinement. */
+std::vector<std::vector<geometry::TDepthObservation>> findReobservations(
+	const std::vector<features::TStereoMeasurement>& landmarks, const geometry::TStereoCalib& calib,
+	const std::vector<TReobservingFrame>& frames, const TReobservationMatching& m);
+
 /** Builds a map from a survey run, one frame at a time:
  *
  *     for each frame:  offer(res, ...)              every frame, tracked or not
@@ -113,8 +121,11 @@ class SurveyBuilder : public mrpt::system::COutputLogger
 	void bridge(const geometry::TPoseWithCov& T_last_f);
 	size_t bridged() const { return m_bridged; }  //!< breaks bridged by bridge()
 
-	/** Whether the builder needs every tracked frame's measurements (addFrame). */
+	/** Whether the builder needs every tracked frame's measurements (addFrame):
+	 * to score landmarks or to refine their depth. */
 	bool needsFrames() const;
+	/** Whether landmarks are thinned by their re-observation count. */
+	bool scoresLandmarks() const;
 	/** The frame last offered (tracked), every channel's measurements in the
 	 * map's channel order, for re-observation; ignored when !needsFrames()
 	 * or the frame was not tracked. */
@@ -134,6 +145,9 @@ class SurveyBuilder : public mrpt::system::COutputLogger
 	size_t breaks() const { return m_breaks; }	//!< VO breaks seen (new segments)
 	/** Mean re-observations per kept landmark, per channel (reobserved only). */
 	std::vector<double> meanKeptReobservations() const;
+	/** Per channel: the share of kept landmarks whose depth the re-observations
+	 * refined (TKeyframeMapOptions::depth_from_reobservations). */
+	std::vector<double> refinedDepthShare() const;
 
    private:
 	CKeyframeMap& m_map;
@@ -193,6 +207,7 @@ class SurveyBuilder : public mrpt::system::COutputLogger
 	};
 	std::vector<TWaiting> m_waiting;
 	std::vector<double> m_keptSum, m_keptCount;	 //!< per channel, for meanKeptReobservations
+	std::vector<double> m_refined;	//!< per channel, kept landmarks with a refined depth
 
 	void flush(bool all);
 	void append(TWaiting w);

@@ -49,6 +49,7 @@ struct TSurveyStats
 	/** Per channel: mean frames in which the kept landmarks were re-found
 	 * (empty unless landmarks are selected by re-observation). */
 	std::vector<double> meanKeptReobservations;
+	std::vector<double> refinedDepthShare;  //!< per channel: kept landmarks whose depth re-observations refined
 };
 
 class SurveyRun : public mrpt::system::COutputLogger
