@@ -60,6 +60,13 @@ uint8_t disparitySigmaCode(double sigma)
 	return static_cast<uint8_t>(std::clamp(std::ceil(sigma / kDisparitySigmaStep - 1e-9), 1.0, 255.0));
 }
 float disparitySigmaFromCode(uint8_t k) { return static_cast<float>(k * kDisparitySigmaStep); }
+/** A refined disparity's sigma with the stored disparity's rounding to
+ * 1/kPixelQuantum added (uniform: step^2 / 12); 0 stays 0 (the pair's model). */
+double withStorageRounding(double sigma)
+{
+	const double q = 1.0 / CKeyframeMap::kPixelQuantum;
+	return sigma > 0 ? std::sqrt(sigma * sigma + q * q / 12) : 0.0;
+}
 
 /** A unit normal as stored: each component times 127, rounded; (0, 0, 0) = unknown. */
 std::array<int8_t, 3> normalCode(const Eigen::Vector3f& n)
@@ -562,17 +569,13 @@ bool CKeyframeMap::quantise(features::TStereoMeasurement& m, const map::TChannel
 	m.zncc = static_cast<float>(std::clamp<long>(std::lround(m.zncc * 127.f), -127, 127)) / 127.f;
 	for (auto& p : m.patch) p = dequantisePixel(static_cast<uint8_t>(p >> (8 - options.patch_bits)), options.patch_bits);
 	if (!normalFromCode(normalCode(m.normal), m.normal)) m.normal.setZero();  // not unit: unknown
+	// As stored (idempotent: a stored sigma codes to itself); beyond the
+	// code's range the pair's own model, not a clipped sigma.
 	if (m.sigma_d > 0)
-	{
-		// The stored disparity is rounded to 1/kPixelQuantum: its variance adds.
-		const double qd = 1.0 / kPixelQuantum;
-		const double sd = std::sqrt(double(m.sigma_d) * m.sigma_d + qd * qd / 12);
-		// Beyond the code's range: the pair's own model, not a clipped sigma.
-		m.sigma_d = sd < 255 * kDisparitySigmaStep ? disparitySigmaFromCode(disparitySigmaCode(sd)) : 0.f;
-	}
+		m.sigma_d = m.sigma_d < 255 * kDisparitySigmaStep ? disparitySigmaFromCode(disparitySigmaCode(m.sigma_d)) : 0.f;
 	Eigen::Matrix3d J;
 	if (!m_calib.triangulate(m.uL, m.v, m.uR, m.P, &J)) return false;
-	m.cov = m_calib.triangulationCovariance(J, ch.sigma_px, m.sigma_d);
+	m.cov = m_calib.triangulationCovariance(J, ch.sigma_px, withStorageRounding(m.sigma_d));
 	return true;
 }
 
@@ -1077,7 +1080,7 @@ void CKeyframeMap::serializeFrom(mrpt::serialization::CArchive& in, uint8_t vers
 						Eigen::Matrix3d J;
 						if (!cal.triangulate(ms[j].uL, ms[j].v, ms[j].uR, ms[j].P, &J))
 							x.fail("keyframe " + std::to_string(i) + " measurement " + std::to_string(j) + " does not triangulate");
-						ms[j].cov = cal.triangulationCovariance(J, channels[c].sigma_px, ms[j].sigma_d);
+						ms[j].cov = cal.triangulationCovariance(J, channels[c].sigma_px, withStorageRounding(ms[j].sigma_d));
 					}
 				}
 				if (x.remaining()) x.fail(std::to_string(x.remaining()) + " bytes left over");

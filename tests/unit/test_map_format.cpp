@@ -508,9 +508,15 @@ TEST(MapFormat, RefinedDisparitySigmaRoundTrips)
 			EXPECT_EQ(stored[j].sigma_d, 0.f);
 			continue;
 		}
-		const double want = std::sqrt(set[j] * set[j] + qd2);
-		EXPECT_GE(stored[j].sigma_d, want - 1e-6);
-		EXPECT_LT(stored[j].sigma_d, want + 1.0 / 128);
+		// Rounded up to 1/128 px; the covariance adds the disparity's rounding.
+		EXPECT_GE(stored[j].sigma_d, set[j] - 1e-6);
+		EXPECT_LT(stored[j].sigma_d, set[j] + 1.0 / 128);
+		Eigen::Matrix3d J;
+		Eigen::Vector3d P;
+		ASSERT_TRUE(m->calibration().triangulate(stored[j].uL, stored[j].v, stored[j].uR, P, &J));
+		const double sd = std::sqrt(double(stored[j].sigma_d) * stored[j].sigma_d + qd2);
+		EXPECT_TRUE(stored[j].cov.isApprox(
+			m->calibration().triangulationCovariance(J, m->channels()[0].sigma_px, sd), 1e-9));
 		EXPECT_LT(stored[j].cov(2, 2), m->keyframe(0).channels[0][j].cov(2, 2));
 	}
 	const auto b = bytesOf(*refined);
@@ -521,6 +527,14 @@ TEST(MapFormat, RefinedDisparitySigmaRoundTrips)
 		EXPECT_TRUE(back->keyframe(0).channels[0][j].cov.isApprox(stored[j].cov, 1e-6));
 	}
 	EXPECT_EQ(bytesOf(*back), b);
+	// Appending a stored keyframe again (an experience copied into another
+	// map) keeps its sigmas as they are.
+	auto again = CKeyframeMap::Create();
+	again->options = m->options;
+	again->setup(m->calibration(), m->imageWidth(), m->imageHeight(), m->channels());
+	for (const auto& r : m->runs()) again->addRun(r);
+	again->appendKeyframe(back->keyframe(0));
+	for (size_t j = 0; j < stored.size(); j++) EXPECT_EQ(again->keyframe(0).channels[0][j].sigma_d, stored[j].sigma_d);
 }
 
 TEST(MapFormat, DescriptorKindRoundTrips)
