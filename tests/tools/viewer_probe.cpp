@@ -1,8 +1,10 @@
 /* What RawLogViewer (MRPT 2.5.8) shows of a file, without a display: a plain
  * MRPT program that knows nothing of ShadyLoc. It loads plugin modules as
  * `RawLogViewer -l` does (mrpt::system::loadPluginModules), reads the file
- * into a CRawlog accepting any CSerializable (as the viewer's tree does:
- * other classes become etOther entries), then for each entry prints what
+ * into a CRawlog accepting any CSerializable (the viewer reads the objects
+ * itself and inserts each into its CRawlog; loadFromRawLogFile(file, true)
+ * reads the same way: other classes become etOther entries, an unknown
+ * class ends the read with MRPT's error), then for each entry prints what
  * the viewer's selection shows: the Stringifyable text (the viewer's
  * fallback for objects that are not observations or actions) and, for a
  * Visualizable, the objects getVisualization() puts in its 3D view.
