@@ -1451,7 +1451,39 @@ std::string CKeyframeMap::asString() const
 	if (options.landmark_selection == TKeyframeMapOptions::LandmarkSelection::Reobserved)
 		s << ": window " << options.reobservation_window_m << " m, radius " << options.reobservation_radius_px
 		  << " px, at least " << options.min_reobservations << " re-observations";
-	s << "), zstd level " << options.compression_level;
+	s << "), zstd level " << options.compression_level << "\n  " << drawingSummary();
+	return s.str();
+}
+
+// Said from the same predicates as getVisualizationInto, so a viewer's
+// user (RawLogViewer shows asString beside the 3D view) knows what is and
+// is not drawn, and where.
+std::string CKeyframeMap::drawingSummary() const
+{
+	std::ostringstream s;
+	s << "drawing: ";
+	if (!genericMapParams.enableSaveAs3DObject || m_keyframes.empty())
+		return s.str() + "nothing (" + (m_keyframes.empty() ? "no keyframes" : "enableSaveAs3DObject is off") + ")";
+	size_t drawn = 0, landmarks = 0;
+	for (const auto& k : m_keyframes)
+	{
+		if (m_runFrame[k.run] != 0) continue;
+		drawn++;
+		if (options.draw_landmarks)
+			for (const auto& ch : k.channels)
+				for (const auto& m : ch) landmarks += m.P.z() <= options.draw_landmark_max_depth_m;
+	}
+	s << "in the map frame (the first keyframe's left camera: x right, y down, "
+	  << "z forward, origin at that camera), the keyframe chain of " << drawn
+	  << " keyframes as a ribbon in the road plane (blue measured, orange predicted), a chevron at most every "
+	  << options.draw_frame_every_m << " m; ";
+	if (options.draw_landmarks)
+		s << landmarks << " landmarks within " << options.draw_landmark_max_depth_m
+		  << " m of their keyframe, coloured by channel";
+	else
+		s << "landmarks not drawn (draw_landmarks off)";
+	if (drawn < m_keyframes.size())
+		s << "; " << m_keyframes.size() - drawn << " keyframes in frames of their own not drawn";
 	return s.str();
 }
 

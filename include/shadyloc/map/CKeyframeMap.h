@@ -254,7 +254,12 @@ class CKeyframeMap : public mrpt::maps::CMetricMap, public map::KeyframeQueries
 	static constexpr mrpt::img::TColor kDrawColourMeasured{70, 120, 230};
 	static constexpr mrpt::img::TColor kDrawColourPredicted{235, 140, 30};
 	static mrpt::img::TColor drawColourOfChannel(size_t c);
+	/** The summary (map-info prints it), ending with drawingSummary(). */
 	std::string asString() const override;
+	/** One line: what getVisualizationInto draws of this map and in which
+	 * frame (landmarks only with draw_landmarks; experiences in frames of
+	 * their own left out). */
+	std::string drawingSummary() const;
 
 	// Virtuals that make no sense for a keyframe map: they throw, naming the class.
 	void determineMatching2D(
