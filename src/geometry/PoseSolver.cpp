@@ -151,24 +151,26 @@ TRansacResult ransacStereoPose(
 	// LO-RANSAC, DAGM 2003: a minimal 3D-3D set is noisy, far points' depths
 	// are poor) on the image residuals of its inliers (Gauss-Newton, or the
 	// two-view bundle adjustment with two_view_ba).
+	// f: the inliers of the hypothesis being considered, f2 of its refinement.
+	std::vector<uint8_t> f(c.size(), 0), f2(c.size(), 0);
 	auto consider = [&](Eigen::Isometry3d T, int it) {
-		int k = countInliers(calib, c, T, o.inlier_threshold_px, nullptr);
+		int k = countInliers(calib, c, T, o.inlier_threshold_px, &f);
 		if (score(T, k) > bestScore && k >= 6)
 		{
 			for (int lo = 0; lo < 2; lo++)
 			{
-				std::vector<uint8_t> f(c.size(), 0);
-				countInliers(calib, c, T, o.inlier_threshold_px, &f);
 				TPoseSolverOptions so;
 				so.max_iterations = 4;
 				so.sigma_px = 1.0;
+				so.covariance = false;
 				const auto sol = o.two_view_ba ? solveStereoPoseTwoView(calib, c, f, T, so)
 												: solveStereoPose(calib, c, f, T, so);
 				if (!sol.ok) break;
-				const int k2 = countInliers(calib, c, sol.T_curr_ref, o.inlier_threshold_px, nullptr);
+				const int k2 = countInliers(calib, c, sol.T_curr_ref, o.inlier_threshold_px, &f2);
 				if (score(sol.T_curr_ref, k2) <= score(T, k)) break;
 				k = k2;
 				T = sol.T_curr_ref;
+				f.swap(f2);
 			}
 		}
 		if (score(T, k) <= bestScore) return;
@@ -283,6 +285,8 @@ TPoseSolution gaussNewton(const Eigen::Isometry3d& T_init, const TPoseSolverOpti
 		Vector6d g = Vector6d::Zero();
 		sumSq = 0;
 		used = 0;
+		// The last linearisation serves the covariance only.
+		if (it == o.max_iterations && !o.covariance) break;
 		accumulate(T, it, H, g, sumSq, used);
 		if (used < 3) return sol;
 		if (it == o.max_iterations) break;
@@ -291,6 +295,12 @@ TPoseSolution gaussNewton(const Eigen::Isometry3d& T_init, const TPoseSolverOpti
 		T = retractLeft(dx, T);
 		sol.iterations = it + 1;
 		if (dx.norm() < o.convergence) break;
+	}
+	if (!o.covariance)
+	{
+		sol.T_curr_ref = T;
+		sol.ok = true;
+		return sol;
 	}
 	// H is from the last linearisation (at the final T, or one step of size < convergence before it).
 	Eigen::FullPivLU<Matrix6d> lu(H);

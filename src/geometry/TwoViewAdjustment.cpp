@@ -195,6 +195,12 @@ TPoseSolution solveStereoPoseTwoView(
 		sol.iterations = it + 1;
 		if (!accepted || dxi.norm() < o.convergence) break;
 	}
+	if (!o.covariance)
+	{
+		sol.T_curr_ref = T;
+		sol.ok = true;
+		return sol;
+	}
 	// Covariance of the pose: inverse of its marginal information (the
 	// undamped Schur complement at the solution).
 	linearise();

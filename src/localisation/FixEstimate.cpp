@@ -89,6 +89,7 @@ Matrix6d bootstrapCovariance(
 		for (size_t k = 0; k < in.size(); k++) count[pick(rng)]++;
 	geometry::TPoseSolverOptions so = solverOptionsFor(o);
 	so.max_iterations = 5;
+	so.covariance = false;	// a resample's pose is all the spread needs
 	const Eigen::Isometry3d T_ref_curr = T_curr_ref.inverse();
 	// Every resample starts at the solve: its first linearisation is shared,
 	// and a resample is a count per inlier rather than a copied list.

@@ -477,3 +477,33 @@ TEST(GeometryPose, CountedSolveEqualsTheSolveOverTheRepeatedList)
 	}
 	EXPECT_THROW(solveStereoPoseCounted(calib(), c, std::vector<int>(3, 1), T, so), std::invalid_argument);
 }
+
+TEST(GeometryPose, PoseOnlySolveGivesTheSamePoseToTheBit)
+{
+	// RANSAC's local optimisation and the bootstrap's resamples use only the
+	// pose: without the covariance a solve must stop at the same pose, to the
+	// bit, whether it converges or runs out of iterations, in both solvers.
+	const Eigen::Isometry3d T = somePose();
+	Eigen::Isometry3d start = T;
+	start.translation() += Eigen::Vector3d(0.05, -0.02, 0.1);
+	for (const int iterations : {1, 2, 15})
+		for (const bool twoView : {false, true})
+		{
+			SCOPED_TRACE(std::to_string(iterations) + (twoView ? " iterations, two-view" : " iterations, one-view"));
+			const auto c = twoView ? makeTwoViewProblem(T, 60, 0.5, 4, 30, 21) : makeProblem(T, 60, 6, 0.5, 21);
+			TPoseSolverOptions full;
+			full.max_iterations = iterations;
+			TPoseSolverOptions poseOnly = full;
+			poseOnly.covariance = false;
+			const auto solve = twoView ? solveStereoPoseTwoView : solveStereoPose;
+			const auto a = solve(calib(), c, {}, start, full);
+			const auto b = solve(calib(), c, {}, start, poseOnly);
+			ASSERT_TRUE(a.ok);
+			ASSERT_TRUE(b.ok);
+			EXPECT_EQ(b.iterations, a.iterations);
+			EXPECT_TRUE(b.T_curr_ref.matrix() == a.T_curr_ref.matrix()) << b.T_curr_ref.matrix() - a.T_curr_ref.matrix();
+			// The pose-only solve says nothing about its covariance.
+			EXPECT_TRUE(b.cov_T_ref_curr.isIdentity(0));
+			if (iterations == 15) EXPECT_LT(transErr(b.T_curr_ref, T), 0.05);
+		}
+}

@@ -112,6 +112,10 @@ struct TPoseSolverOptions
 	double huber_k = 2.0;  //!< Huber threshold on the whitened residual norm [sigmas]
 	double convergence = 1e-7;	//!< stop when |dxi| falls below this
 	bool use_landmark_covariance = true;  //!< add the projected cov_ref to each residual's covariance
+	/** False where only the pose is used (RANSAC's local optimisation, the
+	 * bootstrap's resamples): the final linearisation, the covariance and
+	 * rms_px are skipped, and a solve whose steps stayed finite is ok. */
+	bool covariance = true;
 };
 
 /** Variances of one stereo measurement's (uL, v, uR), independent: sigma_px
