@@ -563,17 +563,17 @@ int acceptedBy(const std::string& summaryPath, const std::string& channel)
 // The must-show 1: replica RobotCar traversals (the default data's
 // noon and overcast, as raw mosaics) import, the noon replica surveys, and
 // the overcast replica localises against it; compared with the simulator's
-// own rawlogs of those frames. Measured (2-core VM): simulator 99.2 % true
-// coverage in map; replica with the SDK's bilinear demosaicing 93.5 %, with
-// edge-aware demosaicing 97.6 %, at half resolution 82.3 %; no false fixes.
-// With the joint localiser (tenth session, K = 3 for a new place): 98.4,
-// 98.4 and 91.9 %, no false fix; with K = 2 the bilinear run had one.
-// The 1-point target is not reached: the mosaic costs the invariant channel
-// most (115 accepted fixes on the simulator's rawlogs, 14 / 19 / 5 on the
-// replicas) and mono some (115 -> 97 / 110 / 87). The bounds below guard
-// those figures (docs/datasets.md). Needs the default dataset
-// (rawlogs/generated or the ctest fixture default_data; skipped without
-// either); about two minutes on two cores.
+// own rawlogs of those frames. Measured (2-core VM, seventeenth session):
+// 99.19 % true coverage in map with the simulator's rawlogs, with the
+// replicas' bilinear and edge-aware demosaicing alike, 95.16 % at half
+// resolution; no false fix. The mosaic still costs the invariant channel
+// most of its own fixes (122 accepted on the simulator's rawlogs, 18 / 18 /
+// 7 on the replicas); mono carries the frames (121 / 121 / 120 / 105). The
+// two full-resolution replicas must stay within the 1 point; half
+// resolution is guarded at its measured loss plus 2 points
+// (docs/datasets.md). Needs the default dataset (rawlogs/generated or the
+// ctest fixture default_data; skipped without either); about three minutes
+// on two cores.
 TEST(LocalisationRobotCarReplica, CoverageAgainstTheSimulatorsRawlogs)
 {
 	SHADYLOC_REQUIRE_DEFAULT_DATASET();
@@ -617,7 +617,7 @@ TEST(LocalisationRobotCarReplica, CoverageAgainstTheSimulatorsRawlogs)
 		EXPECT_EQ(groundTruthFigure(summary, "false_fixes"), 0.0) << s;
 	}
 	ASSERT_GT(coverage["sim"], 0.9);
-	EXPECT_GE(coverage["bilinear"], coverage["sim"] - 0.07);
-	EXPECT_GE(coverage["edge-aware"], coverage["sim"] - 0.025);
-	EXPECT_GE(coverage["half"], coverage["sim"] - 0.2);
+	EXPECT_GE(coverage["bilinear"], coverage["sim"] - 0.01);
+	EXPECT_GE(coverage["edge-aware"], coverage["sim"] - 0.01);
+	EXPECT_GE(coverage["half"], coverage["sim"] - 0.06);
 }
