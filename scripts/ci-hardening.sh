@@ -3,7 +3,7 @@
 #   1. sanitizer build: clang, AddressSanitizer + UndefinedBehaviorSanitizer
 #      (+ fuzzer-no-link coverage), tests, app and fuzz targets, in build-asan/
 #   2. sanitizer tests: the fast tests under the sanitizers
-#   3. fuzzing: each fuzz target for FUZZ_SECONDS (default 60) from seed
+#   3. fuzzing: each fuzz target for FUZZ_SECONDS (default 30) from seed
 #      corpora generated from the project's own data
 #   4. length bound: the rawlog target built without the bound must run into
 #      libFuzzer's -malloc_limit_mb within 60 s (the fuzzer reaches it)
@@ -13,7 +13,7 @@ set -euo pipefail
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="$here/build-asan"
 jobs="$(nproc 2>/dev/null || echo 2)"
-fuzz_seconds="${FUZZ_SECONDS:-60}"
+fuzz_seconds="${FUZZ_SECONDS:-30}"
 stages=("$@")
 [ ${#stages[@]} -gt 0 ] || stages=(sanitize-build sanitize-tests fuzz length-bound)
 
@@ -24,6 +24,7 @@ end() { echo "=== [stage] $1: $(( $(date +%s) - stage_start )) s"; }
 sanitize_build() {
 	begin "sanitizer build (clang, ASan+UBSan)"
 	CC=clang CXX=clang++ cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+		-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -gline-tables-only -DNDEBUG" \
 		-DSHADYLOC_SANITIZE=ON -DSHADYLOC_FUZZ=ON -DSHADYLOC_BUILD_BENCHMARKS=OFF >/dev/null
 	cmake --build "$build" -j "$jobs" --target shadyloc_tests shadyloc_app shadyloc_mrpt_plugin \
 		fuzz_rawlog fuzz_image fuzz_settings fuzz_tum fuzz_map fuzz_rawlog_nobound make_fuzz_seeds
