@@ -24,7 +24,6 @@ end() { echo "=== [stage] $1: $(( $(date +%s) - stage_start )) s"; }
 sanitize_build() {
 	begin "sanitizer build (clang, ASan+UBSan)"
 	CC=clang CXX=clang++ cmake -S "$here" -B "$build" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-		-DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O2 -gline-tables-only -DNDEBUG" \
 		-DSHADYLOC_SANITIZE=ON -DSHADYLOC_FUZZ=ON -DSHADYLOC_BUILD_BENCHMARKS=OFF >/dev/null
 	cmake --build "$build" -j "$jobs" --target shadyloc_tests shadyloc_app shadyloc_mrpt_plugin \
 		fuzz_rawlog fuzz_image fuzz_settings fuzz_tum fuzz_map fuzz_rawlog_nobound make_fuzz_seeds
