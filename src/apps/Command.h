@@ -1,5 +1,8 @@
 /* ShadyLoc command line: each subcommand lives in its own cmd_*.cpp and
- * registers itself here, so adding one touches no other file. */
+ * registers itself here, so adding one touches no other file. Each file keeps
+ * its code in a namespace named after it (cmd_eval, ...), not an anonymous
+ * one: a unity build compiles several files together, and their run() and
+ * reg must stay apart. */
 #pragma once
 
 #include <functional>

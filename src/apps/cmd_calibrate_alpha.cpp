@@ -28,7 +28,7 @@
 namespace fs = std::filesystem;
 using namespace shadyloc::image;
 
-namespace
+namespace cmd_calibrate_alpha
 {
 cv::Mat readColour(const std::string& path)
 {
@@ -675,4 +675,4 @@ shadyloc::apps::RegisterCommand reg(
 	"calibrate-alpha",
 	{"alpha (beta = 1 - alpha) and the 8-bit mapping of the invariant from data (--pairs/--same-view/--images/--rawlog)",
 	 run});
-}  // namespace
+}  // namespace cmd_calibrate_alpha

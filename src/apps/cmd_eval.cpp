@@ -20,7 +20,7 @@
 
 #include "shadyloc_commit.h"  // SHADYLOC_GIT_COMMIT, written at build time (cmake/WriteCommit.cmake)
 
-namespace
+namespace cmd_eval
 {
 using namespace shadyloc;
 namespace fs = std::filesystem;
@@ -146,4 +146,4 @@ shadyloc::apps::RegisterCommand reg(
 	{"leave-one-out evaluation over N runs, Table I (--runs RUNS.txt -o OUTDIR [-c ini]... [--control ini] [-j N] "
 	 "[--plan | --job K | --merge])",
 	 run});
-}  // namespace
+}  // namespace cmd_eval

@@ -8,7 +8,7 @@
 #include <cstring>
 #include <iostream>
 
-namespace
+namespace cmd_export
 {
 using namespace shadyloc::datasets;
 
@@ -71,4 +71,4 @@ int run(int argc, char** argv)
 
 shadyloc::apps::RegisterCommand reg(
 	"export", {"stereo rawlog -> KITTI odometry layout (export kitti --help)", run});
-}  // namespace
+}  // namespace cmd_export

@@ -13,7 +13,7 @@
 #include <filesystem>
 #include <iostream>
 
-namespace
+namespace cmd_figures
 {
 using namespace shadyloc;
 namespace fs = std::filesystem;
@@ -189,4 +189,4 @@ int run(int argc, char** argv)
 
 apps::RegisterCommand reg(
 	"figures", {"the paper's Figures 7-9 as PNG from localise outputs (-p LIVE,MAP,BASE_DIR,COMB_DIR ... -o DIR)", run});
-}  // namespace
+}  // namespace cmd_figures

@@ -7,7 +7,7 @@
 
 #include <iostream>
 
-namespace
+namespace cmd_filter
 {
 int run(int argc, char** argv)
 {
@@ -38,4 +38,4 @@ int run(int argc, char** argv)
 }
 shadyloc::apps::RegisterCommand reg(
 	"filter", {"derive mono/invariant channels in a rawlog (-i in -o out [-c ini])", run});
-}  // namespace
+}  // namespace cmd_filter

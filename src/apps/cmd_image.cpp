@@ -15,7 +15,7 @@
 #include <optional>
 #include <iostream>
 
-namespace
+namespace cmd_image
 {
 int run(int argc, char** argv)
 {
@@ -157,4 +157,4 @@ int run(int argc, char** argv)
 	return 0;
 }
 shadyloc::apps::RegisterCommand reg("image", {"one image file -> mono or invariant image file", run});
-}  // namespace
+}  // namespace cmd_image

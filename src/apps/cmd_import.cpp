@@ -15,7 +15,7 @@
 #include <iostream>
 #include <memory>
 
-namespace
+namespace cmd_import
 {
 using namespace shadyloc::datasets;
 
@@ -272,4 +272,4 @@ int run(int argc, char** argv)
 
 shadyloc::apps::RegisterCommand reg(
 	"import", {"KITTI / Middlebury / image folders / RobotCar -> stereo rawlog (import <kind> --help)", run});
-}  // namespace
+}  // namespace cmd_import

@@ -29,7 +29,7 @@
 
 #include "shadyloc_commit.h"  // SHADYLOC_GIT_COMMIT, written at build time (cmake/WriteCommit.cmake)
 
-namespace
+namespace cmd_localise
 {
 using namespace shadyloc;
 using namespace shadyloc::localisation;
@@ -442,4 +442,4 @@ shadyloc::apps::RegisterCommand reg(
 	 "[--localisers mono,invariant] [--view N [--view-images]] [--gif OUT.gif [--gif-every N] [--gif-fps F]] "
 	 "[--learn OUT.kfmap])",
 	 run});
-}  // namespace
+}  // namespace cmd_localise

@@ -11,7 +11,7 @@
 #include <iomanip>
 #include <iostream>
 
-namespace
+namespace cmd_map_info
 {
 using namespace shadyloc;
 
@@ -80,4 +80,4 @@ int run(int argc, char** argv)
 	return 0;
 }
 shadyloc::apps::RegisterCommand reg("map-info", {"summary of a keyframe map (map-info map.kfmap [-k] [--strip-gt OUT.kfmap])", run});
-}  // namespace
+}  // namespace cmd_map_info

@@ -24,7 +24,7 @@
 #include <iostream>
 #include <sstream>
 
-namespace
+namespace cmd_render
 {
 using namespace shadyloc;
 
@@ -346,4 +346,4 @@ int runOldName(int argc, char** argv)
 shadyloc::apps::RegisterCommand reg(
 	"render", {"top-down PNG of trajectories and keyframe maps, offscreen (-t traj.tum -m map.kfmap -o out.png)", run});
 shadyloc::apps::RegisterCommand regOld("render-traj", {"old name of `render` (deprecated)", runOldName});
-}  // namespace
+}  // namespace cmd_render

@@ -20,7 +20,7 @@
 
 namespace fs = std::filesystem;
 
-namespace
+namespace cmd_sim
 {
 /** Collects a few frames of one traversal and lays them out on one image. */
 class ContactSheet
@@ -248,4 +248,4 @@ int run(int argc, char** argv)
 }
 shadyloc::apps::RegisterCommand reg(
 	"sim", {"render simulated stereo traversals under different lighting (-c sim.ini -o dir)", run});
-}  // namespace
+}  // namespace cmd_sim

@@ -28,7 +28,7 @@
 #include <iostream>
 #include <optional>
 
-namespace
+namespace cmd_survey
 {
 using namespace shadyloc;
 
@@ -263,4 +263,4 @@ shadyloc::apps::RegisterCommand reg(
 	"survey", {"dual-channel keyframe map from a survey run (-i run.rawlog -o map.kfmap [-c ini] [--gt run.tum]); "
 			   "--append MAP adds the run to MAP as a new experience",
 			   run});
-}  // namespace
+}  // namespace cmd_survey

@@ -8,7 +8,7 @@
 
 #include <iostream>
 
-namespace
+namespace cmd_traj_error
 {
 int run(int argc, char** argv)
 {
@@ -35,4 +35,4 @@ int run(int argc, char** argv)
 }
 shadyloc::apps::RegisterCommand reg(
 	"traj-error", {"ATE/RPE/KITTI-style drift of a TUM trajectory (--gt gt.tum --est traj.tum)", run});
-}  // namespace
+}  // namespace cmd_traj_error

@@ -18,7 +18,7 @@
 #include <iomanip>
 #include <iostream>
 
-namespace
+namespace cmd_vo
 {
 using namespace shadyloc;
 
@@ -177,4 +177,4 @@ int run(int argc, char** argv)
 shadyloc::apps::RegisterCommand reg(
 	"vo", {"stereo VO on one channel (-i run.rawlog --channel mono|invariant -o traj.tum [-c ini] [--stats csv])",
 			  run});
-}  // namespace
+}  // namespace cmd_vo

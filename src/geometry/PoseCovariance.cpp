@@ -4,6 +4,8 @@
 #include <mrpt/math/CMatrixFixed.h>
 #include <mrpt/poses/CPose3D.h>
 
+#include "Skew.h"
+
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
@@ -15,16 +17,6 @@
 
 namespace shadyloc::geometry
 {
-namespace
-{
-Eigen::Matrix3d skew(const Eigen::Vector3d& v)
-{
-	Eigen::Matrix3d S;
-	S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-	return S;
-}
-}  // namespace
-
 Vector6d localLeft(const Eigen::Isometry3d& T, const Eigen::Isometry3d& T0)
 {
 	// T = (exp([phi]x) R0, exp([phi]x) t0 + rho)

@@ -1,6 +1,8 @@
 /* ShadyLoc — stereo pose: 3-point RANSAC and robust Gauss-Newton. */
 #include <shadyloc/geometry/PoseSolver.h>
 
+#include "Skew.h"
+
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 #include <Eigen/SVD>
@@ -14,12 +16,6 @@ namespace shadyloc::geometry
 {
 namespace
 {
-Eigen::Matrix3d skew(const Eigen::Vector3d& v)
-{
-	Eigen::Matrix3d S;
-	S << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
-	return S;
-}
 Eigen::Matrix3d expSO3(const Eigen::Vector3d& phi)
 {
 	const double a = phi.norm();

@@ -29,17 +29,12 @@ void requireColour8(const cv::Mat& m, const char* what)
 			std::string(what) + ": expected an 8-bit 3-channel colour image, got " +
 			std::to_string(m.channels()) + " channel(s), depth " + std::to_string(m.depth()));
 }
-
-// Channel indices of blue (R1), green (R2), red (R3) in memory.
-struct ChannelIdx
-{
-	int b, g, r;
-};
-ChannelIdx indices(ChannelOrder o)
-{
-	return o == ChannelOrder::BGR ? ChannelIdx{0, 1, 2} : ChannelIdx{2, 1, 0};
-}
 }  // namespace
+
+ChannelIndices channelIndices(ChannelOrder o)
+{
+	return o == ChannelOrder::BGR ? ChannelIndices{0, 1, 2} : ChannelIndices{2, 1, 0};
+}
 
 ChannelOrder parseChannelOrder(const std::string& s)
 {
@@ -182,7 +177,7 @@ cv::Mat referenceFloatOfChromaInput(const cv::Mat& colour8In, const InvariantPar
 	requireColour8(colour8In, "invariant (reference)");
 	p.validate();
 	const cv::Mat colour8 = chromaInput(colour8In, p);
-	const auto ci = indices(p.order);
+	const auto ci = channelIndices(p.order);
 	cv::Mat out(colour8.size(), CV_32F);
 	for (int y = 0; y < colour8.rows; y++)
 	{
@@ -227,7 +222,7 @@ cv::Mat invariantReference8(const cv::Mat& colour8, const InvariantParams& p)
 void invariantNaive8(const cv::Mat& colour8, cv::Mat& out8, const InvariantParams& p)
 {
 	requireColour8(colour8, "invariant (naive)");
-	const auto ci = indices(p.order);
+	const auto ci = channelIndices(p.order);
 	out8.create(colour8.size(), CV_8U);
 	const float a = float(p.alpha), b = float(p.beta);
 	const float zero = float(InvariantParams::kZeroCode);
@@ -280,7 +275,7 @@ InvariantTransform::InvariantTransform(const InvariantParams& p) : m_params(p)
 template <bool CompressedTails>
 void InvariantTransform::applyRows(const cv::Mat& colour8, cv::Mat& out8) const
 {
-	const auto ci = indices(m_params.order);
+	const auto ci = channelIndices(m_params.order);
 	const int cols = colour8.cols;
 	for (int y = 0; y < colour8.rows; y++)
 	{

@@ -26,12 +26,6 @@ namespace
 // the 8-bit channel.
 constexpr double kGreyPerLog = 255.0;
 
-struct Idx
-{
-	int b, g, r;
-};
-Idx indices(ChannelOrder o) { return o == ChannelOrder::BGR ? Idx{0, 1, 2} : Idx{2, 1, 0}; }
-
 std::array<float, 256> logTable(const TCalibrationInput& in)
 {
 	std::array<float, 256> t{};
@@ -57,7 +51,7 @@ bool trusted(const uint8_t* px, const TCalibrationInput& in)
 
 /** One point's log-chromaticities under both lights: pixel a, then pixel b. */
 void addChange(
-	TChromaChanges& it, const uint8_t* a, const uint8_t* b, const std::array<float, 256>& L, const Idx& ci)
+	TChromaChanges& it, const uint8_t* a, const uint8_t* b, const std::array<float, 256>& L, const ChannelIndices& ci)
 {
 	it.xa.push_back(L[a[ci.b]] - L[a[ci.r]]), it.ya.push_back(L[a[ci.g]] - L[a[ci.r]]);
 	it.xb.push_back(L[b[ci.b]] - L[b[ci.r]]), it.yb.push_back(L[b[ci.g]] - L[b[ci.r]]);
@@ -265,7 +259,7 @@ TAlphaCurve alphaFromShadowPairs(
 							 : "relative shadow step (mean over pairs)";
 	out.alpha = s.grid();
 	const auto L = logTable(in);
-	const auto ci = indices(in.order);
+	const auto ci = channelIndices(in.order);
 	std::vector<std::vector<double>> perPair;
 	for (const auto& p : pairs)
 	{
@@ -319,7 +313,7 @@ TChromaSamples chromaSamples(const std::vector<cv::Mat>& images, const TCalibrat
 {
 	in.validate();
 	const auto L = logTable(in);
-	const auto ci = indices(in.order);
+	const auto ci = channelIndices(in.order);
 	TChromaSamples out;
 	out.imageStart.push_back(0);
 	for (size_t k = 0; k < images.size(); k++)
@@ -476,7 +470,7 @@ TEdgeSamples edgeSamples(const std::vector<cv::Mat>& images, const TCalibrationI
 	in.validate();
 	if (separation < 1 || separation > 64) throw std::invalid_argument("edge samples: separation must be in [1,64] px");
 	const auto L = logTable(in);
-	const auto ci = indices(in.order);
+	const auto ci = channelIndices(in.order);
 	const float minEdge = float(minLogEdge);
 	TEdgeSamples out;
 	out.imageStart.push_back(0);
@@ -641,7 +635,7 @@ TAlphaCurve alphaFromSameView(
 {
 	in.validate();
 	const auto L = logTable(in);
-	const auto ci = indices(in.order);
+	const auto ci = channelIndices(in.order);
 	std::vector<TChromaChanges> items;
 	for (const auto& p : pairs)
 	{
@@ -768,7 +762,7 @@ std::vector<TChromaChanges> correspondencesAcrossRuns(
 		cb.push_back(orbOf(grey, *coarseOrb));
 	}
 	const auto L = logTable(in);
-	const auto ci = indices(in.order);
+	const auto ci = channelIndices(in.order);
 	std::vector<TChromaChanges> items;
 	for (size_t i = 0; i < runA.size(); i++)
 	{
@@ -848,7 +842,7 @@ std::vector<float> invariantValues(const std::vector<cv::Mat>& images, const Inv
 	if (stride < 1) throw std::invalid_argument("mapping: stride must be >= 1");
 	std::array<float, 256> L{};
 	for (int v = 0; v < 256; v++) L[v] = float(std::log(linearise(v, p.linearisation, p.gamma)));
-	const auto ci = indices(p.order);
+	const auto ci = channelIndices(p.order);
 	const float a = float(p.alpha), b = float(p.beta);
 	std::vector<float> out;
 	for (size_t k = 0; k < images.size(); k++)

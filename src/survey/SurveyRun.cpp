@@ -16,17 +16,15 @@
 
 namespace shadyloc::survey
 {
-namespace
-{
 /** One channel of the survey: the filter that makes it and its feature
- * extractor (its frames come from the survey's one frame source). */
+ * extractor (its frames come from the survey's one frame source). Not in an
+ * anonymous namespace: SurveyRun::TImpl holds it. */
 struct TSurveyChannel
 {
 	filters::TChannel channel;
 	features::StereoFeatureExtractor extractor;
 	map::TChannelParams params;	 //!< what the map records
 };
-}  // namespace
 
 struct SurveyRun::TImpl
 {

@@ -46,6 +46,13 @@ enum class ChannelOrder
 	RGB
 };
 
+/** Where blue (R1), green (R2) and red (R3) sit in a pixel of one order. */
+struct ChannelIndices
+{
+	int b, g, r;
+};
+ChannelIndices channelIndices(ChannelOrder o);
+
 /** How encoded pixel values map back to linear sensor response before logs. */
 enum class Linearisation
 {
