@@ -3,6 +3,7 @@
 
 #include "TestSupport.h"
 
+#include <shadyloc/core/Units.h>
 #include <shadyloc/io/AtomicFile.h>
 #include <shadyloc/sim/SyntheticCorridor.h>
 
@@ -136,6 +137,22 @@ TStereoSequence readSimDir(const std::string& dir, const std::string& traversal)
 	return s;
 }
 }  // namespace
+
+Eigen::Isometry3d corridorPose(double z, double x, double yawDeg)
+{
+	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+	T.linear() = Eigen::AngleAxisd(yawDeg * core::kDeg, Eigen::Vector3d::UnitY()).toRotationMatrix();
+	T.translation() = Eigen::Vector3d(x, 0.1, z);
+	return T;
+}
+
+sim::TSimOptions smallSimOptions(int w, int h)
+{
+	auto o = sim::TSimOptions::FromFile(sourcePath("config/sim.ini"));
+	o.camera.width = w;
+	o.camera.height = h;
+	return o;
+}
 
 std::string fixtureDir()
 {

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <shadyloc/geometry/StereoCamera.h>
+#include <shadyloc/sim/SimOptions.h>
 
 #include <Eigen/Geometry>
 #include <opencv2/core/mat.hpp>
@@ -26,6 +27,14 @@ struct TStereoSequence
 	std::vector<double> t;	//!< timestamps [s]
 	std::vector<Eigen::Isometry3d> T_world_left;  //!< ground truth: left camera in the world
 };
+
+/** A pose in the synthetic corridor: `z` metres in, `x` to the side, 0.1 m
+ * up, turned `yawDeg` about the vertical (y) axis. */
+Eigen::Isometry3d corridorPose(double z, double x, double yawDeg = 0);
+
+/** The shipped simulator config (config/sim.ini), its camera shrunk to w x h
+ * for speed. */
+sim::TSimOptions smallSimOptions(int w = 160, int h = 120);
 
 /** SHADYLOC_FIXTURE_DIR, or "" outside ctest. */
 std::string fixtureDir();

@@ -8,9 +8,13 @@
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <opencv2/core.hpp>
+
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 #include <random>
 
@@ -94,6 +98,69 @@ std::string fileContents(const std::string& path)
 	return s.str();
 }
 
+void writeFileContents(const std::string& path, const std::string& contents)
+{
+	std::ofstream f(path, std::ios::binary | std::ios::trunc);
+	f << contents;
+}
+
+Bytes fileBytes(const std::string& path)
+{
+	std::ifstream f(path, std::ios::binary);
+	return Bytes(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+}
+
+void writeBytes(const std::string& path, const Bytes& b)
+{
+	std::ofstream f(path, std::ios::binary | std::ios::trunc);
+	f.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
+}
+
+std::map<std::string, std::string> snapshot(const std::string& path)
+{
+	std::map<std::string, std::string> s;
+	if (fs::is_regular_file(path)) s["."] = fileContents(path);
+	else if (fs::is_directory(path))
+		for (const auto& e : fs::recursive_directory_iterator(path))
+			if (e.is_regular_file()) s[fs::relative(e.path(), path).string()] = fileContents(e.path().string());
+	return s;
+}
+
+bool updatingGolden()
+{
+	const char* e = std::getenv("SHADYLOC_UPDATE_GOLDEN");
+	return e && *e && std::string(e) != "0";
+}
+
+std::string errorOf(const std::function<void()>& f)
+{
+	try
+	{
+		f();
+	}
+	catch (const std::exception& e)
+	{
+		return e.what();
+	}
+	return "";
+}
+
+bool samePixels(const cv::Mat& a, const cv::Mat& b)
+{
+	return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
+}
+
+geometry::TStereoCalib stereoCalib()
+{
+	geometry::TStereoCalib c;
+	c.fx = c.fy = 400;
+	c.cx = 256;
+	c.cy = 192;
+	c.cxR = 256;
+	c.baseline = 0.12;
+	return c;
+}
+
 std::string defaultDatasetDir()
 {
 	auto complete = [](const std::string& dir) {
@@ -119,6 +186,7 @@ std::string appPath()
 	return other && *other ? other : SHADYLOC_APP;
 }
 std::string pluginPath() { return SHADYLOC_PLUGIN; }
+std::string sourcePath(const std::string& rel) { return std::string(SHADYLOC_SOURCE_DIR) + "/" + rel; }
 
 mrpt::obs::CObservationStereoImages stereoObservation(
 	const cv::Mat& left, const cv::Mat& right, const geometry::TStereoCalib& c, double timestamp,
@@ -183,13 +251,13 @@ mrpt::obs::CObservationStereoImages::Ptr syntheticStereoFrame(int frame, int w, 
 	return obs;
 }
 
-void writeSyntheticRawlog(const std::string& path, int n, bool sensoryFrames)
+void writeSyntheticRawlog(const std::string& path, int n, bool sensoryFrames, int w, int h)
 {
 	mrpt::io::CFileGZOutputStream f(path);
 	auto arch = mrpt::serialization::archiveFrom(f);
 	for (int i = 0; i < n; i++)
 	{
-		auto obs = syntheticStereoFrame(i);
+		auto obs = syntheticStereoFrame(i, w, h);
 		if (sensoryFrames)
 		{
 			mrpt::obs::CActionCollection acts;

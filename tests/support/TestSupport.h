@@ -1,4 +1,11 @@
-/* ShadyLoc tests: paths, shared data, temporary directories, small rawlogs. */
+/* ShadyLoc tests: paths, shared data, temporary directories, small rawlogs,
+ * and the small helpers several test files need.
+ *
+ * The test sources must also compile as one translation unit (CMake's unity
+ * build, CMAKE_UNITY_BUILD), where every file's anonymous namespace is one
+ * namespace and a using-directive reaches the files after it: a helper two
+ * files need lives here, once; a file's own helper has a name no other test
+ * file uses. */
 #pragma once
 
 #include <gtest/gtest.h>
@@ -9,7 +16,10 @@
 
 #include <opencv2/core/mat.hpp>
 
+#include <cstdint>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -54,7 +64,35 @@ std::string appPath();	  //!< the built `shadyloc` executable
 int spawnApp(const std::vector<std::string>& args, const std::string& log);
 /** The whole file as bytes ("" when it cannot be read). */
 std::string fileContents(const std::string& path);
+/** Writes `contents` as the whole file (binary, replacing it). */
+void writeFileContents(const std::string& path, const std::string& contents);
 std::string pluginPath();  //!< the built MRPT plugin module
+/** SHADYLOC_SOURCE_DIR + "/" + rel: a file of the checkout (config/sim.ini). */
+std::string sourcePath(const std::string& rel);
+
+using Bytes = std::vector<uint8_t>;
+/** The whole file as bytes (none when it cannot be read). */
+Bytes fileBytes(const std::string& path);
+/** Writes `b` as the whole file (binary, replacing it). */
+void writeBytes(const std::string& path, const Bytes& b);
+
+/** Every regular file under the folder `path` (relative name -> contents);
+ * a regular file alone as ".", nothing when `path` does not exist. */
+std::map<std::string, std::string> snapshot(const std::string& path);
+
+/** SHADYLOC_UPDATE_GOLDEN is set (and not "0"): tests rewrite their golden
+ * files instead of comparing with them. */
+bool updatingGolden();
+
+/** The message of the std::exception `f` throws, "" when it throws none. */
+std::string errorOf(const std::function<void()>& f);
+
+/** Same size, type and every pixel value. */
+bool samePixels(const cv::Mat& a, const cv::Mat& b);
+
+/** A rectified 512x384 stereo camera: fx = fy = 400 px, principal point
+ * (256, 192) in both images, baseline 0.12 m. */
+geometry::TStereoCalib stereoCalib();
 
 /** Every stereo observation of a rawlog (both styles), external images
  * loaded, read through the project's checked reader. */
@@ -70,8 +108,8 @@ mrpt::obs::CObservationStereoImages stereoObservation(
  * (sky-lit: dimmer and bluer) that moves with `frame`. */
 mrpt::obs::CObservationStereoImages::Ptr syntheticStereoFrame(int frame, int w = 160, int h = 120);
 
-/** Writes n synthetic frames as a rawlog; sensoryFrames selects the
+/** Writes n synthetic frames (w x h) as a rawlog; sensoryFrames selects the
  * action/sensory-frame style instead of bare observations. */
-void writeSyntheticRawlog(const std::string& path, int n, bool sensoryFrames);
+void writeSyntheticRawlog(const std::string& path, int n, bool sensoryFrames, int w = 160, int h = 120);
 
 }  // namespace shadyloc::test

@@ -23,7 +23,7 @@ namespace fs = std::filesystem;
 
 namespace
 {
-constexpr int kW = 64, kH = 40, kFrames = 5;
+constexpr int kW = 64, kH = 40, kKittiFrames = 5;
 
 // KITTI odometry sequence 00's colour projection matrices (fx, cx, cy and the
 // non-zero P[1][3], P[2][3] terms included), for an image of kW x kH.
@@ -38,7 +38,7 @@ std::vector<std::array<double, 12>> g_poses;
 
 /** A KITTI tree: random colour PNGs, calib.txt (P0..P3, Tr), times.txt,
  * poses/00.txt printed with `poseFmt`. */
-void makeKittiTree(const std::string& root, const char* poseFmt = "%.12e", int frames = kFrames)
+void makeKittiTree(const std::string& root, const char* poseFmt = "%.12e", int frames = kKittiFrames)
 {
 	const fs::path seq = fs::path(root) / "sequences" / "00";
 	fs::create_directories(seq / "image_2");
@@ -121,15 +121,6 @@ std::vector<std::string> readLines(const std::string& path)
 	return out;
 }
 
-
-bool samePixels(const cv::Mat& a, const cv::Mat& b)
-{
-	if (a.size() != b.size() || a.type() != b.type()) return false;
-	cv::Mat d;
-	cv::absdiff(a, b, d);
-	return cv::countNonZero(d.reshape(1)) == 0;
-}
-
 /** Nothing of a failed import may remain: rawlog, temporaries, images, ground truth. */
 void expectNoOutput(const std::string& out)
 {
@@ -196,17 +187,17 @@ TEST_P(DatasetsKittiRoundTrip, ImagesBitExactPosesToPrintPrecision)
 	imp.setMinLoggingLevel(mrpt::system::LVL_WARN);
 	imp.options.externalImages = external;
 	const auto res = imp.run(rootA, "00", rawlog);
-	ASSERT_EQ(res.frames, size_t(kFrames));
+	ASSERT_EQ(res.frames, size_t(kKittiFrames));
 	ASSERT_EQ(res.groundTruthPath, groundTruthPathFor(rawlog));
 	ASSERT_TRUE(fs::exists(res.groundTruthPath));
 	EXPECT_EQ(fs::is_directory(shadyloc::io::imagesDirFor(rawlog)), external);
 
 	// What the rawlog holds: calibration, baseline, timestamps, BGR images.
 	const auto obs = shadyloc::test::readStereoFrames(rawlog);
-	ASSERT_EQ(obs.size(), size_t(kFrames));
+	ASSERT_EQ(obs.size(), size_t(kKittiFrames));
 	const double t2x = (kP[2][3] - kP[2][2] * kP[2][11]) / kP[2][0];
 	const double t3x = (kP[3][3] - kP[3][2] * kP[3][11]) / kP[3][0];
-	for (int i = 0; i < kFrames; i++)
+	for (int i = 0; i < kKittiFrames; i++)
 	{
 		const auto& o = *obs[i];
 		EXPECT_EQ(o.sensorLabel, "CAMERA");
@@ -221,32 +212,32 @@ TEST_P(DatasetsKittiRoundTrip, ImagesBitExactPosesToPrintPrecision)
 		EXPECT_NEAR(mrpt::Clock::toDouble(o.timestamp), std::stod(readLines(rootA + "/sequences/00/times.txt")[i]), 5e-8);
 		char name[32];
 		std::snprintf(name, sizeof(name), "/%06d.png", i);
-		EXPECT_TRUE(samePixels(o.imageLeft.asCvMatRef(), cv::imread(rootA + "/sequences/00/image_2" + name)));
-		EXPECT_TRUE(samePixels(o.imageRight.asCvMatRef(), cv::imread(rootA + "/sequences/00/image_3" + name)));
+		EXPECT_TRUE(shadyloc::test::samePixels(o.imageLeft.asCvMatRef(), cv::imread(rootA + "/sequences/00/image_2" + name)));
+		EXPECT_TRUE(shadyloc::test::samePixels(o.imageRight.asCvMatRef(), cv::imread(rootA + "/sequences/00/image_3" + name)));
 	}
 
 	KittiExporter exp;
 	exp.setMinLoggingLevel(mrpt::system::LVL_WARN);
 	exp.options.groundTruthTum = res.groundTruthPath;
 	const auto er = exp.run(rawlog, rootB);
-	EXPECT_EQ(er.frames, size_t(kFrames));
+	EXPECT_EQ(er.frames, size_t(kKittiFrames));
 	EXPECT_TRUE(er.poses);
 
 	// Images: decoded pixels identical, same names.
 	for (const char* sub : {"image_2", "image_3"})
 	{
 		const auto a = readLines(rootA + "/sequences/00/times.txt");
-		for (int i = 0; i < kFrames; i++)
+		for (int i = 0; i < kKittiFrames; i++)
 		{
 			char name[32];
 			std::snprintf(name, sizeof(name), "/%s/%06d.png", sub, i);
 			const cv::Mat ia = cv::imread(rootA + "/sequences/00" + name, cv::IMREAD_UNCHANGED);
 			const cv::Mat ib = cv::imread(rootB + "/sequences/00" + name, cv::IMREAD_UNCHANGED);
 			ASSERT_FALSE(ib.empty()) << name;
-			EXPECT_TRUE(samePixels(ia, ib)) << name << " differs after the round trip";
+			EXPECT_TRUE(shadyloc::test::samePixels(ia, ib)) << name << " differs after the round trip";
 		}
 	}
-	EXPECT_FALSE(fs::exists(rootB + "/sequences/00/image_2/" + std::to_string(kFrames) + ".png"));
+	EXPECT_FALSE(fs::exists(rootB + "/sequences/00/image_2/" + std::to_string(kKittiFrames) + ".png"));
 
 	// Times: A starts at 0, so relative times equal A's, to the 100 ns tick.
 	const auto ta = readLines(rootA + "/sequences/00/times.txt"), tb = readLines(rootB + "/sequences/00/times.txt");
@@ -467,5 +458,5 @@ TEST(DatasetsKitti, ExportErrorsLeaveNoSequence)
 	ASSERT_EQ(readPoses(dir + "/out/poses/00.txt").size(), 3u);
 	EXPECT_NEAR(readPoses(dir + "/out/poses/00.txt")[2][3], 1.0, 1e-12);
 	const auto obs = shadyloc::test::syntheticStereoFrame(1);
-	EXPECT_TRUE(samePixels(obs->imageLeft.asCvMatRef(), cv::imread(dir + "/out/sequences/00/image_2/000001.png")));
+	EXPECT_TRUE(shadyloc::test::samePixels(obs->imageLeft.asCvMatRef(), cv::imread(dir + "/out/sequences/00/image_2/000001.png")));
 }

@@ -27,8 +27,8 @@ namespace fs = std::filesystem;
 
 namespace
 {
-constexpr int kFrames = 6;
-constexpr double kSpeed = 0.1;	// m per frame
+constexpr int kRobotCarFrames = 6;
+constexpr double kRobotCarSpeed = 0.1;	// m per frame
 constexpr int64_t kT0 = 1418381798000000;  // [us], a RobotCar-like Unix time
 constexpr int64_t kFramePeriod = 100000;  // [us]: frame k of the corridor is 0.1 k s
 
@@ -43,14 +43,14 @@ const double kInsXyzrpy[6] = {-1.7132, 0.1181, 1.1948, -0.0125, 0.04, 0.005};
 constexpr double kDemosaicError = 8.0, kMisregistered = 11.0;
 const cv::Rect kInner(2, 2, 300, 200);	// compared with shifted windows
 
-const shadyloc::test::TStereoSequence& corridor() { return shadyloc::test::corridorSequence(kFrames, kSpeed); }
+const shadyloc::test::TStereoSequence& corridor() { return shadyloc::test::corridorSequence(kRobotCarFrames, kRobotCarSpeed); }
 
 /** The corridor's camera pose at a fractional frame number (examplePose's
  * formula, which takes whole frames only), for INS rows between frames. */
 Eigen::Isometry3d leftPoseAt(double k)
 {
 	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-	T.translation() = Eigen::Vector3d(0.4 * std::sin(0.09 * k), 0.15 * std::sin(0.06 * k + 0.5), kSpeed * k);
+	T.translation() = Eigen::Vector3d(0.4 * std::sin(0.09 * k), 0.15 * std::sin(0.06 * k + 0.5), kRobotCarSpeed * k);
 	const double yaw = 6.0 * M_PI / 180 * std::sin(0.07 * k), pitch = 2.0 * M_PI / 180 * std::sin(0.05 * k);
 	T.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitX()))
 					 .toRotationMatrix();
@@ -190,10 +190,10 @@ TReplica makeReplica(const std::string& dir, double du = 0, double dv = 0)
 {
 	const auto r = replicaFolders(dir, "2014-12-12-10-45-15");
 	const auto& s = corridor();
-	for (int k = 0; k < kFrames; k++) writeFrame(r.traversal, kT0 + k * kFramePeriod, s.left[k], s.right[k]);
+	for (int k = 0; k < kRobotCarFrames; k++) writeFrame(r.traversal, kT0 + k * kFramePeriod, s.left[k], s.right[k]);
 	writeModels(r.models, s.calib, s.left[0].cols, s.left[0].rows, du, dv);
 	std::vector<std::pair<int64_t, Eigen::Isometry3d>> ins;
-	for (int64_t t = kT0 - 53000; t <= kT0 + (kFrames - 1) * kFramePeriod + 60000; t += 20000)
+	for (int64_t t = kT0 - 53000; t <= kT0 + (kRobotCarFrames - 1) * kFramePeriod + 60000; t += 20000)
 		ins.push_back({t, leftPoseAt(double(t - kT0) / kFramePeriod)});
 	writeIns(r.traversal + "/gps/ins.csv", ins);
 	return r;
@@ -219,7 +219,7 @@ RobotCarImporter importer(const TReplica& r)
 	return imp;
 }
 
-void expectNoOutput(const std::string& out)
+void expectNoRobotCarOutput(const std::string& out)
 {
 	const fs::path p(out);
 	for (const std::string& q :
@@ -253,12 +253,12 @@ TEST(DatasetsRobotCar, RoundTripImagesCalibrationAndGroundTruth)
 	auto imp = importer(rep);
 	const std::string out = dir + "/rc.rawlog";
 	const auto res = imp.run(rep.traversal, out);
-	ASSERT_EQ(res.frames, size_t(kFrames));
+	ASSERT_EQ(res.frames, size_t(kRobotCarFrames));
 	const auto& s = corridor();
 
 	const auto obs = shadyloc::test::readStereoFrames(out);
-	ASSERT_EQ(obs.size(), size_t(kFrames));
-	for (int k = 0; k < kFrames; k++)
+	ASSERT_EQ(obs.size(), size_t(kRobotCarFrames));
+	for (int k = 0; k < kRobotCarFrames; k++)
 	{
 		const auto& o = *obs[k];
 		EXPECT_NEAR(mrpt::Clock::toDouble(o.timestamp), (kT0 + k * kFramePeriod) * 1e-6, 3e-7);	 // 100 ns ticks of a 1.4e9 s double
@@ -289,8 +289,8 @@ TEST(DatasetsRobotCar, RoundTripImagesCalibrationAndGroundTruth)
 	// Ground truth: the left camera's pose at each image time, interpolated
 	// from INS rows 7 ms away (the motion's curvature over 20 ms gives < 0.1 mm).
 	const auto gt = shadyloc::io::readTum(res.groundTruthPath);
-	ASSERT_EQ(gt.size(), size_t(kFrames));
-	for (int k = 0; k < kFrames; k++)
+	ASSERT_EQ(gt.size(), size_t(kRobotCarFrames));
+	for (int k = 0; k < kRobotCarFrames; k++)
 	{
 		EXPECT_NEAR(gt[k].t, mrpt::Clock::toDouble(obs[k]->timestamp), 1e-9);
 		const Eigen::Isometry3d E = s.T_world_left[k].inverse() * gt[k].T;
@@ -335,8 +335,8 @@ TEST(DatasetsRobotCar, HalfResolutionDemosaicingMeasuresEveryColour)
 	EXPECT_NEAR(res.rightCamera.cx(), (s.calib.cxR - 0.5) / 2, 1e-6);
 	EXPECT_NEAR(res.rightCameraPose.x(), s.calib.baseline, 1e-9);
 	const auto obs = shadyloc::test::readStereoFrames(dir + "/rc.rawlog");
-	ASSERT_EQ(obs.size(), size_t(kFrames));
-	for (int k = 0; k < kFrames; k++)
+	ASSERT_EQ(obs.size(), size_t(kRobotCarFrames));
+	for (int k = 0; k < kRobotCarFrames; k++)
 	{
 		// Green exactly (the identity table, halved, samples cell centres).
 		cv::Mat want, got = obs[k]->imageLeft.asCvMatRef();
@@ -423,7 +423,7 @@ TEST(DatasetsRobotCar, BadInputNamesTheCulpritAndLeavesNothing)
 		{
 			EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
 		}
-		expectNoOutput(out);
+		expectNoRobotCarOutput(out);
 	};
 	const auto rep = makeReplica(dir);
 	const std::string stamps = rep.traversal + "/stereo.timestamps";
@@ -503,7 +503,7 @@ TEST(DatasetsRobotCar, BadInputNamesTheCulpritAndLeavesNothing)
 
 	// Good again; then the command line's message and exit status for one case.
 	auto imp = importer(rep);
-	EXPECT_EQ(imp.run(rep.traversal, out).frames, size_t(kFrames));
+	EXPECT_EQ(imp.run(rep.traversal, out).frames, size_t(kRobotCarFrames));
 	fs::remove(out);
 	fs::remove(groundTruthPathFor(out));
 	fs::rename(rep.models + "/stereo_wide_left.txt", dir + "/l.txt");
@@ -516,7 +516,7 @@ TEST(DatasetsRobotCar, BadInputNamesTheCulpritAndLeavesNothing)
 		1)
 		<< text;
 	EXPECT_NE(text.find("stereo_wide_left.txt': no such camera model"), std::string::npos) << text;
-	expectNoOutput(out);
+	expectNoRobotCarOutput(out);
 }
 
 namespace

@@ -9,9 +9,6 @@
 #include <shadyloc/eval/RunList.h>
 #include <shadyloc/map/CKeyframeMap.h>
 
-#include <mrpt/io/CFileGZOutputStream.h>
-#include <mrpt/serialization/CArchive.h>
-
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -27,20 +24,6 @@ using namespace shadyloc;
 
 namespace
 {
-void writeText(const std::string& path, const std::string& text)
-{
-	std::ofstream f(path);
-	f << text;
-}
-
-std::string readText(const std::string& path)
-{
-	std::ifstream f(path, std::ios::binary);
-	std::stringstream s;
-	s << f.rdbuf();
-	return s.str();
-}
-
 /** Every regular file below dir (relative path -> bytes), timings left out:
  * they are the only outputs allowed to differ between runs. */
 std::map<std::string, std::string> resultFiles(const std::string& dir)
@@ -51,17 +34,9 @@ std::map<std::string, std::string> resultFiles(const std::string& dir)
 		if (!e.is_regular_file()) continue;
 		const std::string name = e.path().filename().string();
 		if (name == "timing.json" || name == "job_timing.json") continue;
-		out[fs::relative(e.path(), dir).string()] = readText(e.path().string());
+		out[fs::relative(e.path(), dir).string()] = test::fileContents(e.path().string());
 	}
 	return out;
-}
-
-/** Synthetic colour stereo frames (test support) of a w x h camera. */
-void writeRun(const std::string& path, int frames, int w = 160, int h = 120)
-{
-	mrpt::io::CFileGZOutputStream f(path);
-	auto arch = mrpt::serialization::archiveFrom(f);
-	for (int i = 0; i < frames; i++) arch << *test::syntheticStereoFrame(i, w, h);
 }
 
 std::string app() { return test::appPath() + " eval"; }
@@ -72,11 +47,11 @@ TEST(EvalRunList, ParsesCommentsBlankLinesAndRelativePaths)
 {
 	const std::string dir = test::tempDir("eval_runlist");
 	fs::create_directories(dir + "/data");
-	writeText(dir + "/data/a.rawlog", "x");
-	writeText(dir + "/data/b.rawlog", "x");
-	writeText(dir + "/data/b.tum", "");
-	writeText(dir + "/data/c.rawlog", "x");	 // a rawlog of its own: the same one twice is refused
-	writeText(
+	test::writeFileContents(dir + "/data/a.rawlog", "x");
+	test::writeFileContents(dir + "/data/b.rawlog", "x");
+	test::writeFileContents(dir + "/data/b.tum", "");
+	test::writeFileContents(dir + "/data/c.rawlog", "x");	 // a rawlog of its own: the same one twice is refused
+	test::writeFileContents(
 		dir + "/runs.txt",
 		"# name rawlog gt\n\n  a\tdata/a.rawlog   # no ground truth\nb data/b.rawlog data/b.tum\r\n" + std::string("c ") +
 			dir + "/data/c.rawlog\n");
@@ -96,9 +71,9 @@ TEST(EvalRunList, ParsesCommentsBlankLinesAndRelativePaths)
 TEST(EvalRunList, ErrorsNameFileLineAndRun)
 {
 	const std::string dir = test::tempDir("eval_runlist_bad");
-	writeText(dir + "/a.rawlog", "x");
+	test::writeFileContents(dir + "/a.rawlog", "x");
 	const auto error = [&](const std::string& text) {
-		writeText(dir + "/runs.txt", text);
+		test::writeFileContents(dir + "/runs.txt", text);
 		try
 		{
 			eval::readRunList(dir + "/runs.txt");
@@ -297,27 +272,27 @@ TEST(LocalisationEvaluation, NoLongEpisodeStillHasAnUpperBound)
 TEST(EvalApp, BadInputNamesTheCulpritAndLeavesNothing)
 {
 	const std::string dir = test::tempDir("eval_bad");
-	writeRun(dir + "/a.rawlog", 2);
-	writeRun(dir + "/b.rawlog", 2);
-	writeRun(dir + "/wide.rawlog", 2, 200, 120);  // another camera
+	test::writeSyntheticRawlog(dir + "/a.rawlog", 2, false);
+	test::writeSyntheticRawlog(dir + "/b.rawlog", 2, false);
+	test::writeSyntheticRawlog(dir + "/wide.rawlog", 2, false, 200, 120);  // another camera
 	std::string out;
 	const auto run = [&](const std::string& args) { return test::runCommand(app() + " " + args, &out); };
 
 	// A run list naming a file that is not there.
-	writeText(dir + "/missing.txt", "a a.rawlog\n\nb gone.rawlog\n");
+	test::writeFileContents(dir + "/missing.txt", "a a.rawlog\n\nb gone.rawlog\n");
 	EXPECT_EQ(run("--runs " + dir + "/missing.txt -o " + dir + "/o1"), 1);
 	EXPECT_NE(out.find("missing.txt:3: run 'b': rawlog '"), std::string::npos) << out;
 	EXPECT_NE(out.find("gone.rawlog' does not exist"), std::string::npos) << out;
 	EXPECT_FALSE(fs::exists(dir + "/o1"));
 
 	// Duplicate names.
-	writeText(dir + "/dup.txt", "a a.rawlog\na b.rawlog\n");
+	test::writeFileContents(dir + "/dup.txt", "a a.rawlog\na b.rawlog\n");
 	EXPECT_EQ(run("--runs " + dir + "/dup.txt -o " + dir + "/o2"), 1);
 	EXPECT_NE(out.find("dup.txt:2: run name 'a' is already used on line 1"), std::string::npos) << out;
 	EXPECT_FALSE(fs::exists(dir + "/o2"));
 
 	// Runs of different cameras: both named, with their lines.
-	writeText(dir + "/cams.txt", "a a.rawlog\nb b.rawlog\nw wide.rawlog\n");
+	test::writeFileContents(dir + "/cams.txt", "a a.rawlog\nb b.rawlog\nw wide.rawlog\n");
 	EXPECT_EQ(run("--runs " + dir + "/cams.txt -o " + dir + "/o3 --plan"), 1);
 	EXPECT_NE(out.find("cams.txt:3: run 'w': its camera"), std::string::npos) << out;
 	EXPECT_NE(out.find("200x120 px"), std::string::npos) << out;
@@ -325,9 +300,9 @@ TEST(EvalApp, BadInputNamesTheCulpritAndLeavesNothing)
 	EXPECT_FALSE(fs::exists(dir + "/o3"));
 
 	// An unknown key in one of several configs: that file and line.
-	writeText(dir + "/ok.ini", "[localise]\nthreads = 1\n");
-	writeText(dir + "/typo.ini", "[localiser]\nmin_inliers = 12\nmin_inlier = 3\n");
-	writeText(dir + "/runs.txt", "a a.rawlog\nb b.rawlog\n");
+	test::writeFileContents(dir + "/ok.ini", "[localise]\nthreads = 1\n");
+	test::writeFileContents(dir + "/typo.ini", "[localiser]\nmin_inliers = 12\nmin_inlier = 3\n");
+	test::writeFileContents(dir + "/runs.txt", "a a.rawlog\nb b.rawlog\n");
 	EXPECT_EQ(run("--runs " + dir + "/runs.txt -o " + dir + "/o4 -c " + dir + "/ok.ini -c " + dir + "/typo.ini"), 1);
 	EXPECT_NE(out.find(dir + "/typo.ini:3: [localiser] min_inlier: unknown key"), std::string::npos) << out;
 	EXPECT_FALSE(fs::exists(dir + "/o4"));
@@ -351,7 +326,7 @@ TEST(EvalApp, BadInputNamesTheCulpritAndLeavesNothing)
 	EXPECT_NE(out.find("run map job 1 first"), std::string::npos) << out;
 	// A map that fails to load (a damaged job output): named, with its job.
 	fs::create_directories(o5 + "/jobs/map_b");
-	writeText(o5 + "/jobs/map_b/map.kfmap", "not a map");
+	test::writeFileContents(o5 + "/jobs/map_b/map.kfmap", "not a map");
 	EXPECT_EQ(run(base + " --job 2"), 1);
 	EXPECT_NE(out.find("the map of run 'b' ('" + o5 + "/jobs/map_b/map.kfmap', from map job 1) fails to load"), std::string::npos)
 		<< out;
@@ -395,9 +370,9 @@ std::string pairRecord(const std::string& live, const std::string& map, const st
 TEST(EvalApp, MergeRefusesJobRecordsOutOfRange)
 {
 	const std::string dir = test::tempDir("eval_merge_check");
-	writeRun(dir + "/a.rawlog", 2);
-	writeRun(dir + "/b.rawlog", 2);
-	writeText(dir + "/runs.txt", "a a.rawlog\nb b.rawlog\n");
+	test::writeSyntheticRawlog(dir + "/a.rawlog", 2, false);
+	test::writeSyntheticRawlog(dir + "/b.rawlog", 2, false);
+	test::writeFileContents(dir + "/runs.txt", "a a.rawlog\nb b.rawlog\n");
 	const std::string o = dir + "/o", base = app() + " --runs " + dir + "/runs.txt -o " + o;
 	std::string out;
 	ASSERT_EQ(test::runCommand(base + " --plan", &out), 0) << out;
@@ -405,8 +380,8 @@ TEST(EvalApp, MergeRefusesJobRecordsOutOfRange)
 	{
 		const std::string d = o + "/jobs/map_" + std::string(r);
 		fs::create_directories(d);
-		writeText(d + "/map.kfmap", "");
-		writeText(d + "/map.tsv", "# shadyloc eval map v1\nrun\t" + std::string(r) +
+		test::writeFileContents(d + "/map.kfmap", "");
+		test::writeFileContents(d + "/map.tsv", "# shadyloc eval map v1\nrun\t" + std::string(r) +
 									  "\nframes\t10\nkeyframes\t4\ngt_keyframes\t0\nbreaks\t0\npath_m\t9\n");
 	}
 	const auto writePairs = [&](const std::string& badJob, const std::map<std::string, std::string>& edit) {
@@ -415,8 +390,8 @@ TEST(EvalApp, MergeRefusesJobRecordsOutOfRange)
 			{
 				const std::string name = "pair_" + live + "__" + map + "__" + sys, d = o + "/jobs/" + name;
 				fs::create_directories(d);
-				for (const char* f : {"frames.csv", "summary.json", "trajectory.tum"}) writeText(d + "/" + f, "");
-				writeText(d + "/pair.tsv", pairRecord(live, map, sys, name == badJob ? edit : std::map<std::string, std::string>{}));
+				for (const char* f : {"frames.csv", "summary.json", "trajectory.tum"}) test::writeFileContents(d + "/" + f, "");
+				test::writeFileContents(d + "/pair.tsv", pairRecord(live, map, sys, name == badJob ? edit : std::map<std::string, std::string>{}));
 			}
 	};
 	struct TCase
@@ -458,7 +433,7 @@ TEST(EvalApp, ResultsIdenticalAcrossWorkersAndJobs)
 			&out),
 		0)
 		<< out;
-	writeText(
+	test::writeFileContents(
 		dir + "/data/runs.txt",
 		"# three lighting conditions\nnoon noon.rawlog noon.tum\novercast overcast.rawlog overcast.tum\n"
 		"morning morning_low_sun.rawlog morning_low_sun.tum\n");
@@ -569,10 +544,10 @@ TMapBudget monoLandmarks(const std::string& path)
 TEST(EvalControl, BadLayerIsRefusedNamingItBeforeAnyJob)
 {
 	const std::string dir = test::tempDir("eval_control_bad");
-	writeRun(dir + "/a.rawlog", 2);
-	writeRun(dir + "/b.rawlog", 2);
-	writeText(dir + "/runs.txt", "a a.rawlog\nb b.rawlog\n");
-	writeText(dir + "/ok.ini", "[localise]\nthreads = 1\n");
+	test::writeSyntheticRawlog(dir + "/a.rawlog", 2, false);
+	test::writeSyntheticRawlog(dir + "/b.rawlog", 2, false);
+	test::writeFileContents(dir + "/runs.txt", "a a.rawlog\nb b.rawlog\n");
+	test::writeFileContents(dir + "/ok.ini", "[localise]\nthreads = 1\n");
 	std::string out;
 	const std::string base = app() + " --runs " + dir + "/runs.txt -c " + dir + "/ok.ini";
 	const auto refused = [&](const std::string& control, const std::string& o, const std::string& expect) {
@@ -583,25 +558,25 @@ TEST(EvalControl, BadLayerIsRefusedNamingItBeforeAnyJob)
 	refused(dir + "/gone.ini", "o1", "--control '" + dir + "/gone.ini': the control's config does not exist");
 
 	// An unknown key: the control's file and line, though the -c files are fine.
-	writeText(dir + "/typo.ini", "[features]\nmax_per_cell = 60\nmax_per_cel_right = 240\n");
+	test::writeFileContents(dir + "/typo.ini", "[features]\nmax_per_cell = 60\nmax_per_cel_right = 240\n");
 	refused(dir + "/typo.ini", "o2", dir + "/typo.ini:3: [features] max_per_cel_right: unknown key");
 	// An unknown section.
-	writeText(dir + "/sect.ini", "[feature]\nmax_per_cell = 60\n");
+	test::writeFileContents(dir + "/sect.ini", "[feature]\nmax_per_cell = 60\n");
 	refused(dir + "/sect.ini", "o3", dir + "/sect.ini:1: ");
 	EXPECT_NE(out.find("[feature]"), std::string::npos) << out;
 	// A value out of range.
-	writeText(dir + "/range.ini", "[map]\nlandmarks_per_keyframe = -4\n");
+	test::writeFileContents(dir + "/range.ini", "[map]\nlandmarks_per_keyframe = -4\n");
 	refused(dir + "/range.ini", "o4", dir + "/range.ini:");
 	EXPECT_NE(out.find("landmarks_per_keyframe: must be >= 0"), std::string::npos) << out;
 	// A layer that sets nothing would make the control the baseline.
-	writeText(dir + "/empty.ini", "; nothing\n[features]\n");
+	test::writeFileContents(dir + "/empty.ini", "; nothing\n[features]\n");
 	refused(dir + "/empty.ini", "o5", "--control '" + dir + "/empty.ini': sets no key");
 	// The same file twice in one layer is refused by the layering.
-	writeText(dir + "/twice.ini", "[features]\nmax_per_cell = 60\nmax_per_cell = 70\n");
+	test::writeFileContents(dir + "/twice.ini", "[features]\nmax_per_cell = 60\nmax_per_cell = 70\n");
 	refused(dir + "/twice.ini", "o6", dir + "/twice.ini");
 
 	// A plan made with a control wants it again at --job and --merge; one made without refuses it.
-	writeText(dir + "/budget.ini", "[features]\nmax_per_cell = 60\n");
+	test::writeFileContents(dir + "/budget.ini", "[features]\nmax_per_cell = 60\n");
 	const std::string o7 = " -o " + dir + "/o7";
 	ASSERT_EQ(test::runCommand(base + o7 + " --control " + dir + "/budget.ini --plan", &out), 0) << out;
 	EXPECT_EQ(out, "maps 0 3\npairs 4 9\n");
@@ -611,7 +586,7 @@ TEST(EvalControl, BadLayerIsRefusedNamingItBeforeAnyJob)
 	EXPECT_NE(plan.find("\n9\tpair\tb\ta\tcontrol\tpair_b__a__control\n"), std::string::npos) << plan;
 	EXPECT_EQ(test::runCommand(base + o7 + " --job 0", &out), 1);
 	EXPECT_NE(out.find("made with --control: give the same --control file"), std::string::npos) << out;
-	writeText(dir + "/budget2.ini", "[features]\nmax_per_cell = 61\n");
+	test::writeFileContents(dir + "/budget2.ini", "[features]\nmax_per_cell = 61\n");
 	EXPECT_EQ(test::runCommand(base + o7 + " --control " + dir + "/budget2.ini --merge", &out), 1);
 	EXPECT_NE(out.find("made with another control than '" + dir + "/budget2.ini'"), std::string::npos) << out;
 	EXPECT_EQ(test::runCommand(base + o7 + " --control " + dir + "/budget.ini --job 6", &out), 1);
@@ -639,7 +614,7 @@ TEST(EvalControl, ThirdSystemOnMapsOfItsOwnBudget)
 			&out),
 		0)
 		<< out;
-	writeText(dir + "/data/runs.txt", "noon noon.rawlog noon.tum\novercast overcast.rawlog overcast.tum\n");
+	test::writeFileContents(dir + "/data/runs.txt", "noon noon.rawlog noon.tum\novercast overcast.rawlog overcast.tum\n");
 	const std::string base = app() + " -q --runs " + dir + "/data/runs.txt -c " + src + "/config/vo_sim.ini -c " + src +
 							 "/config/localise_sim.ini";
 	const std::string control = " --control " + src + "/config/control_budget.ini";

@@ -35,41 +35,27 @@ using namespace shadyloc::eval;
 
 namespace
 {
-const std::string kGoldenDir = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/eval";
+const std::string kEvalGoldenDir = test::sourcePath("tests/golden/eval");
 
-bool updatingGolden()
-{
-	const char* e = std::getenv("SHADYLOC_UPDATE_GOLDEN");
-	return e && *e && std::string(e) != "0";
-}
-
-std::string readText(const std::string& path)
-{
-	std::ifstream f(path, std::ios::binary);
-	std::stringstream s;
-	s << f.rdbuf();
-	return s.str();
-}
-
-void writeText(const std::string& path, const std::string& text)
+/** Writes the file, its folders made first. */
+void writeFileMakingDirs(const std::string& path, const std::string& text)
 {
 	fs::create_directories(fs::path(path).parent_path());
-	std::ofstream f(path, std::ios::binary | std::ios::trunc);
-	f << text;
+	test::writeFileContents(path, text);
 }
 
 /** Compares the file `produced` with golden `name`, or rewrites the golden file when asked. */
-void checkGolden(const std::string& name, const std::string& produced)
+void checkEvalGolden(const std::string& name, const std::string& produced)
 {
-	const std::string path = kGoldenDir + "/" + name, actual = readText(produced);
+	const std::string path = kEvalGoldenDir + "/" + name, actual = test::fileContents(produced);
 	ASSERT_FALSE(actual.empty()) << produced << " is missing or empty";
-	if (updatingGolden())
+	if (test::updatingGolden())
 	{
-		writeText(path, actual);
+		writeFileMakingDirs(path, actual);
 		ADD_FAILURE() << "rewrote " << path << " (SHADYLOC_UPDATE_GOLDEN is set): review `git diff tests/golden/eval`";
 		return;
 	}
-	const std::string golden = readText(path);
+	const std::string golden = test::fileContents(path);
 	ASSERT_FALSE(golden.empty()) << "golden file " << path << " is missing or empty";
 	if (golden == actual) return;
 	size_t at = 0;
@@ -78,7 +64,7 @@ void checkGolden(const std::string& name, const std::string& produced)
 				  << golden.substr(at >= 40 ? at - 40 : 0, 100) << "\n  actual: " << actual.substr(at >= 40 ? at - 40 : 0, 100);
 }
 
-Eigen::Isometry3d pose(double x, double y, double yawDeg)
+Eigen::Isometry3d planarPose(double x, double y, double yawDeg)
 {
 	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
 	T.translation() = Eigen::Vector3d(x, y, 0);
@@ -87,7 +73,7 @@ Eigen::Isometry3d pose(double x, double y, double yawDeg)
 }
 
 /** The ground truth's world frame is the map frame moved by this. */
-const Eigen::Isometry3d kWorld = pose(100, 50, 10);
+const Eigen::Isometry3d kWorld = planarPose(100, 50, 10);
 
 /** Six keyframes 2 m apart along x (camera z forward: a yaw turns it),
  * with their ground truth, of survey run "survey_a". */
@@ -107,7 +93,7 @@ CKeyframeMap::Ptr syntheticMap()
 		map::TMapKeyframe kf;
 		kf.frame = 10 * k;
 		kf.timestamp = 50 + k;
-		kf.T_map_kf = pose(2.0 * k, 0, 0);
+		kf.T_map_kf = planarPose(2.0 * k, 0, 0);
 		kf.T_gt_kf = kWorld * kf.T_map_kf;
 		kf.channels.resize(2);
 		map->appendKeyframe(kf);
@@ -154,7 +140,7 @@ std::vector<TLocalisationUpdate> syntheticRun(const CKeyframeMap& map, io::Traje
 	for (int i = 0; i < 24; i++)
 	{
 		const double x = 0.5 * i + (i >= 20 ? 6.0 : 0.0);
-		const Eigen::Isometry3d T_map_live = pose(x, 0.05 * std::sin(i), 0.3 * i);
+		const Eigen::Isometry3d T_map_live = planarPose(x, 0.05 * std::sin(i), 0.3 * i);
 		gt.push_back({100.0 + 0.1 * i, kWorld * T_map_live});
 		const uint32_t kf = static_cast<uint32_t>(std::min(5.0, std::round(x / 2)));
 		const Eigen::Isometry3d truth = map.keyframe(kf).T_map_kf.inverse() * T_map_live;
@@ -227,7 +213,7 @@ void writeSyntheticOutputs(const std::string& dir, bool withGt)
 // ---- a leave-one-out evaluation's job outputs ---------------------------------------------------
 /** pair.tsv of pair job k: numbers varied by k, consistent with each other
  * (the merge checks them), ground truth where both runs have it. */
-std::string pairRecord(const std::string& live, const std::string& map, const std::string& sys, size_t k, bool gt)
+std::string variedPairRecord(const std::string& live, const std::string& map, const std::string& sys, size_t k, bool gt)
 {
 	const size_t frames = 40 + k, inMap = 30 + k % 5, fixes = 20 + k % 7, fixesInMap = std::min(fixes, inMap) - 2;
 	const size_t trueFixes = gt ? fixes - 3 : 0, trueInMap = gt ? fixesInMap - 3 : 0;
@@ -263,10 +249,10 @@ std::vector<eval::TEvalJob> writeJobOutputs(const std::string& dir, const std::s
 {
 	for (const std::string r : {"a", "b", "c"})
 	{
-		writeText(dir + "/data/" + r + ".rawlog", "rawlog of " + r);
-		writeText(dir + "/data/" + r + ".tum", "100 0 0 0 0 0 0 1 # " + r + "\n");
+		writeFileMakingDirs(dir + "/data/" + r + ".rawlog", "rawlog of " + r);
+		writeFileMakingDirs(dir + "/data/" + r + ".tum", "100 0 0 0 0 0 0 1 # " + r + "\n");
 	}
-	writeText(dir + "/data/runs.txt", runList);
+	writeFileMakingDirs(dir + "/data/runs.txt", runList);
 	in = eval::TEvalInputs::Load(dir + "/data/runs.txt", {}, false);
 	const auto jobs = eval::makePlan(in.runs);
 	const std::string jobsDir = dir + "/out/jobs/";
@@ -283,13 +269,13 @@ std::vector<eval::TEvalJob> writeJobOutputs(const std::string& dir, const std::s
 		{
 			char wall[32];
 			std::snprintf(wall, sizeof wall, "%.3f", 1.5 + 0.25 * static_cast<double>(j.index));
-			writeText(d + "/job_timing.json",
+			writeFileMakingDirs(d + "/job_timing.json",
 					  std::string("{\"format\": \"shadyloc eval job timing\", \"version\": 1, \"wall_s\": ") + wall + "}\n");
 		}
 		if (j.isMap)
 		{
 			map->saveToFile(d + "/map.kfmap");
-			writeText(d + "/map.tsv", "# shadyloc eval map v1\nrun\t" + in.runs[j.run].name + "\nframes\t" +
+			writeFileMakingDirs(d + "/map.tsv", "# shadyloc eval map v1\nrun\t" + in.runs[j.run].name + "\nframes\t" +
 										  std::to_string(60 + j.run) + "\nkeyframes\t6\ngt_keyframes\t6\nbreaks\t" +
 										  std::to_string(j.run % 2) + "\npath_m\t10.25\n");
 			continue;
@@ -297,9 +283,10 @@ std::vector<eval::TEvalJob> writeJobOutputs(const std::string& dir, const std::s
 		const bool withGt = in.runs[j.run].hasGt() && in.runs[j.map].hasGt();
 		const int s = j.system == eval::EvalSystem::Combined;
 		writeFramesCsv(d + "/frames.csv", ups[s], withGt ? evGt[s] : evNone[s], *map);
-		writeText(d + "/summary.json", "{}\n");
-		writeText(d + "/trajectory.tum", "# " + j.name + "\n");
-		writeText(d + "/pair.tsv", pairRecord(in.runs[j.run].name, in.runs[j.map].name, eval::toString(j.system), j.index, withGt));
+		writeFileMakingDirs(d + "/summary.json", "{}\n");
+		writeFileMakingDirs(d + "/trajectory.tum", "# " + j.name + "\n");
+		writeFileMakingDirs(d + "/pair.tsv",
+			variedPairRecord(in.runs[j.run].name, in.runs[j.map].name, eval::toString(j.system), j.index, withGt));
 	}
 	return jobs;
 }
@@ -310,7 +297,7 @@ TEST(EvalIdentity, LocaliseOutputsWithGroundTruth)
 	const std::string dir = test::tempDir("eval_identity_gt");
 	writeSyntheticOutputs(dir, true);
 	for (const char* f : {"frames.csv", "solves.csv", "trajectory.tum", "summary.json", "timing.json"})
-		checkGolden(std::string("localise_gt/") + f, dir + "/" + f);
+		checkEvalGolden(std::string("localise_gt/") + f, dir + "/" + f);
 }
 
 TEST(EvalIdentity, LocaliseOutputsWithoutGroundTruth)
@@ -318,7 +305,7 @@ TEST(EvalIdentity, LocaliseOutputsWithoutGroundTruth)
 	const std::string dir = test::tempDir("eval_identity_nogt");
 	writeSyntheticOutputs(dir, false);
 	for (const char* f : {"frames.csv", "solves.csv", "trajectory.tum", "summary.json", "timing.json"})
-		checkGolden(std::string("localise_nogt/") + f, dir + "/" + f);
+		checkEvalGolden(std::string("localise_nogt/") + f, dir + "/" + f);
 }
 
 /** Merges the job outputs of `runList` and compares the results with golden folder `golden`. */
@@ -330,7 +317,7 @@ void checkMerge(const std::string& golden, const std::string& runList)
 	in.buildCommit = "0123abc";
 	eval::merge(dir + "/out", in, jobs, 12.5);
 	for (const char* f : {"table1.md", "table1.csv", "summary.md", "eval.json", "timing.json", "figures_inputs.tsv"})
-		checkGolden(golden + "/" + f, dir + "/out/" + f);
+		checkEvalGolden(golden + "/" + f, dir + "/out/" + f);
 	EXPECT_TRUE(fs::exists(dir + "/out/figures/figure9.png"));
 }
 
@@ -353,11 +340,11 @@ TEST(EvalIdentity, JsonOutputsAreJsonAndKeepEveryString)
 {
 	// Every golden JSON file parses (a parser of the tests' own).
 	size_t files = 0;
-	for (const auto& f : fs::recursive_directory_iterator(kGoldenDir))
+	for (const auto& f : fs::recursive_directory_iterator(kEvalGoldenDir))
 		if (f.path().extension() == ".json")
 		{
 			files++;
-			const auto doc = nlohmann::json::parse(readText(f.path().string()), nullptr, false);
+			const auto doc = nlohmann::json::parse(test::fileContents(f.path().string()), nullptr, false);
 			EXPECT_FALSE(doc.is_discarded()) << f.path();
 			EXPECT_TRUE(doc.is_object() && doc.contains("format")) << f.path();
 		}
@@ -383,7 +370,7 @@ TEST(EvalIdentity, JsonOutputsAreJsonAndKeepEveryString)
 	EXPECT_EQ(localiseProvenance(dir, "gt_fnv1a64"), "00000000000000cc");
 	EXPECT_EQ(localiseProvenance(dir, "localisers"), "mono,invariant");
 	EXPECT_EQ(localiseProvenance(dir, "no_such_key"), "");
-	writeText(dir + "/summary.json", "{\"provenance\": {\"live\": ");	// cut short
+	writeFileMakingDirs(dir + "/summary.json", "{\"provenance\": {\"live\": ");	// cut short
 	EXPECT_EQ(localiseProvenance(dir, "live"), "");
 	EXPECT_EQ(localiseProvenance(dir + "/missing", "live"), "");
 }

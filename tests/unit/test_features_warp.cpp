@@ -1,5 +1,7 @@
 /* Patches that follow the viewpoint (features/PatchWarp.h) and the surface
  * normals they need (features/SurfaceNormals.h). */
+#include "../support/TestSupport.h"
+
 #include <shadyloc/features/PatchWarp.h>
 #include <shadyloc/features/SurfaceNormals.h>
 #include <shadyloc/vo/KeyframeMatcher.h>
@@ -17,20 +19,10 @@ using namespace shadyloc::features;
 
 namespace
 {
-geometry::TStereoCalib calib()
-{
-	geometry::TStereoCalib c;
-	c.fx = c.fy = 400;
-	c.cx = c.cxR = 256;
-	c.cy = 192;
-	c.baseline = 0.12;
-	return c;
-}
-
 /** A smooth texture on the plane's coordinates (a, b) [m]: sinusoids of
  * 0.2-0.7 m wavelength (coarse enough not to alias at a few metres), grey
  * levels 30..225. */
-double texture(double a, double b)
+double planeTexture(double a, double b)
 {
 	static const double k[6][3] = {{17, 5, 0.3}, {-7, 15, 1.1}, {9, -12, 2.0},
 								   {21, 3, 0.7}, {-4, 24, 1.9}, {12, 19, 2.6}};
@@ -51,7 +43,7 @@ cv::Mat renderGround(const geometry::TStereoCalib& c, const Eigen::Isometry3d& T
 			const Eigen::Vector3d o = T_world_cam.translation();
 			if (d.y() <= 1e-6) continue;
 			const Eigen::Vector3d X = o + (h - o.y()) / d.y() * d;
-			img.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(texture(X.x(), X.z()));
+			img.at<uint8_t>(v, u) = cv::saturate_cast<uint8_t>(planeTexture(X.x(), X.z()));
 		}
 	return img;
 }
@@ -68,7 +60,7 @@ Eigen::Vector3d onPlane(const geometry::TStereoCalib& c, double u, double v, con
 // ray -> plane point -> other camera, by central differences.
 TEST(FeaturesWarp, AffineIsTheDerivativeOfThePlaneInducedMap)
 {
-	const auto c = calib();
+	const auto c = test::stereoCalib();
 	const Eigen::Vector3d n = Eigen::Vector3d(0.2, -0.9, -0.3).normalized();
 	const double rho = -1.4;  // n^T X = rho: the plane 1.4 m from the camera, facing it
 	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -125,7 +117,7 @@ TEST(FeaturesWarp, IdentityWarpGivesTheUnwarpedDescriptor)
 // is, it is not found at all or far off.
 TEST(FeaturesWarp, WarpedPatchMatchesAPlaneSeenFromTwoViewpoints)
 {
-	const auto c = calib();
+	const auto c = test::stereoCalib();
 	const double h = 1.5;
 	Eigen::Isometry3d T_world_kf = Eigen::Isometry3d::Identity(), T_world_live = Eigen::Isometry3d::Identity();
 	T_world_live.translation() = Eigen::Vector3d(-1.75, 0, -0.3);
@@ -172,7 +164,7 @@ TEST(FeaturesWarp, WarpedPatchMatchesAPlaneSeenFromTwoViewpoints)
 // the measurement, with some pixels missing and some from another surface.
 TEST(FeaturesWarp, NormalFromTheDisparityOfATiltedPlane)
 {
-	const auto c = calib();
+	const auto c = test::stereoCalib();
 	const Eigen::Vector3d n = Eigen::Vector3d(0.3, -0.8, -0.5).normalized();
 	const double rho = -4.0;
 	cv::Mat disp(384, 512, CV_32F);
@@ -214,7 +206,7 @@ TEST(FeaturesWarp, NormalFromTheDisparityOfATiltedPlane)
 // one landmark at most.
 TEST(VoKeyframeMatcher, PatchSearchFindsLandmarksWithoutCorners)
 {
-	const auto c = calib();
+	const auto c = test::stereoCalib();
 	const double h = 1.5;
 	Eigen::Isometry3d T_world_kf = Eigen::Isometry3d::Identity(), T_world_live = Eigen::Isometry3d::Identity();
 	T_world_live.translation() = Eigen::Vector3d(-1.75, 0, -0.3);

@@ -266,16 +266,6 @@ void writePlain(const std::string& path, const std::vector<const mrpt::serializa
 	auto a = mrpt::serialization::archiveFrom(f);
 	for (auto* o : objs) a << *o;
 }
-std::string readBytes(const std::string& p)
-{
-	std::ifstream f(p, std::ios::binary);
-	return std::string(std::istreambuf_iterator<char>(f), {});
-}
-void writeBytes(const std::string& p, const std::string& b)
-{
-	std::ofstream f(p, std::ios::binary | std::ios::trunc);
-	f << b;
-}
 }  // namespace
 
 class FilterBadInput : public ::testing::TestWithParam<BadCase>
@@ -311,10 +301,10 @@ INSTANTIATE_TEST_SUITE_P(
 				auto a = syntheticStereoFrame(0), b = syntheticStereoFrame(1);
 				auto f = CFilterLinearise::Create();
 				writePlain(in, {a.get(), f.get(), b.get()});
-				auto bytes = readBytes(in);
+				auto bytes = fileContents(in);
 				const std::string from = "shadyloc::CFilterLinearise", to = "shadyloc::CFilterXinearise";
 				bytes.replace(bytes.find(from), from.size(), to);
-				writeBytes(in, bytes);
+				writeFileContents(in, bytes);
 			},
 			"object #1: Stored object has class 'shadyloc::CFilterXinearise'"},
 		BadCase{
@@ -322,16 +312,16 @@ INSTANTIATE_TEST_SUITE_P(
 			[](auto&, const std::string& in) {
 				auto a = syntheticStereoFrame(0), b = syntheticStereoFrame(1);
 				writePlain(in, {a.get(), b.get()});
-				auto bytes = readBytes(in);
-				writeBytes(in, bytes.substr(0, bytes.size() * 3 / 4));
+				auto bytes = fileContents(in);
+				writeFileContents(in, bytes.substr(0, bytes.size() * 3 / 4));
 			},
 			"object #1"},
 		BadCase{
 			"truncated_gz",
 			[](auto&, const std::string& in) {
 				writeSyntheticRawlog(in, 3, false);
-				auto bytes = readBytes(in);
-				writeBytes(in, bytes.substr(0, bytes.size() / 2));
+				auto bytes = fileContents(in);
+				writeFileContents(in, bytes.substr(0, bytes.size() / 2));
 			},
 			"object #1"},
 		BadCase{
@@ -339,12 +329,12 @@ INSTANTIATE_TEST_SUITE_P(
 			[](auto&, const std::string& in) {
 				auto a = syntheticStereoFrame(0);
 				writePlain(in, {a.get()});
-				writeBytes(in, readBytes(in) + std::string("\x7f garbage after the last object", 32));
+				writeFileContents(in, fileContents(in) + std::string("\x7f garbage after the last object", 32));
 			},
 			"object #1"},
 		BadCase{
 			"empty",
-			[](auto&, const std::string& in) { writeBytes(in, ""); },
+			[](auto&, const std::string& in) { writeFileContents(in, ""); },
 			"holds no objects"},
 		BadCase{
 			"missing_external_image",

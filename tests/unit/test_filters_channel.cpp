@@ -23,20 +23,6 @@ namespace fs = std::filesystem;
 
 namespace
 {
-std::string errorOf(const std::function<void()>& f)
-{
-	try
-	{
-		f();
-	}
-	catch (const std::exception& e)
-	{
-		return e.what();
-	}
-	return "";
-}
-
-
 /** n colour frames of the textured corridor (the VO tracks it). */
 void writeCorridor(const std::string& rawlog, int n)
 {
@@ -94,16 +80,16 @@ TEST(FilterChannels, NamedBySectionOrSuffixBuiltByClass)
 	EXPECT_EQ(filters::channelFromConfig(none, "inv", "-").label, "invariant");
 
 	// Errors name the file, the section and key, or the names known.
-	auto e = errorOf([&] { filters::channelFromConfig(none, "sepia", "x.ini"); });
+	auto e = test::errorOf([&] { filters::channelFromConfig(none, "sepia", "x.ini"); });
 	EXPECT_NE(e.find("'x.ini': unknown channel 'sepia'"), std::string::npos) << e;
 	EXPECT_NE(e.find("mono (_mono), invariant (_inv)"), std::string::npos) << e;
-	e = errorOf([&] { filters::channelFromConfig(custom, "sepia", "custom.ini"); });
+	e = test::errorOf([&] { filters::channelFromConfig(custom, "sepia", "custom.ini"); });
 	EXPECT_NE(e.find("the config's pipeline has grey (_grey), flat (_flat), lin (_lin)"), std::string::npos) << e;
 	mrpt::config::CConfigFileMemory classless("[sepia]\ntone = 3\n");
-	e = errorOf([&] { filters::channelFromConfig(classless, "sepia", "s.ini"); });
+	e = test::errorOf([&] { filters::channelFromConfig(classless, "sepia", "s.ini"); });
 	EXPECT_NE(e.find("'s.ini': [sepia] class: missing"), std::string::npos) << e;
 	mrpt::config::CConfigFileMemory bad("[invariant]\nclass = CFilterInvariant\nalpha = 7\n");
-	e = errorOf([&] { filters::channelFromConfig(bad, "invariant", "bad.ini"); });
+	e = test::errorOf([&] { filters::channelFromConfig(bad, "invariant", "bad.ini"); });
 	EXPECT_NE(e.find("'bad.ini'"), std::string::npos) << e;
 	EXPECT_NE(e.find("[invariant]"), std::string::npos) << e;
 	EXPECT_NE(e.find("alpha"), std::string::npos) << e;

@@ -31,24 +31,13 @@
 #include <sstream>
 
 using namespace shadyloc;
-using Bytes = std::vector<uint8_t>;
+using test::Bytes;
 
 namespace
 {
 const std::string kGoldenDir = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden";
 
-bool updatingGolden()
-{
-	const char* e = std::getenv("SHADYLOC_UPDATE_GOLDEN");
-	return e && *e && std::string(e) != "0";
-}
-
-Bytes readFile(const std::string& path)
-{
-	std::ifstream f(path, std::ios::binary);
-	return Bytes(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
-}
-void writeFile(const std::string& path, const Bytes& b)
+void writeGoldenFile(const std::string& path, const Bytes& b)
 {
 	std::ofstream f(path, std::ios::binary | std::ios::trunc);
 	f.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
@@ -56,7 +45,7 @@ void writeFile(const std::string& path, const Bytes& b)
 }
 Bytes asBytes(const std::string& s) { return Bytes(s.begin(), s.end()); }
 
-Bytes bytesOf(const mrpt::io::CMemoryStream& m)
+Bytes memoryBytes(const mrpt::io::CMemoryStream& m)
 {
 	const auto* p = static_cast<const uint8_t*>(m.getRawBufferData());
 	return Bytes(p, p + m.getTotalBytesCount());
@@ -68,7 +57,7 @@ Bytes serialise(const mrpt::serialization::CSerializable& o)
 	mrpt::io::CMemoryStream m;
 	auto ar = mrpt::serialization::archiveFrom(m);
 	ar << o;
-	return bytesOf(m);
+	return memoryBytes(m);
 }
 mrpt::serialization::CSerializable::Ptr deserialise(const Bytes& b)
 {
@@ -407,15 +396,15 @@ std::string filterRecordText(mrpt::obs::CObservationComment::Ptr* recordOut = nu
 void checkGolden(const std::string& name, const Bytes& actual)
 {
 	const std::string path = kGoldenDir + "/" + name;
-	if (updatingGolden())
+	if (test::updatingGolden())
 	{
-		writeFile(path, actual);
+		writeGoldenFile(path, actual);
 		ADD_FAILURE() << "rewrote " << path
 					  << " (SHADYLOC_UPDATE_GOLDEN is set): review `git diff tests/golden`, "
 						 "then run again without it";
 		return;
 	}
-	const Bytes golden = readFile(path);
+	const Bytes golden = test::fileBytes(path);
 	ASSERT_FALSE(golden.empty()) << "golden file " << path << " is missing or empty";
 	if (golden == actual) return;
 	size_t at = 0;
@@ -497,9 +486,9 @@ TEST(FormatsGolden, RegisteredClassesMatchTheirGoldenFiles)
 		SCOPED_TRACE(name);
 		const auto obj = c.populated();
 		checkGolden(goldenName(name), serialise(*obj));
-		if (updatingGolden()) continue;
+		if (test::updatingGolden()) continue;
 		// The golden bytes load into the same fields.
-		const auto back = deserialise(readFile(kGoldenDir + "/" + goldenName(name)));
+		const auto back = deserialise(test::fileBytes(kGoldenDir + "/" + goldenName(name)));
 		ASSERT_TRUE(back);
 		c.expectSame(*obj, *back);
 	}
@@ -509,7 +498,7 @@ TEST(FormatsGolden, RegisteredClassesMatchTheirGoldenFiles)
 // was) still loads, as the linear mapping it described.
 TEST(FormatsGolden, InvariantFilterVersion0StillLoads)
 {
-	const auto back = deserialise(readFile(kGoldenDir + "/CFilterInvariant_v0.bin"));
+	const auto back = deserialise(test::fileBytes(kGoldenDir + "/CFilterInvariant_v0.bin"));
 	ASSERT_TRUE(back);
 	const auto* f = dynamic_cast<const CFilterInvariant*>(back.get());
 	ASSERT_NE(f, nullptr);
@@ -527,7 +516,7 @@ TEST(FormatsGolden, InvariantFilterVersion0StillLoads)
 // it was) still loads, with every pixel as it comes.
 TEST(FormatsGolden, InvariantFilterVersion1StillLoads)
 {
-	const auto back = deserialise(readFile(kGoldenDir + "/CFilterInvariant_v1.bin"));
+	const auto back = deserialise(test::fileBytes(kGoldenDir + "/CFilterInvariant_v1.bin"));
 	ASSERT_TRUE(back);
 	const auto* f = dynamic_cast<const CFilterInvariant*>(back.get());
 	ASSERT_NE(f, nullptr);
@@ -544,9 +533,9 @@ TEST(FormatsGolden, FilterRecordMatchesItsGoldenFile)
 	const std::string text = filterRecordText(&record);
 	EXPECT_EQ(text.rfind(filters::kRecordHeader, 0), 0u) << text;
 	checkGolden("filter_record.txt", asBytes(text));
-	if (updatingGolden()) return;
+	if (test::updatingGolden()) return;
 	// The golden record builds the same filters.
-	const Bytes g = readFile(kGoldenDir + "/filter_record.txt");
+	const Bytes g = test::fileBytes(kGoldenDir + "/filter_record.txt");
 	const std::string golden(g.begin(), g.end());
 	mrpt::config::CConfigFileMemory cfg(golden.substr(std::string(filters::kRecordHeader).size() + 1));
 	const auto p = filters::FilterPipeline::FromConfig(cfg, "tests/golden/filter_record.txt");
@@ -565,18 +554,6 @@ TEST(FormatsGolden, FilterRecordMatchesItsGoldenFile)
 
 namespace
 {
-std::string errorOf(const std::function<void()>& f)
-{
-	try
-	{
-		f();
-	}
-	catch (const std::exception& e)
-	{
-		return e.what();
-	}
-	return "";
-}
 bool has(const std::string& s, const std::string& part) { return s.find(part) != std::string::npos; }
 
 void putU32(Bytes& b, size_t at, uint32_t v) { std::memcpy(b.data() + at, &v, 4); }
@@ -597,7 +574,7 @@ TEST(FormatsBoundedRead, FilterStringLengthAndEnumsAreChecked)
 	ASSERT_LT(at + 8, good.size());
 	Bytes bad = good;
 	putU32(bad, at, 0xFFFFFFF0u);
-	const std::string e = errorOf([&] { deserialise(bad); });
+	const std::string e = test::errorOf([&] { deserialise(bad); });
 	EXPECT_TRUE(has(e, "shadyloc::CFilterMonochrome (version 0): byte 0: output_suffix: count 4294967280 exceeds"))
 		<< e;
 	// The channel order is the last data byte before MRPT's end marker.
@@ -605,6 +582,6 @@ TEST(FormatsBoundedRead, FilterStringLengthAndEnumsAreChecked)
 	const size_t orderAt = at + 4 + len + 4 + f->common.sensor_labels.size();
 	ASSERT_EQ(bad[orderAt], static_cast<uint8_t>(image::ChannelOrder::RGB));
 	bad[orderAt] = 9;
-	const std::string e2 = errorOf([&] { deserialise(bad); });
+	const std::string e2 = test::errorOf([&] { deserialise(bad); });
 	EXPECT_TRUE(has(e2, "channel_order: value 9 out of range")) << e2;
 }

@@ -36,7 +36,7 @@ struct TSurveyedLandmark
 	double D_true = 0;
 };
 
-TSurveyedLandmark survey(const Eigen::Vector3d& P, double noise_px, std::mt19937& rng)
+TSurveyedLandmark surveyLandmark(const Eigen::Vector3d& P, double noise_px, std::mt19937& rng)
 {
 	const TStereoCalib c = calib();
 	std::normal_distribution<double> n(0, noise_px);
@@ -74,7 +74,7 @@ TEST(GeometryLandmarkDepth, ReobservationsNarrowTheDepthAndItsSigmaHolds)
 	for (; n < 400 && tried < 4000; tried++)
 	{
 		const double Z = uz(rng);
-		const auto s = survey(Eigen::Vector3d(ux(rng) * Z, uy(rng) * Z, Z), noise, rng);
+		const auto s = surveyLandmark(Eigen::Vector3d(ux(rng) * Z, uy(rng) * Z, Z), noise, rng);
 		if (!inImage(s.z_kf)) continue;
 		const auto r = refineDisparity(calib(), s.z_kf, s.obs, o);
 		if (!r.ok) continue;
@@ -106,7 +106,7 @@ TEST(GeometryLandmarkDepth, ReobservationsNarrowTheDepthAndItsSigmaHolds)
 TEST(GeometryLandmarkDepth, AWrongReobservationIsLeftOut)
 {
 	std::mt19937 rng(11);
-	const auto s = survey(Eigen::Vector3d(-6, 1, 20), 0.3, rng);
+	const auto s = surveyLandmark(Eigen::Vector3d(-6, 1, 20), 0.3, rng);
 	ASSERT_GE(s.obs.size(), 6u);
 	TDepthRefinementOptions o;
 	o.sigma_px = o.reobservation_sigma_px = 0.3;
@@ -127,14 +127,14 @@ TEST(GeometryLandmarkDepth, TooFewOrContradictingReobservationsKeepThePairsDepth
 {
 	std::mt19937 rng(13);
 	const Eigen::Vector3d P(-5, 0.5, 15);
-	const auto s = survey(P, 0.2, rng);
+	const auto s = surveyLandmark(P, 0.2, rng);
 	TDepthRefinementOptions o;
 	o.sigma_px = o.reobservation_sigma_px = 0.2;
 	ASSERT_TRUE(refineDisparity(calib(), s.z_kf, s.obs, o).ok);
 	EXPECT_FALSE(refineDisparity(calib(), s.z_kf, {s.obs.front()}, o).ok);
 	EXPECT_FALSE(refineDisparity(calib(), s.z_kf, {}, o).ok);
 	// The frames see the point at twice the depth along the same ray.
-	auto far = survey(2 * P, 0.2, rng);
+	auto far = surveyLandmark(2 * P, 0.2, rng);
 	EXPECT_FALSE(refineDisparity(calib(), s.z_kf, far.obs, o).ok);
 }
 

@@ -1,6 +1,8 @@
 /* Tests of the pose geometry: Jacobians against numeric differentiation,
  * closed-form 3D-3D alignment, RANSAC with outliers, Gauss-Newton and its
  * covariance. */
+#include "../support/TestSupport.h"
+
 #include <shadyloc/geometry/PoseSolver.h>
 
 #include <gtest/gtest.h>
@@ -13,16 +15,8 @@ using namespace shadyloc::geometry;
 
 namespace
 {
-TStereoCalib calib()
-{
-	TStereoCalib c;
-	c.fx = c.fy = 400;
-	c.cx = 256;
-	c.cy = 192;
-	c.cxR = 256;
-	c.baseline = 0.12;
-	return c;
-}
+using shadyloc::test::stereoCalib;
+
 Eigen::Isometry3d somePose()
 {
 	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -40,7 +34,7 @@ std::vector<TStereoCorrespondence> makeProblem(
 	std::mt19937 rng(seed);
 	std::uniform_real_distribution<double> ux(-4, 4), uy(-2, 2), uz(3, 25), uo(-60, 60);
 	std::normal_distribution<double> nz(0, noise_px);
-	const TStereoCalib c = calib();
+	const TStereoCalib c = stereoCalib();
 	std::vector<TStereoCorrespondence> out;
 	while (static_cast<int>(out.size()) < n)
 	{
@@ -67,7 +61,7 @@ double rotErrDeg(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B)
 
 TEST(GeometryPose, ResidualJacobianMatchesNumeric)
 {
-	const TStereoCalib c = calib();
+	const TStereoCalib c = stereoCalib();
 	const Eigen::Isometry3d T = somePose();
 	const Eigen::Vector3d P(0.8, -0.3, 5.0), z(300, 180, 290);
 	Eigen::Vector3d r;
@@ -138,7 +132,7 @@ TEST(GeometryPose, RansacAndSolverRecoverPoseDespiteOutliers)
 	// 200 correspondences, 30 % outliers, 0.5 px noise.
 	const auto c = makeProblem(T, 200, 60, 0.5, 11);
 	TRansacOptions ro;
-	const auto rs = ransacStereoPose(calib(), c, ro);
+	const auto rs = ransacStereoPose(stereoCalib(), c, ro);
 	ASSERT_TRUE(rs.ok);
 	int falseIn = 0, trueIn = 0;
 	for (int i = 0; i < 200; i++) (i < 60 ? falseIn : trueIn) += rs.inlier[i];
@@ -147,7 +141,7 @@ TEST(GeometryPose, RansacAndSolverRecoverPoseDespiteOutliers)
 	EXPECT_GE(trueIn, 130);	 // 2 px bound on 0.5 px noise (3-vector norm): ~99 % of 140
 	TPoseSolverOptions so;
 	so.use_landmark_covariance = false;	 // these landmarks are exact
-	const auto sol = solveStereoPose(calib(), c, rs.inlier, rs.T_curr_ref, so);
+	const auto sol = solveStereoPose(stereoCalib(), c, rs.inlier, rs.T_curr_ref, so);
 	ASSERT_TRUE(sol.ok);
 	// 140 points at 3-25 m with 0.5 px noise: the pose is good to a few mm / 0.05 deg.
 	EXPECT_LT(transErr(sol.T_curr_ref, T), 0.01);
@@ -170,7 +164,7 @@ TEST(GeometryPose, CovarianceMatchesMonteCarloSpread)
 	for (int i = 0; i < N; i++)
 	{
 		const auto c = makeProblem(T, 80, 0, 0.5, 100 + i);
-		const auto sol = solveStereoPose(calib(), c, {}, T, so);
+		const auto sol = solveStereoPose(stereoCalib(), c, {}, T, so);
 		ASSERT_TRUE(sol.ok);
 		const Eigen::Isometry3d E = sol.T_curr_ref.inverse();  // the covariance is of T_ref_curr
 		const Eigen::Matrix3d dR = E.linear() * Ti.linear().transpose();
@@ -207,7 +201,7 @@ std::vector<TStereoCorrespondence> makeTwoViewProblem(
 	std::mt19937 rng(seed);
 	std::uniform_real_distribution<double> ux(-0.45, 0.45), uy(-0.3, 0.3), uz(zmin, zmax);
 	std::normal_distribution<double> nz(0, noise_px);
-	const TStereoCalib c = calib();
+	const TStereoCalib c = stereoCalib();
 	std::vector<TStereoCorrespondence> out;
 	while (static_cast<int>(out.size()) < n)
 	{
@@ -255,8 +249,8 @@ TEST(GeometryPose, TwoViewAdjustmentIsUnbiasedOnFarField)
 	for (int i = 0; i < N; i++)
 	{
 		const auto c = makeTwoViewProblem(T, 60, 0.3, 12, 40, 500 + i);
-		const auto a = solveStereoPose(calib(), c, {}, T, so);
-		const auto b = solveStereoPoseTwoView(calib(), c, {}, T, so);
+		const auto a = solveStereoPose(stereoCalib(), c, {}, T, so);
+		const auto b = solveStereoPoseTwoView(stereoCalib(), c, {}, T, so);
 		ASSERT_TRUE(a.ok && b.ok);
 		const double za = a.T_curr_ref.inverse().translation().z(), zb = b.T_curr_ref.inverse().translation().z();
 		e1 += (za - 0.7) * (za - 0.7);
@@ -303,8 +297,8 @@ TEST(GeometryPose, DisparityNoiseWeighsTheRightImageLess)
 	for (int i = 0; i < N; i++)
 	{
 		const auto c = makeTwoViewProblem(T, 60, 0.2, 4, 25, 900 + i, 1.0);
-		const auto a = solveStereoPoseTwoView(calib(), c, {}, T, flat);
-		const auto b = solveStereoPoseTwoView(calib(), c, {}, T, model);
+		const auto a = solveStereoPoseTwoView(stereoCalib(), c, {}, T, flat);
+		const auto b = solveStereoPoseTwoView(stereoCalib(), c, {}, T, model);
 		ASSERT_TRUE(a.ok && b.ok);
 		eFlat += (a.T_curr_ref.inverse().translation() - T_ref_curr.translation()).squaredNorm();
 		eModel += (b.T_curr_ref.inverse().translation() - T_ref_curr.translation()).squaredNorm();
@@ -362,15 +356,15 @@ TEST(GeometryPose, PriorPrefersTheConsensusNearThePrediction)
 		TStereoCorrespondence k = c[i % 12];
 		k.z_curr = Eigen::Vector3d(uu(rng), uv(rng), 0);
 		k.z_curr.z() = k.z_curr.x() - ud(rng);
-		ASSERT_TRUE(calib().triangulate(k.z_curr.x(), k.z_curr.y(), k.z_curr.z(), k.P_curr));
+		ASSERT_TRUE(stereoCalib().triangulate(k.z_curr.x(), k.z_curr.y(), k.z_curr.z(), k.P_curr));
 		c.push_back(k);
 	}
 	TRansacOptions ro;
 	ro.inlier_threshold_px = 4;
 	ro.hypotheses.push_back(forward(0.88));	 // the constant-velocity prediction, 2 cm off
-	const auto plain = ransacStereoPose(calib(), c, ro);
+	const auto plain = ransacStereoPose(stereoCalib(), c, ro);
 	ro.prior_sigma_m = 0.15;
-	const auto withPrior = ransacStereoPose(calib(), c, ro);
+	const auto withPrior = ransacStereoPose(stereoCalib(), c, ro);
 	ASSERT_TRUE(plain.ok && withPrior.ok);
 	EXPECT_LT(transErr(plain.T_curr_ref, T_wrong), 0.1);  // inlier counting alone: the wrong set
 	EXPECT_LT(transErr(withPrior.T_curr_ref, T_true), 0.1);
@@ -386,13 +380,13 @@ TEST(GeometryPose, TwoViewAdjustmentUsesTheReferenceCalibration)
 	// 0.24 m. Each landmark's reference measurement is projected with that
 	// calibration; projecting it with the live one (the former behaviour)
 	// would put every landmark somewhere else.
-	TStereoCalib ref = calib();
+	TStereoCalib ref = stereoCalib();
 	ref.fx = ref.fy = 560;
 	ref.cx = 300;
 	ref.cxR = 302;
 	ref.cy = 200;
 	ref.baseline = 0.24;
-	const TStereoCalib live = calib();
+	const TStereoCalib live = stereoCalib();
 	const Eigen::Isometry3d T = somePose();
 	std::mt19937 rng(3);
 	std::uniform_real_distribution<double> ux(-3, 3), uy(-1.5, 1.5), uz(4, 20);
@@ -443,11 +437,11 @@ TEST(GeometryPose, CountedSolveEqualsTheSolveOverTheRepeatedList)
 	const auto c = makeProblem(T, 40, 2, 0.5, 5);
 	TPoseSolverOptions so;
 	so.max_iterations = 5;
-	const auto fit = solveStereoPose(calib(), c, {}, T, so);
+	const auto fit = solveStereoPose(stereoCalib(), c, {}, T, so);
 	ASSERT_TRUE(fit.ok);
 	std::mt19937 rng(3);
 	std::uniform_int_distribution<size_t> pick(0, c.size() - 1);
-	const auto atFit = normalTermsAt(calib(), c, fit.T_curr_ref, so);
+	const auto atFit = normalTermsAt(stereoCalib(), c, fit.T_curr_ref, so);
 	for (int b = 0; b < 5; b++)
 	{
 		std::vector<int> count(c.size(), 0);
@@ -458,10 +452,10 @@ TEST(GeometryPose, CountedSolveEqualsTheSolveOverTheRepeatedList)
 			count[i]++;
 			repeated.push_back(c[i]);
 		}
-		const auto ref = solveStereoPose(calib(), repeated, {}, fit.T_curr_ref, so);
+		const auto ref = solveStereoPose(stereoCalib(), repeated, {}, fit.T_curr_ref, so);
 		for (const auto* terms : {static_cast<const std::vector<TNormalTerms>*>(nullptr), &atFit})
 		{
-			const auto got = solveStereoPoseCounted(calib(), c, count, fit.T_curr_ref, so, terms);
+			const auto got = solveStereoPoseCounted(stereoCalib(), c, count, fit.T_curr_ref, so, terms);
 			ASSERT_EQ(got.ok, ref.ok);
 			EXPECT_LT(transErr(got.T_curr_ref, ref.T_curr_ref), 1e-9);
 			EXPECT_LT(rotErrDeg(got.T_curr_ref, ref.T_curr_ref), 1e-7);
@@ -471,11 +465,11 @@ TEST(GeometryPose, CountedSolveEqualsTheSolveOverTheRepeatedList)
 		// A resample that differs from the list does not solve as it.
 		std::vector<int> other = count;
 		std::fill(other.begin(), other.begin() + 10, 0);
-		const auto off = solveStereoPoseCounted(calib(), c, other, fit.T_curr_ref, so, &atFit);
+		const auto off = solveStereoPoseCounted(stereoCalib(), c, other, fit.T_curr_ref, so, &atFit);
 		ASSERT_TRUE(off.ok);
 		EXPECT_GT(transErr(off.T_curr_ref, ref.T_curr_ref), 1e-6);
 	}
-	EXPECT_THROW(solveStereoPoseCounted(calib(), c, std::vector<int>(3, 1), T, so), std::invalid_argument);
+	EXPECT_THROW(solveStereoPoseCounted(stereoCalib(), c, std::vector<int>(3, 1), T, so), std::invalid_argument);
 }
 
 TEST(GeometryPose, PoseOnlySolveGivesTheSamePoseToTheBit)
@@ -496,8 +490,8 @@ TEST(GeometryPose, PoseOnlySolveGivesTheSamePoseToTheBit)
 			TPoseSolverOptions poseOnly = full;
 			poseOnly.covariance = false;
 			const auto solve = twoView ? solveStereoPoseTwoView : solveStereoPose;
-			const auto a = solve(calib(), c, {}, start, full);
-			const auto b = solve(calib(), c, {}, start, poseOnly);
+			const auto a = solve(stereoCalib(), c, {}, start, full);
+			const auto b = solve(stereoCalib(), c, {}, start, poseOnly);
 			ASSERT_TRUE(a.ok);
 			ASSERT_TRUE(b.ok);
 			EXPECT_EQ(b.iterations, a.iterations);

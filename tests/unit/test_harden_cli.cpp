@@ -20,7 +20,7 @@ struct CliCase
 	std::string expect;	 //!< in the message (the option at fault)
 };
 
-void expectRefused(const std::vector<CliCase>& cases, const std::string& mustNotExist)
+void expectCliRefused(const std::vector<CliCase>& cases, const std::string& mustNotExist)
 {
 	for (const auto& c : cases)
 	{
@@ -43,7 +43,7 @@ TEST(CommandLine, ImageRefusesBadNumbersAndUnknownFlags)
 	cv::Mat img(20, 30, CV_8UC3, cv::Scalar(60, 90, 120));
 	ASSERT_TRUE(cv::imwrite(dir + "/in.png", img));
 	const std::string io = "image " + dir + "/in.png " + dir + "/out.png";
-	expectRefused(
+	expectCliRefused(
 		{{io + " --alpha nan", "alpha"},
 		 {io + " --alpha inf", "alpha"},
 		 {io + " --alpha 1e999", "alpha"},
@@ -68,7 +68,7 @@ TEST(CommandLine, SimRefusesBadFrameCountsBeforeRendering)
 	const std::string ini = std::regex_replace(s.str(), std::regex("(frames|end_s_m) = [0-9]+"), "frames = 2");
 	std::ofstream(dir + "/sim.ini") << ini;
 	const std::string sim = "sim -q -c " + dir + "/sim.ini -o " + dir + "/out";
-	expectRefused(
+	expectCliRefused(
 		{{sim + " --frames abc", "frames"},
 		 {sim + " --frames 2.5", "frames"},
 		 {sim + " --frames 99999999999", "frames"},
@@ -85,7 +85,7 @@ TEST(CommandLine, EveryCommandRefusesUnknownFlagsAndBadNumbers)
 	test::writeSyntheticRawlog(dir + "/r.rawlog", 2, false);
 	std::ofstream(dir + "/t.tum") << "1 0 0 0 0 0 0 1\n2 1 0 0 0 0 0 1\n3 2 0 0 0 0 0 1\n";
 	const std::string r = dir + "/r.rawlog", t = dir + "/t.tum", o = dir + "/o";
-	expectRefused(
+	expectCliRefused(
 		{{"vo -i " + r + " -o " + o + " --frobnicate", "frobnicate"},
 		 {"filter -i " + r + " -o " + o + " --frobnicate", "frobnicate"},
 		 {"traj-error --gt " + t + " --est " + t + " --max-dt nan", "max-dt"},

@@ -30,22 +30,6 @@ void writeExternalRawlog(const std::string& path, int n)
 	w.commit();
 }
 
-/** Every file under dir with its contents. */
-std::map<std::string, std::string> snapshot(const std::string& dir)
-{
-	std::map<std::string, std::string> m;
-	if (!fs::is_directory(dir)) return m;
-	for (const auto& e : fs::recursive_directory_iterator(dir))
-		if (e.is_regular_file())
-		{
-			std::ifstream f(e.path(), std::ios::binary);
-			std::ostringstream s;
-			s << f.rdbuf();
-			m[fs::relative(e.path(), dir).string()] = s.str();
-		}
-	return m;
-}
-
 /** Counts stereo frames per label, every external image loaded. */
 std::map<std::string, int> labelsOf(const std::string& rawlog)
 {
@@ -93,13 +77,13 @@ TEST(FilterExternalInput, OutputWithTheInputsStemNeverTouchesItsImages)
 	{
 		const auto dir = test::tempDir("filter_ext_stem");
 		writeExternalRawlog(dir + "/run.rawlog", 3);
-		const auto before = snapshot(dir + "/run_Images");
+		const auto before = test::snapshot(dir + "/run_Images");
 		ASSERT_EQ(before.size(), 7u);  // 3 frames x 2 images, and the folder's output marker
 		ASSERT_EQ(before.count(".shadyloc-output"), 1u);
 		std::string out;
 		const int rc = test::runCommand(
 			test::appPath() + " filter -q -i " + dir + "/run.rawlog -o " + dir + "/run.filtered" + ext, &out);
-		EXPECT_EQ(snapshot(dir + "/run_Images"), before) << "filter" << ext << " changed the input's images: " << out;
+		EXPECT_EQ(test::snapshot(dir + "/run_Images"), before) << "filter" << ext << " changed the input's images: " << out;
 		// The input still reads, in colour.
 		for (const auto& s : test::readStereoFrames(dir + "/run.rawlog"))
 			EXPECT_EQ(s->imageLeft.asCvMatRef().channels(), 3);

@@ -18,8 +18,6 @@ namespace fs = std::filesystem;
 
 namespace
 {
-void writeBytes(const std::string& path, const std::string& b) { std::ofstream(path, std::ios::binary) << b; }
-
 /** A textured colour image (so that JPEG has real entropy-coded data). */
 cv::Mat texture(int w, int h)
 {
@@ -34,7 +32,7 @@ std::string truncatedCopy(const std::string& dir, const std::string& name, doubl
 	const std::string whole = dir + "/whole_" + name, cut = dir + "/cut_" + name;
 	EXPECT_TRUE(cv::imwrite(whole, texture(64, 48)));
 	const std::string b = test::fileContents(whole);
-	writeBytes(cut, b.substr(0, static_cast<size_t>(b.size() * fraction)));
+	test::writeFileContents(cut, b.substr(0, static_cast<size_t>(b.size() * fraction)));
 	return cut;
 }
 }  // namespace
@@ -70,7 +68,7 @@ TEST(ImageFiles, ImportRefusesTruncatedImages)
 	}
 	const std::string victim = dir + "/R/1" + ext;
 	const std::string b = test::fileContents(victim);
-	writeBytes(victim, b.substr(0, b.size() * 3 / 4));
+	test::writeFileContents(victim, b.substr(0, b.size() * 3 / 4));
 	std::ofstream(dir + "/calib.ini") << "[left]\nfx_px = 50\nfy_px = 50\ncx_px = 32\ncy_px = 24\n"
 										 "[stereo]\nbaseline_m = 0.1\nwidth_px = 64\nheight_px = 48\n";
 	std::string out;
@@ -102,7 +100,7 @@ TEST(ImageFiles, TruncatedExternalImageInARawlogIsAnError)
 	}
 	const std::string victim = dir + "/r_Images/L1" + ext;
 	const std::string b = test::fileContents(victim);
-	writeBytes(victim, b.substr(0, b.size() * 2 / 3));
+	test::writeFileContents(victim, b.substr(0, b.size() * 2 / 3));
 	std::string out;
 	EXPECT_NE(test::runCommand(test::appPath() + " filter -q -i " + dir + "/r.rawlog -o " + dir + "/f.rawlog", &out), 0)
 		<< out;

@@ -31,20 +31,8 @@ namespace fs = std::filesystem;
 
 namespace
 {
-
-std::string src(const std::string& rel) { return std::string(SHADYLOC_SOURCE_DIR) + "/" + rel; }
-
-/** Every regular file under `path` (relative name -> bytes); a file: {".": bytes}. */
+/** Every regular file under a path (relative name -> bytes); a file: {".": bytes} (test::snapshot). */
 using Snapshot = std::map<std::string, std::string>;
-Snapshot snapshot(const std::string& path)
-{
-	Snapshot s;
-	if (fs::is_regular_file(path)) s["."] = test::fileContents(path);
-	else if (fs::is_directory(path))
-		for (const auto& e : fs::recursive_directory_iterator(path))
-			if (e.is_regular_file()) s[fs::relative(e.path(), path).string()] = test::fileContents(e.path().string());
-	return s;
-}
 
 /** The same files; the same bytes except in files named in `varying` (timings). */
 bool sameOutput(const Snapshot& a, const Snapshot& b, const std::set<std::string>& varying)
@@ -106,7 +94,7 @@ class Killer
 		for (const auto& o : m_c.outputs)
 		{
 			if (fs::is_directory(o)) std::ofstream(o + "/previous.txt") << "from the previous run\n";
-			m_old[o] = snapshot(o);
+			m_old[o] = test::snapshot(o);
 			m_new[o] = m_old[o];
 			m_new[o].erase("previous.txt");
 		}
@@ -153,8 +141,8 @@ class Killer
 			EXPECT_TRUE(fs::exists(s)) << s << ": a stale temporary is named, not deleted behind the user's back";
 		}
 		for (const auto& o : m_c.outputs)
-			EXPECT_TRUE(sameOutput(snapshot(o), m_new[o], m_c.varying))
-				<< o << ": the rerun's output is not complete:\n" << describe(snapshot(o)) << "expected\n" << describe(m_new[o]);
+			EXPECT_TRUE(sameOutput(test::snapshot(o), m_new[o], m_c.varying))
+				<< o << ": the rerun's output is not complete:\n" << describe(test::snapshot(o)) << "expected\n" << describe(m_new[o]);
 		for (const auto& s : stale) fs::remove_all(s);
 	}
 
@@ -203,7 +191,7 @@ class Killer
 	{
 		for (const auto& o : m_c.outputs)
 		{
-			const auto now = snapshot(o);
+			const auto now = test::snapshot(o);
 			EXPECT_TRUE(now == m_old[o] || sameOutput(now, m_new[o], m_c.varying))
 				<< o << " is neither the previous output nor a complete new one:\n"
 				<< describe(now) << "previous:\n" << describe(m_old[o]);
@@ -217,7 +205,7 @@ class Killer
 			if (fs::is_directory(o) && !fs::exists(o + "/previous.txt"))
 			{
 				std::ofstream(o + "/previous.txt") << "from the previous run\n";
-				m_old[o] = snapshot(o);
+				m_old[o] = test::snapshot(o);
 			}
 	}
 
@@ -232,7 +220,7 @@ std::string simRuns(const std::string& dir, const std::string& traversals)
 {
 	std::string out;
 	const int rc = test::runCommand(
-		test::appPath() + " sim -q -c " + src("config/sim.ini") + " -o " + dir + "/sim --traversals " + traversals +
+		test::appPath() + " sim -q -c " + test::sourcePath("config/sim.ini") + " -o " + dir + "/sim --traversals " + traversals +
 			" --frames 8",
 		&out);
 	if (rc != 0) throw std::runtime_error("sim failed: " + out);
@@ -245,7 +233,7 @@ std::string surveyedNoon(const std::string& dir, const std::string& sim)
 	const std::string map = dir + "/noon.kfmap";
 	std::string out;
 	const int rc = test::runCommand(
-		test::appPath() + " survey -q -i " + sim + "/noon.rawlog -o " + map + " -c " + src("config/vo_sim.ini") +
+		test::appPath() + " survey -q -i " + sim + "/noon.rawlog -o " + map + " -c " + test::sourcePath("config/vo_sim.ini") +
 			" --gt " + sim + "/noon.tum",
 		&out);
 	if (rc != 0) throw std::runtime_error("survey failed: " + out);
@@ -290,7 +278,7 @@ TEST(KillFolderOutputsSlow, LocaliseOutputFolder)
 	const std::string map = surveyedNoon(dir, sim);
 	TKillCase c;
 	c.args = {"localise", "-q", "-m", map, "-i", sim + "/overcast.rawlog", "-o", dir + "/loc",
-			  "-c", src("config/vo_sim.ini"), "-c", src("config/localise_sim.ini"), "--gt", sim + "/overcast.tum"};
+			  "-c", test::sourcePath("config/vo_sim.ini"), "-c", test::sourcePath("config/localise_sim.ini"), "--gt", sim + "/overcast.tum"};
 	c.outputs = {dir + "/loc"};
 	c.varying = {"timing.json"};
 	Killer(c, dir).runAll();
@@ -306,7 +294,7 @@ TEST(KillFolderOutputsSlow, LocaliseLearntMap)
 	const std::string before = test::fileContents(map);
 	TKillCase c;
 	c.args = {"localise", "-q", "-m", map, "-i", sim + "/overcast.rawlog", "-o", dir + "/loc",
-			  "-c", src("config/vo_sim.ini"), "-c", src("config/localise_sim.ini"), "--learn", dir + "/learnt.kfmap"};
+			  "-c", test::sourcePath("config/vo_sim.ini"), "-c", test::sourcePath("config/localise_sim.ini"), "--learn", dir + "/learnt.kfmap"};
 	c.outputs = {dir + "/loc", dir + "/learnt.kfmap"};
 	c.varying = {"timing.json"};
 	Killer(c, dir).runAll();
@@ -320,8 +308,8 @@ TEST(KillFolderOutputsSlow, EvalJobFoldersPairsAndFigures)
 	std::ofstream(sim + "/runs.txt") << "noon noon.rawlog noon.tum\novercast overcast.rawlog overcast.tum\n";
 	const std::string o = dir + "/eval";
 	TKillCase c;
-	c.args = {"eval", "-q", "--runs", sim + "/runs.txt", "-o", o, "-c", src("config/vo_sim.ini"),
-			  "-c", src("config/localise_sim.ini"), "-j", "1"};
+	c.args = {"eval", "-q", "--runs", sim + "/runs.txt", "-o", o, "-c", test::sourcePath("config/vo_sim.ini"),
+			  "-c", test::sourcePath("config/localise_sim.ini"), "-j", "1"};
 	for (const char* job : {"map_noon", "map_overcast", "pair_noon__overcast__baseline", "pair_noon__overcast__combined",
 							"pair_overcast__noon__baseline", "pair_overcast__noon__combined"})
 		c.outputs.push_back(o + "/jobs/" + job);

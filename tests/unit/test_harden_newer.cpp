@@ -11,8 +11,6 @@
 #include <shadyloc/features/StereoFeatures.h>
 
 #include <mrpt/config/CConfigFileMemory.h>
-#include <mrpt/io/CFileGZOutputStream.h>
-#include <mrpt/serialization/CArchive.h>
 
 #include <fstream>
 #include <sstream>
@@ -25,17 +23,6 @@ namespace fs = std::filesystem;
 
 namespace
 {
-std::string src(const std::string& rel) { return std::string(SHADYLOC_SOURCE_DIR) + "/" + rel; }
-
-void writeText(const std::string& path, const std::string& text) { std::ofstream(path, std::ios::binary) << text; }
-
-void writeRun(const std::string& path, int frames, int w = 160, int h = 120)
-{
-	mrpt::io::CFileGZOutputStream f(path);
-	auto arch = mrpt::serialization::archiveFrom(f);
-	for (int i = 0; i < frames; i++) arch << *test::syntheticStereoFrame(i, w, h);
-}
-
 /** The error of loading [features] from `ini`, "" if it loads. */
 std::string featureError(const std::string& ini)
 {
@@ -66,7 +53,7 @@ std::string runListError(const std::string& path)
 }
 
 /** Peak resident memory [kB] of `shadyloc args` (its exit status in *rc). */
-long peakKb(const std::string& args, int* rc)
+long peakKbOfShell(const std::string& args, int* rc)
 {
 	const pid_t pid = fork();
 	if (pid == 0)
@@ -101,23 +88,23 @@ TEST(EvalRunList, SameRawlogTwiceRefusedAndQuotedPathsWithSpaces)
 {
 	const std::string dir = test::tempDir("runlist_newer");
 	fs::create_directories(dir + "/my runs");
-	writeText(dir + "/a.rawlog", "x");
-	writeText(dir + "/my runs/b.rawlog", "x");
-	writeText(dir + "/runs.txt", "a a.rawlog\nb ./a.rawlog\n");
+	test::writeFileContents(dir + "/a.rawlog", "x");
+	test::writeFileContents(dir + "/my runs/b.rawlog", "x");
+	test::writeFileContents(dir + "/runs.txt", "a a.rawlog\nb ./a.rawlog\n");
 	EXPECT_NE(
 		runListError(dir + "/runs.txt").find("runs.txt:2: run 'b': rawlog '" + dir + "/a.rawlog' is run 'a''s (line 1)"),
 		std::string::npos)
 		<< runListError(dir + "/runs.txt");
 	const std::string hint = "(a path with spaces must be in double quotes: \"my runs/a.rawlog\")";
-	writeText(dir + "/runs.txt", "a a.rawlog\nb my runs/b.rawlog gt.tum\n");
+	test::writeFileContents(dir + "/runs.txt", "a a.rawlog\nb my runs/b.rawlog gt.tum\n");
 	EXPECT_NE(runListError(dir + "/runs.txt").find("runs.txt:2: 4 fields; a run is 'name rawlog [ground_truth.tum]' " + hint),
 		std::string::npos)
 		<< runListError(dir + "/runs.txt");
-	writeText(dir + "/runs.txt", "a a.rawlog\nb my runs/b.rawlog\n");
+	test::writeFileContents(dir + "/runs.txt", "a a.rawlog\nb my runs/b.rawlog\n");
 	EXPECT_NE(runListError(dir + "/runs.txt").find("runs.txt:2: run 'b': rawlog '" + dir + "/my' does not exist " + hint),
 		std::string::npos)
 		<< runListError(dir + "/runs.txt");
-	writeText(dir + "/runs.txt", "a a.rawlog\nb \"my runs/b.rawlog\"\n");
+	test::writeFileContents(dir + "/runs.txt", "a a.rawlog\nb \"my runs/b.rawlog\"\n");
 	ASSERT_EQ(runListError(dir + "/runs.txt"), "(no error)");
 	EXPECT_EQ(eval::readRunList(dir + "/runs.txt")[1].rawlogPath, dir + "/my runs/b.rawlog");
 }
@@ -125,13 +112,13 @@ TEST(EvalRunList, SameRawlogTwiceRefusedAndQuotedPathsWithSpaces)
 TEST(NewerChecks, LocaliseConfigErrorNamesFileAndLine)
 {
 	const std::string dir = test::tempDir("newer_localise_cfg");
-	fs::copy_file(src("tests/golden/CKeyframeMap.bin"), dir + "/map.kfmap");
-	writeRun(dir + "/live.rawlog", 2);
-	writeText(dir + "/typo.ini", "[localiser]\nmin_inliers = 12\nmin_inlier = 3\n");
-	writeText(dir + "/cells.ini", "; corners\n[features]\nmax_per_cell = 0\n");
+	fs::copy_file(test::sourcePath("tests/golden/CKeyframeMap.bin"), dir + "/map.kfmap");
+	test::writeSyntheticRawlog(dir + "/live.rawlog", 2, false);
+	test::writeFileContents(dir + "/typo.ini", "[localiser]\nmin_inliers = 12\nmin_inlier = 3\n");
+	test::writeFileContents(dir + "/cells.ini", "; corners\n[features]\nmax_per_cell = 0\n");
 	std::string out;
 	const std::string base = test::appPath() + " localise -q -m " + dir + "/map.kfmap -i " + dir + "/live.rawlog -o " + dir + "/o -c " +
-							 src("config/vo_sim.ini") + " -c " + src("config/localise_sim.ini");
+							 test::sourcePath("config/vo_sim.ini") + " -c " + test::sourcePath("config/localise_sim.ini");
 	EXPECT_EQ(test::runCommand(base + " -c " + dir + "/typo.ini", &out), 1) << out;
 	EXPECT_NE(out.find(dir + "/typo.ini:3: [localiser] min_inlier: unknown key"), std::string::npos) << out;
 	EXPECT_EQ(test::runCommand(base + " -c " + dir + "/cells.ini", &out), 1) << out;
@@ -142,9 +129,9 @@ TEST(NewerChecks, LocaliseConfigErrorNamesFileAndLine)
 TEST(NewerChecks, CalibrateAlphaRefusesRunsOfTwoCamerasAndGammaWithoutGammaCurve)
 {
 	const std::string dir = test::tempDir("newer_calib");
-	writeRun(dir + "/a.rawlog", 2);
-	writeRun(dir + "/b.rawlog", 2);
-	writeRun(dir + "/wide.rawlog", 2, 200, 120);
+	test::writeSyntheticRawlog(dir + "/a.rawlog", 2, false);
+	test::writeSyntheticRawlog(dir + "/b.rawlog", 2, false);
+	test::writeSyntheticRawlog(dir + "/wide.rawlog", 2, false, 200, 120);
 	std::string out;
 	const std::string base = test::appPath() + " calibrate-alpha --no-plot --bootstrap 0 --max-frames 2 -o " + dir + "/cam";
 	EXPECT_EQ(test::runCommand(base + " --linearise none --runs " + dir + "/a.rawlog," + dir + "/wide.rawlog", &out), 1) << out;
@@ -167,10 +154,10 @@ TEST(NewerChecks, CalibrateAlphaRefusesRunsOfTwoCamerasAndGammaWithoutGammaCurve
 TEST(NewerChecks, DamagedMapCostsItsSizeOnceInMemory)
 {
 	const std::string dir = test::tempDir("newer_map_memory");
-	std::ifstream g(src("tests/golden/CKeyframeMap.bin"), std::ios::binary);
+	std::ifstream g(test::sourcePath("tests/golden/CKeyframeMap.bin"), std::ios::binary);
 	std::string bytes((std::istreambuf_iterator<char>(g)), std::istreambuf_iterator<char>());
 	int rc = 0;
-	const long intact = peakKb("map-info " + src("tests/golden/CKeyframeMap.bin"), &rc);
+	const long intact = peakKbOfShell("map-info " + test::sourcePath("tests/golden/CKeyframeMap.bin"), &rc);
 	ASSERT_EQ(rc, 0);
 	const size_t size = 150u << 20;
 	{
@@ -179,7 +166,7 @@ TEST(NewerChecks, DamagedMapCostsItsSizeOnceInMemory)
 		std::string junk(1 << 20, '\x5a');
 		for (size_t n = 64; n < size; n += junk.size()) f << junk;
 	}
-	const long damaged = peakKb("map-info " + dir + "/big.kfmap", &rc);
+	const long damaged = peakKbOfShell("map-info " + dir + "/big.kfmap", &rc);
 	EXPECT_EQ(rc, 1);
 	EXPECT_LT(damaged, intact + static_cast<long>(1.5 * (size >> 10)))
 		<< "peak " << damaged << " kB, intact map " << intact << " kB, file " << (size >> 10) << " kB";
@@ -194,12 +181,12 @@ TEST(NewerChecks, RenderOfOneKeyframeMapNamesTheMap)
 	std::string out;
 	ASSERT_EQ(
 		test::runCommand(
-			test::appPath() + " sim -q -c " + src("config/sim.ini") + " -o " + dir + " --traversals noon --frames 1", &out),
+			test::appPath() + " sim -q -c " + test::sourcePath("config/sim.ini") + " -o " + dir + " --traversals noon --frames 1", &out),
 		0)
 		<< out;
 	ASSERT_EQ(
 		test::runCommand(
-			test::appPath() + " survey -q -i " + dir + "/noon.rawlog -o " + dir + "/one.kfmap -c " + src("config/vo_sim.ini"), &out),
+			test::appPath() + " survey -q -i " + dir + "/noon.rawlog -o " + dir + "/one.kfmap -c " + test::sourcePath("config/vo_sim.ini"), &out),
 		0)
 		<< out;
 	EXPECT_EQ(test::runCommand(test::appPath() + " render -m " + dir + "/one.kfmap -o " + dir + "/one.png", &out), 1) << out;
@@ -223,16 +210,16 @@ const TSimData& simData()
 		TSimData t;
 		t.dir = test::tempDir(std::string("newer_sim_") + ::testing::UnitTest::GetInstance()->current_test_info()->name());
 		t.sim = t.dir + "/sim";
-		t.cfg = " -c " + src("config/vo_sim.ini") + " -c " + src("config/localise_sim.ini");
+		t.cfg = " -c " + test::sourcePath("config/vo_sim.ini") + " -c " + test::sourcePath("config/localise_sim.ini");
 		std::string out;
 		if (test::runCommand(
-				test::appPath() + " sim -q -c " + src("config/sim.ini") + " -o " + t.sim + " --traversals noon,overcast --frames 8",
+				test::appPath() + " sim -q -c " + test::sourcePath("config/sim.ini") + " -o " + t.sim + " --traversals noon,overcast --frames 8",
 				&out) != 0)
 			throw std::runtime_error(out);
 		for (const char* run : {"noon", "overcast"})
 			if (test::runCommand(
 					test::appPath() + " survey -q -i " + t.sim + "/" + run + ".rawlog -o " + t.dir + "/" + run + ".kfmap -c " +
-						src("config/vo_sim.ini") + " --gt " + t.sim + "/" + run + ".tum",
+						test::sourcePath("config/vo_sim.ini") + " --gt " + t.sim + "/" + run + ".tum",
 					&out) != 0)
 				throw std::runtime_error(out);
 		t.noonMap = t.dir + "/noon.kfmap";
@@ -256,7 +243,7 @@ std::string localise(const TSimData& d, const std::string& map, const std::strin
 TEST(NewerChecksSim, LocaliseRefusesALiveRunOfAnotherCamera)
 {
 	const auto& d = simData();
-	writeRun(d.dir + "/other_camera.rawlog", 3, 320, 240);
+	test::writeSyntheticRawlog(d.dir + "/other_camera.rawlog", 3, false, 320, 240);
 	std::string out;
 	EXPECT_EQ(
 		test::runCommand(
@@ -319,7 +306,7 @@ TEST(NewerChecksSim, FiguresRefuseMismatchedRunsAndWarnOfNamesThatMatchNothing)
 TEST(NewerChecksSim, EvalMergeRefusesADamagedMap)
 {
 	const auto& d = simData();
-	writeText(d.sim + "/runs.txt", "noon noon.rawlog noon.tum\novercast overcast.rawlog overcast.tum\n");
+	test::writeFileContents(d.sim + "/runs.txt", "noon noon.rawlog noon.tum\novercast overcast.rawlog overcast.tum\n");
 	const std::string o = d.dir + "/eval", eval = test::appPath() + " eval -q --runs " + d.sim + "/runs.txt -o " + o + d.cfg;
 	std::string out;
 	ASSERT_EQ(test::runCommand(eval, &out), 0) << out;

@@ -22,7 +22,7 @@ namespace fs = std::filesystem;
 
 namespace
 {
-using Bytes = std::vector<uint8_t>;
+using test::Bytes;
 
 /** The serialised bytes of n small synthetic stereo frames, and where each
  * object starts (ends[i] = end of object i). */
@@ -37,12 +37,6 @@ Bytes serialisedFrames(int n, std::vector<size_t>& ends)
 	}
 	const auto* p = static_cast<const uint8_t*>(mem.getRawBufferData());
 	return Bytes(p, p + mem.getPosition());
-}
-
-void writeFile(const std::string& path, const Bytes& b)
-{
-	std::ofstream f(path, std::ios::binary);
-	f.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
 }
 
 /** gzip-compresses `b`. With flushAt set, the stream is flushed (Z_FULL_FLUSH)
@@ -87,7 +81,7 @@ Bytes jpegStoredImage()
 }
 
 /** Reads the whole rawlog; returns the number of objects, or throws. */
-size_t readAll(const std::string& path)
+size_t readObjectCount(const std::string& path)
 {
 	io::RawlogReader r(path);
 	size_t n = 0;
@@ -100,7 +94,7 @@ void expectErrorNamingFile(const std::string& path, const std::string& what)
 {
 	try
 	{
-		const size_t n = readAll(path);
+		const size_t n = readObjectCount(path);
 		ADD_FAILURE() << what << ": read as complete (" << n << " objects)";
 	}
 	catch (const io::RawlogError& e)
@@ -115,10 +109,10 @@ TEST(RawlogIntegrity, WholeRawlogsReadCompletelyPlainAndGzip)
 	const auto dir = test::tempDir("rawlog_whole");
 	std::vector<size_t> ends;
 	const Bytes b = serialisedFrames(4, ends);
-	writeFile(dir + "/plain.rawlog", b);
-	writeFile(dir + "/gz.rawlog", gzip(b));
-	EXPECT_EQ(readAll(dir + "/plain.rawlog"), 4u);
-	EXPECT_EQ(readAll(dir + "/gz.rawlog"), 4u);
+	test::writeBytes(dir + "/plain.rawlog", b);
+	test::writeBytes(dir + "/gz.rawlog", gzip(b));
+	EXPECT_EQ(readObjectCount(dir + "/plain.rawlog"), 4u);
+	EXPECT_EQ(readObjectCount(dir + "/gz.rawlog"), 4u);
 }
 
 TEST(RawlogIntegrity, CutAnywhereInsideTheLastObjectIsAnError)
@@ -137,8 +131,8 @@ TEST(RawlogIntegrity, CutAnywhereInsideTheLastObjectIsAnError)
 		const Bytes t(b.begin(), b.end() - static_cast<long>(cut));
 		const std::string plain = dir + "/cut" + std::to_string(cut) + ".rawlog";
 		const std::string gz = dir + "/cut" + std::to_string(cut) + ".gz.rawlog";
-		writeFile(plain, t);
-		writeFile(gz, gzip(t));
+		test::writeBytes(plain, t);
+		test::writeBytes(gz, gzip(t));
 		expectErrorNamingFile(plain, "plain, " + std::to_string(cut) + " bytes cut");
 		expectErrorNamingFile(gz, "gzip, " + std::to_string(cut) + " bytes cut");
 	}
@@ -154,7 +148,7 @@ TEST(RawlogIntegrity, GzipStreamWithoutTrailerIsAnError)
 	for (size_t k = 0; k + 1 < ends.size(); k++)
 	{
 		const std::string p = dir + "/notrailer" + std::to_string(k) + ".rawlog";
-		writeFile(p, gzip(b, ends[k]));
+		test::writeBytes(p, gzip(b, ends[k]));
 		expectErrorNamingFile(p, "gzip cut after object " + std::to_string(k));
 	}
 }
@@ -169,7 +163,7 @@ TEST(RawlogIntegrity, CompressedFileCutAnywhereNearItsEndIsAnError)
 	for (size_t cut = 1; cut <= 64; cut++)
 	{
 		const std::string p = dir + "/gzcut" + std::to_string(cut) + ".rawlog";
-		writeFile(p, Bytes(gz.begin(), gz.end() - static_cast<long>(cut)));
+		test::writeBytes(p, Bytes(gz.begin(), gz.end() - static_cast<long>(cut)));
 		expectErrorNamingFile(p, "compressed file, " + std::to_string(cut) + " bytes cut");
 	}
 }
@@ -183,8 +177,8 @@ TEST(RawlogIntegrity, GzipTrailerMismatchIsAnError)
 	Bytes badCrc = gz, badLen = gz;
 	badCrc[gz.size() - 8] ^= 0x01;	// CRC-32 of the data
 	badLen[gz.size() - 4] ^= 0x01;	// length of the data mod 2^32
-	writeFile(dir + "/crc.rawlog", badCrc);
-	writeFile(dir + "/len.rawlog", badLen);
+	test::writeBytes(dir + "/crc.rawlog", badCrc);
+	test::writeBytes(dir + "/len.rawlog", badLen);
 	expectErrorNamingFile(dir + "/crc.rawlog", "wrong CRC-32");
 	expectErrorNamingFile(dir + "/len.rawlog", "wrong length");
 }
@@ -195,7 +189,7 @@ TEST(RawlogIntegrity, AppRefusesTruncatedRawlogAndWritesNothing)
 	std::vector<size_t> ends;
 	const Bytes b = serialisedFrames(3, ends);
 	const Bytes t(b.begin(), b.end() - 5);	// inside the last object's timestamp region
-	writeFile(dir + "/cut.rawlog", gzip(t));
+	test::writeBytes(dir + "/cut.rawlog", gzip(t));
 	std::string out;
 	EXPECT_NE(test::runCommand(test::appPath() + " filter -q -i " + dir + "/cut.rawlog -o " + dir + "/out.rawlog", &out), 0)
 		<< out;
@@ -210,15 +204,15 @@ TEST(RawlogIntegrity, ImageByteCountsAreCheckedBeforeMrptReadsThem)
 	// from its byte count, which no allocation bound sees.
 	const auto dir = test::tempDir("rawlog_jpeg_count");
 	Bytes b = jpegStoredImage();
-	writeFile(dir + "/ok.rawlog", b);
-	EXPECT_EQ(readAll(dir + "/ok.rawlog"), 1u);
+	test::writeBytes(dir + "/ok.rawlog", b);
+	EXPECT_EQ(readObjectCount(dir + "/ok.rawlog"), 1u);
 	// Header: 0x91 "mrpt::img::CImage" version external hasColor w h nBytes.
 	const size_t nBytesAt = 1 + 17 + 1 + 1 + 1 + 4 + 4;
 	b[nBytesAt + 3] = 0xF0;	 // ~4 GB announced
-	writeFile(dir + "/bad.rawlog", b);
+	test::writeBytes(dir + "/bad.rawlog", b);
 	try
 	{
-		readAll(dir + "/bad.rawlog");
+		readObjectCount(dir + "/bad.rawlog");
 		ADD_FAILURE() << "4 GB image byte count accepted";
 	}
 	catch (const io::RawlogError& e)
@@ -239,10 +233,10 @@ TEST(RawlogIntegrity, CorruptJpegImageIsAnErrorNotAnExit)
 	ASSERT_EQ(b[jpegAt + 1], 0xD8);	 // the JPEG's start-of-image marker
 	b[jpegAt + 1] = 0x00;
 	const std::string path = dir + "/bad_jpeg.rawlog";
-	writeFile(path, b);
+	test::writeBytes(path, b);
 	try
 	{
-		readAll(path);
+		readObjectCount(path);
 		ADD_FAILURE() << "an image with a broken JPEG header read as complete";
 	}
 	catch (const io::RawlogError& e)
@@ -256,10 +250,10 @@ TEST(RawlogIntegrity, CorruptJpegImageIsAnErrorNotAnExit)
 	// scan replaced by garbage) still decodes or fails with an error: never exits.
 	Bytes c = jpegStoredImage();
 	for (size_t i = c.size() - 40; i < c.size(); i++) c[i] = 0xFF;
-	writeFile(dir + "/cut_jpeg.rawlog", c);
+	test::writeBytes(dir + "/cut_jpeg.rawlog", c);
 	try
 	{
-		readAll(dir + "/cut_jpeg.rawlog");
+		readObjectCount(dir + "/cut_jpeg.rawlog");
 	}
 	catch (const io::RawlogError& e)
 	{
@@ -283,7 +277,7 @@ TEST(RawlogIntegrity, AbandonedJpegDecodersAreFreed)
 	ASSERT_GT(sof, 0u);
 	b[sof + 7] = 0xEA, b[sof + 8] = 0x60;  // width 60000 (height stays 24)
 	const std::string path = dir + "/huge_jpeg.rawlog";
-	writeFile(path, b);
+	test::writeBytes(path, b);
 	const auto heapInUse = [] { return mallinfo2().uordblks; };
 	std::string first;
 	const size_t before = heapInUse();
@@ -291,7 +285,7 @@ TEST(RawlogIntegrity, AbandonedJpegDecodersAreFreed)
 	{
 		try
 		{
-			readAll(path);
+			readObjectCount(path);
 			ADD_FAILURE() << "a 60000x24 JPEG in a " << b.size() << "-byte file read as complete";
 		}
 		catch (const io::RawlogError& e)

@@ -261,7 +261,7 @@ TEST(OutputsTogether, FolderReplacedOnlyIfAnEarlierOutputOfTheSameKind)
 
 namespace
 {
-using Bytes = std::vector<uint8_t>;
+using test::Bytes;
 Bytes gzipBytes(const Bytes& b)
 {
 	uLongf n = compressBound(static_cast<uLong>(b.size())) + 64;
@@ -276,10 +276,6 @@ Bytes gzipBytes(const Bytes& b)
 	out.resize(out.size() - z.avail_out);
 	deflateEnd(&z);
 	return out;
-}
-void writeBytes(const std::string& path, const Bytes& b)
-{
-	std::ofstream(path, std::ios::binary).write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(b.size()));
 }
 /** Peak resident memory [kB] of `shadyloc args` (ru_maxrss of the child). */
 long peakKb(const std::vector<std::string>& args, const std::string& log, int* exitCode)
@@ -303,7 +299,7 @@ TEST(DamagedRawlog, EveryHeaderByteFlippedIsAnErrorOrReadsAndMemoryStaysBounded)
 	for (int i = 0; i < 2; i++) arch << *test::syntheticStereoFrame(i, 320, 240);
 	const auto* p = static_cast<const uint8_t*>(mem.getRawBufferData());
 	const Bytes valid(p, p + mem.getPosition());
-	writeBytes(dir + "/valid.rawlog", gzipBytes(valid));
+	test::writeBytes(dir + "/valid.rawlog", gzipBytes(valid));
 
 	// Every byte of the first object's header (class names, poses, camera
 	// models, image sizes), flipped: an error naming the file, or a read.
@@ -313,7 +309,7 @@ TEST(DamagedRawlog, EveryHeaderByteFlippedIsAnErrorOrReadsAndMemoryStaysBounded)
 	{
 		Bytes b = valid;
 		b[i] ^= 0xFF;
-		writeBytes(damaged, gzipBytes(b));
+		test::writeBytes(damaged, gzipBytes(b));
 		try
 		{
 			io::RawlogReader r(damaged);
@@ -346,7 +342,7 @@ TEST(DamagedRawlog, EveryHeaderByteFlippedIsAnErrorOrReadsAndMemoryStaysBounded)
 	{
 		Bytes b = valid;
 		b[lengthFaults[k]] ^= 0xFF;
-		writeBytes(damaged, gzipBytes(b));
+		test::writeBytes(damaged, gzipBytes(b));
 		const long kb = peakKb({"filter", "-q", "-i", damaged, "-o", dir + "/out2.rawlog"}, dir + "/log", &rc);
 		EXPECT_NE(rc, 0);
 		EXPECT_LE(kb, boundKb) << "byte " << lengthFaults[k] << ": peak " << kb << " kB, valid " << validKb << " kB";

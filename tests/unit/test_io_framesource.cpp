@@ -15,11 +15,6 @@ namespace fs = std::filesystem;
 
 namespace
 {
-bool samePixels(const cv::Mat& a, const cv::Mat& b)
-{
-	return a.size() == b.size() && a.type() == b.type() && cv::norm(a, b, cv::NORM_INF) == 0;
-}
-
 /** Frame i of rawlog "A" (the synthetic frame) or "B" (its negative). */
 cv::Mat expected(bool negative, int i, bool left)
 {
@@ -69,10 +64,10 @@ TEST(IoExternalImages, TwoReadersOpenAtOnceEachReadTheirOwnImages)
 	{
 		ASSERT_TRUE(sa.next(fa));
 		ASSERT_TRUE(sb.next(fb));
-		EXPECT_TRUE(samePixels(fa.left, expected(false, i, true))) << "survey frame " << i;
-		EXPECT_TRUE(samePixels(fa.right, expected(false, i, false))) << "survey frame " << i;
-		EXPECT_TRUE(samePixels(fb.left, expected(true, i, true))) << "live frame " << i;
-		EXPECT_TRUE(samePixels(fb.right, expected(true, i, false))) << "live frame " << i;
+		EXPECT_TRUE(test::samePixels(fa.left, expected(false, i, true))) << "survey frame " << i;
+		EXPECT_TRUE(test::samePixels(fa.right, expected(false, i, false))) << "survey frame " << i;
+		EXPECT_TRUE(test::samePixels(fb.left, expected(true, i, true))) << "live frame " << i;
+		EXPECT_TRUE(test::samePixels(fb.right, expected(true, i, false))) << "live frame " << i;
 		// Each observation now names its file absolutely, in its own folder.
 		const fs::path want = fs::absolute(dir) / "survey" / "run_Images" / ("CAMERA_" + std::to_string(i) + "_left.png");
 		EXPECT_EQ(fa.obs->imageLeft.getExternalStorageFile(), want.lexically_normal().string());
@@ -100,8 +95,8 @@ TEST(IoStereoFrameSource, BothRawlogStylesGiveTheSameFrames)
 			EXPECT_EQ(f.object, sf ? size_t(2 * n + 1) : size_t(n));
 			EXPECT_EQ(f.sensorLabel, "CAMERA");
 			EXPECT_DOUBLE_EQ(f.timestamp, mrpt::Clock::toDouble(o->timestamp));
-			EXPECT_TRUE(samePixels(f.left, o->imageLeft.asCvMatRef()));
-			EXPECT_TRUE(samePixels(f.right, o->imageRight.asCvMatRef()));
+			EXPECT_TRUE(test::samePixels(f.left, o->imageLeft.asCvMatRef()));
+			EXPECT_TRUE(test::samePixels(f.right, o->imageRight.asCvMatRef()));
 			EXPECT_EQ(f.calib.fx, 200.0);
 			EXPECT_EQ(f.calib.cx, 80.0);
 			EXPECT_NEAR(f.calib.baseline, 0.12, 1e-12);
@@ -211,8 +206,8 @@ TEST(IoStereoFrameSource, PicksChannelsByLabelSuffix)
 	while (cam.next(f))
 	{
 		EXPECT_EQ(f.sensorLabel, "CAMERA");
-		EXPECT_TRUE(samePixels(f.left, test::syntheticStereoFrame(n)->imageLeft.asCvMatRef()));
-		EXPECT_TRUE(samePixels(f.right, test::syntheticStereoFrame(n)->imageRight.asCvMatRef()));
+		EXPECT_TRUE(test::samePixels(f.left, test::syntheticStereoFrame(n)->imageLeft.asCvMatRef()));
+		EXPECT_TRUE(test::samePixels(f.right, test::syntheticStereoFrame(n)->imageRight.asCvMatRef()));
 		n++;
 	}
 	EXPECT_EQ(n, 3);

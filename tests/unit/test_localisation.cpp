@@ -2,6 +2,9 @@
  * corridor (sim::SyntheticCorridor): a map surveyed along one path, a live
  * run along a path offset by a known amount; injected faults; a map of
  * another world; determinism across thread counts; the evaluation. */
+#include "../support/Sequences.h"
+
+#include <shadyloc/core/Units.h>
 #include <shadyloc/eval/Evaluation.h>
 #include <shadyloc/filters/Channel.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
@@ -21,8 +24,9 @@ using namespace shadyloc;
 using namespace shadyloc::localisation;
 using eval::evaluate;
 using eval::TBlindEpisode;
+using core::kDeg;
+using test::corridorPose;
 
-constexpr double kDeg = M_PI / 180.0;
 constexpr double kSpacing = 1.0;  // map keyframes every metre
 constexpr double kStep = 0.25;	// live frames every 25 cm
 
@@ -38,15 +42,6 @@ features::TStereoFeatureOptions featureOptions(const std::string& ch)
 		f.min_zncc_shifted = -1;
 	}
 	return f;
-}
-
-/** A pose along the corridor: `z` metres in, `x` to the side, a small yaw. */
-Eigen::Isometry3d corridorPose(double z, double x, double yawDeg = 0)
-{
-	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-	T.linear() = Eigen::AngleAxisd(yawDeg * kDeg, Eigen::Vector3d::UnitY()).toRotationMatrix();
-	T.translation() = Eigen::Vector3d(x, 0.1, z);
-	return T;
 }
 
 /** A map surveyed along the corridor's centre line with known poses (the

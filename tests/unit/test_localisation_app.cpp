@@ -33,15 +33,6 @@ namespace
 using namespace shadyloc;
 namespace fs = std::filesystem;
 
-
-void writeText(const std::string& path, const std::string& text)
-{
-	std::ofstream f(path, std::ios::binary);
-	f << text;
-}
-
-std::string src(const std::string& rel) { return std::string(SHADYLOC_SOURCE_DIR) + "/" + rel; }
-
 /** The dataset: noon and overcast rawlogs with ground truth, the noon map
  * surveyed from them (ground truth stored beside its keyframes). Made once
  * per process. */
@@ -64,7 +55,7 @@ const TDataset& dataset()
 			sim = t.dir + "/sim";
 			std::string out;
 			const int rc = test::runCommand(
-				test::appPath() + " sim -q -c " + src("config/sim.ini") + " -o " + sim +
+				test::appPath() + " sim -q -c " + test::sourcePath("config/sim.ini") + " -o " + sim +
 					" --traversals noon,overcast --frames " + std::to_string(test::kSimFixtureFrames),
 				&out);
 			if (rc != 0) throw std::runtime_error("sim failed: " + out);
@@ -76,7 +67,7 @@ const TDataset& dataset()
 		t.map = t.dir + "/noon.kfmap";
 		std::string out;
 		const int rc = test::runCommand(
-			test::appPath() + " survey -q -i " + t.noon + " -o " + t.map + " -c " + src("config/vo_sim.ini") + " --gt " +
+			test::appPath() + " survey -q -i " + t.noon + " -o " + t.map + " -c " + test::sourcePath("config/vo_sim.ini") + " --gt " +
 				t.noonGt,
 			&out);
 		if (rc != 0) throw std::runtime_error("survey failed: " + out);
@@ -88,7 +79,7 @@ const TDataset& dataset()
 std::string localiseCmd(const std::string& map, const std::string& live, const std::string& outDir, const std::string& extra = "")
 {
 	return test::appPath() + " localise -q -m " + map + " -i " + live + " -o " + outDir + " -c " +
-		   src("config/vo_sim.ini") + " -c " + src("config/localise_sim.ini") + extra;
+		   test::sourcePath("config/vo_sim.ini") + " -c " + test::sourcePath("config/localise_sim.ini") + extra;
 }
 
 /** summary.json without the provenance's map entries (the map file's path
@@ -207,8 +198,8 @@ TEST(LocalisationApp, BadInputFailsCleanlyOrGivesNoFix)
 	// An earlier OUTDIR (its marker says so): a failed run leaves it as it was.
 	const std::string outDir = d.dir + "/bad_out";
 	fs::create_directories(outDir);
-	writeText(outDir + "/frames.csv", "earlier\n");
-	writeText(outDir + "/.shadyloc-output", "shadyloc localise output\n");
+	test::writeFileContents(outDir + "/frames.csv", "earlier\n");
+	test::writeFileContents(outDir + "/.shadyloc-output", "shadyloc localise output\n");
 	const auto expectUntouched = [&](const std::string& what) {
 		EXPECT_EQ(test::fileContents(outDir + "/frames.csv"), "earlier\n") << what;
 		EXPECT_FALSE(fs::exists(outDir + "/summary.json")) << what;
@@ -219,17 +210,17 @@ TEST(LocalisationApp, BadInputFailsCleanlyOrGivesNoFix)
 	// the invariant channel's descriptor kind differs (the map's ORB, live
 	// FAST + BRIEF). Refused, naming both kinds and both sets.
 	{
-		std::string ini = test::fileContents(src("config/vo_sim.ini"));
+		std::string ini = test::fileContents(test::sourcePath("config/vo_sim.ini"));
 		const auto at = ini.find("[features.invariant]\n");
 		ASSERT_NE(at, std::string::npos);
 		const auto kind = ini.find("\ndescriptor = orb", at);
 		ASSERT_NE(kind, std::string::npos) << "config/vo_sim.ini: the invariant channel is no longer ORB";
 		ini.replace(kind, std::string("\ndescriptor = orb").size(), "\ndescriptor = brief");
 		const std::string cfg = d.dir + "/vo_sim_brief.ini";
-		writeText(cfg, ini);
+		test::writeFileContents(cfg, ini);
 		const int rc = test::runCommand(
 			test::appPath() + " localise -q -m " + d.map + " -i " + d.overcast + " -o " + outDir + " -c " + cfg + " -c " +
-				src("config/localise_sim.ini"),
+				test::sourcePath("config/localise_sim.ini"),
 			&out);
 		EXPECT_NE(rc, 0) << out;
 		EXPECT_NE(out.find("invariant"), std::string::npos) << out;
@@ -277,12 +268,12 @@ TEST(LocalisationApp, BadInputFailsCleanlyOrGivesNoFix)
 	// 4. A live run through another world (the scene seed differs): no place
 	// in common, so no fix; not an error.
 	{
-		std::string ini = test::fileContents(src("config/sim.ini"));
+		std::string ini = test::fileContents(test::sourcePath("config/sim.ini"));
 		const std::regex seed(R"((\n)seed = 7\b)");
 		ASSERT_TRUE(std::regex_search(ini, seed)) << "config/sim.ini's scene seed moved";
 		ini = std::regex_replace(ini, seed, "$1seed = 8", std::regex_constants::format_first_only);
 		const std::string cfg = d.dir + "/sim_seed8.ini";
-		writeText(cfg, ini);
+		test::writeFileContents(cfg, ini);
 		const std::string other = d.dir + "/other";
 		ASSERT_EQ(
 			test::runCommand(
@@ -319,7 +310,7 @@ TEST(LocalisationApp, FilteredRawlogLocalisesAsItsColourOriginal)
 	const std::string filt = d.dir + "/overcast_filtered.rawlog";
 	ASSERT_EQ(
 		test::runCommand(
-			test::appPath() + " filter -q -i " + d.overcast + " -o " + filt + " -c " + src("config/filters_sim.ini"), &out),
+			test::appPath() + " filter -q -i " + d.overcast + " -o " + filt + " -c " + test::sourcePath("config/filters_sim.ini"), &out),
 		0)
 		<< out;
 	const std::string greyOnly = d.dir + "/overcast_channels_only.rawlog";
@@ -352,11 +343,11 @@ TEST(LocalisationApp, FilteredRawlogLocalisesAsItsColourOriginal)
 	}
 
 	// Channels another filter made: not what the map was checked against.
-	std::string ini = test::fileContents(src("config/filters_sim.ini"));
+	std::string ini = test::fileContents(test::sourcePath("config/filters_sim.ini"));
 	const auto at = ini.find("peak_wavelength_red_nm = 620");
 	ASSERT_NE(at, std::string::npos) << "config/filters_sim.ini changed";
 	ini.replace(at, std::string("peak_wavelength_red_nm = 620").size(), "peak_wavelength_red_nm = 640");
-	writeText(d.dir + "/filters_other.ini", ini);
+	test::writeFileContents(d.dir + "/filters_other.ini", ini);
 	const std::string other = d.dir + "/overcast_other.rawlog";
 	ASSERT_EQ(
 		test::runCommand(
@@ -415,7 +406,7 @@ double writeSideBySide(const std::string& rawlog, const std::string& dir, const 
 					<< "\n[right]\nfx_px = " << R.fx() << "\nfy_px = " << R.fy() << "\ncx_px = " << R.cx() << "\ncy_px = " << R.cy()
 					<< "\n[stereo]\nbaseline_m = " << st->rightCameraPose.x() << "\nwidth_px = " << L.ncols
 					<< "\nheight_px = " << L.nrows << "\n";
-				writeText(calibIni, ini.str());
+				test::writeFileContents(calibIni, ini.str());
 			}
 			stamps.push_back(mrpt::Clock::toDouble(st->timestamp));
 		}
@@ -440,7 +431,7 @@ TEST(LocalisationApp, LiveImageSequenceLocalisesAsTheRawlog)
 	ASSERT_EQ(test::runCommand(localiseCmd(d.map, d.overcast, fromRawlog), &out), 0) << out;
 	const auto liveCmd = [&](const std::string& source, const std::string& calibIni) {
 		return test::appPath() + " localise -q -m " + d.map + " --live " + source + " --camera " + calibIni + " --fps " +
-			   std::to_string(fps) + " -c " + src("config/vo_sim.ini") + " -c " + src("config/localise_sim.ini");
+			   std::to_string(fps) + " -c " + test::sourcePath("config/vo_sim.ini") + " -c " + test::sourcePath("config/localise_sim.ini");
 	};
 	ASSERT_EQ(test::runCommand(liveCmd(seq + "/%06d.png", calib) + " --view 10 -o " + fromLive, &out), 0) << out;
 	// --view 10: a picture of the map and the path so far at frames 0, 10, 20.
@@ -470,7 +461,7 @@ TEST(LocalisationApp, LiveImageSequenceLocalisesAsTheRawlog)
 	const auto at = other.find("width_px = ");
 	ASSERT_NE(at, std::string::npos);
 	other.insert(at + std::string("width_px = ").size(), "1");	// another width
-	writeText(d.dir + "/live_calib_other.ini", other);
+	test::writeFileContents(d.dir + "/live_calib_other.ini", other);
 	EXPECT_NE(test::runCommand(liveCmd(seq + "/%06d.png", d.dir + "/live_calib_other.ini") + " -o " + bad, &out), 0);
 	EXPECT_NE(out.find("frame 0"), std::string::npos) << out;
 	EXPECT_NE(out.find("side by side"), std::string::npos) << out;
@@ -489,7 +480,7 @@ TEST(LocalisationApp, OutputFolderReplacedOnlyIfAnEarlierLocaliseOutput)
 	// A folder of unrelated files.
 	const std::string mine = d.dir + "/mine";
 	fs::create_directories(mine);
-	writeText(mine + "/notes.txt", "mine\n");
+	test::writeFileContents(mine + "/notes.txt", "mine\n");
 	EXPECT_NE(test::runCommand(localiseCmd(d.map, d.overcast, mine), &out), 0) << out;
 	EXPECT_NE(out.find("'" + mine + "'"), std::string::npos) << out;
 	EXPECT_EQ(test::fileContents(mine + "/notes.txt"), "mine\n");
@@ -510,7 +501,7 @@ TEST(LocalisationApp, OutputFolderReplacedOnlyIfAnEarlierLocaliseOutput)
 	fs::create_directories(again);
 	ASSERT_EQ(test::runCommand(localiseCmd(d.map, d.overcast, again), &out), 0) << out;
 	EXPECT_TRUE(fs::is_regular_file(again + "/frames.csv"));
-	writeText(again + "/stale.txt", "from before\n");
+	test::writeFileContents(again + "/stale.txt", "from before\n");
 	ASSERT_EQ(test::runCommand(localiseCmd(d.map, d.overcast, again), &out), 0) << out;
 	EXPECT_FALSE(fs::exists(again + "/stale.txt"));
 	EXPECT_TRUE(fs::is_regular_file(again + "/summary.json"));
@@ -518,7 +509,7 @@ TEST(LocalisationApp, OutputFolderReplacedOnlyIfAnEarlierLocaliseOutput)
 }
 
 /** Pixels of exactly this BGR colour in `img`. */
-int countColour(const cv::Mat& img, const cv::Vec3b& bgr)
+int countColourPixels(const cv::Mat& img, const cv::Vec3b& bgr)
 {
 	int n = 0;
 	for (auto it = img.begin<cv::Vec3b>(); it != img.end<cv::Vec3b>(); ++it) n += *it == bgr;
@@ -551,8 +542,8 @@ TEST(LocalisationApp, GifAndStillsOfTheRun)
 	EXPECT_EQ(g.delays.front(), 13);  // 8 frames per second
 	// The last frame's channel panels (the top 120 rows) show inliers.
 	const cv::Vec3b inlierGreen(0, 204, 0);
-	EXPECT_GT(countColour(g.frames.back()(cv::Rect(0, 0, 160, 120)), inlierGreen), 20);
-	EXPECT_GT(countColour(g.frames.back()(cv::Rect(160, 0, 160, 120)), inlierGreen), 20);
+	EXPECT_GT(countColourPixels(g.frames.back()(cv::Rect(0, 0, 160, 120)), inlierGreen), 20);
+	EXPECT_GT(countColourPixels(g.frames.back()(cv::Rect(160, 0, 160, 120)), inlierGreen), 20);
 	for (const char* f : {"frame_000000.png", "frame_000010.png", "frame_000020.png"})
 	{
 		const cv::Mat png = cv::imread(withPictures + "/view/" + f);

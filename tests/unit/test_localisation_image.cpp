@@ -4,8 +4,10 @@
  * another world; the map's refusal of other descriptor parameters; the
  * options; and the Middlebury check (a map of the Piano stereo pair localises
  * Piano's and PianoL's right image alone at the stereo baseline). */
+#include "../support/Sequences.h"
 #include "../support/TestSupport.h"
 
+#include <shadyloc/core/Units.h>
 #include <shadyloc/datasets/Middlebury.h>
 #include <shadyloc/filters/Channel.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
@@ -28,8 +30,8 @@ namespace
 {
 using namespace shadyloc;
 using namespace shadyloc::localisation;
-
-constexpr double kDeg = M_PI / 180.0;
+using core::kDeg;
+using test::corridorPose;
 
 features::TStereoFeatureOptions corridorFeatures(const std::string& ch)
 {
@@ -43,14 +45,6 @@ features::TStereoFeatureOptions corridorFeatures(const std::string& ch)
 		f.min_zncc_shifted = -1;
 	}
 	return f;
-}
-
-Eigen::Isometry3d corridorPose(double z, double x, double yawDeg)
-{
-	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
-	T.linear() = Eigen::AngleAxisd(yawDeg * kDeg, Eigen::Vector3d::UnitY()).toRotationMatrix();
-	T.translation() = Eigen::Vector3d(x, 0.1, z);
-	return T;
 }
 
 /** A map of one stereo keyframe of the corridor (seed 1) at T_world_kf, both channels. */

@@ -5,6 +5,7 @@
  * solve kept as the motion test's reference, an unconfirmed solve that
  * validated the next frame against itself, the bootstrap covariance
  * inflated twice. The joint localiser's solve of two channels' searches. */
+#include <shadyloc/core/Units.h>
 #include <shadyloc/localisation/FixAcceptance.h>
 #include <shadyloc/localisation/JointLocaliser.h>
 #include <shadyloc/localisation/LocalisationSystem.h>
@@ -23,8 +24,7 @@ namespace
 using namespace shadyloc;
 using namespace shadyloc::localisation;
 using geometry::Matrix6d;
-
-constexpr double kDeg = M_PI / 180.0;
+using core::kDeg;
 
 Matrix6d diag(double sm, double sdeg)
 {

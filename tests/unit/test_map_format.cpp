@@ -37,12 +37,7 @@ std::vector<uint8_t> bytesOf(const mrpt::serialization::CSerializable& o)
 	const auto* p = static_cast<const uint8_t*>(mem.getRawBufferData());
 	return std::vector<uint8_t>(p, p + mem.getTotalBytesCount());
 }
-std::vector<uint8_t> fileBytes(const std::string& path)
-{
-	std::ifstream f(path, std::ios::binary);
-	return std::vector<uint8_t>((std::istreambuf_iterator<char>(f)), std::istreambuf_iterator<char>());
-}
-void writeBytes(const std::string& path, const std::vector<uint8_t>& b, size_t n)
+void writeFirstBytes(const std::string& path, const std::vector<uint8_t>& b, size_t n)
 {
 	std::ofstream f(path, std::ios::binary | std::ios::trunc);
 	f.write(reinterpret_cast<const char*>(b.data()), static_cast<std::streamsize>(n));
@@ -56,7 +51,7 @@ TEST(MapFormat, RoundTripIsByteIdenticalAndLossless)
 	m->saveToFile(a);
 	const auto loaded = CKeyframeMap::LoadFromFile(a);
 	loaded->saveToFile(b);
-	EXPECT_EQ(fileBytes(a), fileBytes(b));
+	EXPECT_EQ(test::fileBytes(a), test::fileBytes(b));
 	EXPECT_EQ(bytesOf(*m), bytesOf(*loaded));
 	// Field by field: the in-memory map is what the file holds (quantised on insertion).
 	ASSERT_EQ(loaded->keyframeCount(), m->keyframeCount());
@@ -232,7 +227,7 @@ TEST(MapFormat, DamagedFilesAreCleanErrors)
 	offsets.push_back(n - 1);
 	for (size_t k : offsets)
 	{
-		writeBytes(path, good, k);
+		writeFirstBytes(path, good, k);
 		expectError("truncated at " + std::to_string(k));
 	}
 	int flips = 0;
@@ -242,7 +237,7 @@ TEST(MapFormat, DamagedFilesAreCleanErrors)
 			if (k >= 160 && x != 0x01) continue;
 			auto b = good;
 			b[k] ^= x;
-			writeBytes(path, b, n);
+			writeFirstBytes(path, b, n);
 			expectError("byte " + std::to_string(k) + " ^ " + std::to_string(x));
 			flips++;
 		}
@@ -254,7 +249,7 @@ TEST(MapFormat, DamagedFilesAreCleanErrors)
 		ASSERT_NE(it, good.end());
 		auto b = good;
 		b[(it - good.begin()) + name.size()] = 7;
-		writeBytes(path, b, n);
+		writeFirstBytes(path, b, n);
 		try
 		{
 			CKeyframeMap::LoadFromFile(path);
@@ -266,7 +261,7 @@ TEST(MapFormat, DamagedFilesAreCleanErrors)
 		}
 	}
 	// Empty, and a serialised object of another class.
-	writeBytes(path, good, 0);
+	writeFirstBytes(path, good, 0);
 	expectError("empty");
 	{
 		mrpt::io::CFileOutputStream f(path);
@@ -278,7 +273,7 @@ TEST(MapFormat, DamagedFilesAreCleanErrors)
 	{
 		auto b = good;
 		b.push_back(0);
-		writeBytes(path, b, b.size());
+		writeFirstBytes(path, b, b.size());
 		expectError("trailing byte");
 	}
 	EXPECT_THROW(CKeyframeMap::LoadFromFile(dir + "/missing.kfmap"), std::runtime_error);
@@ -317,7 +312,7 @@ TEST(MapFormat, OldVersionAndLyingBlockSizesAreRefused)
 	{
 		auto b = good;
 		b[ver] = 0;
-		writeBytes(path, b, b.size());
+		writeFirstBytes(path, b, b.size());
 		try
 		{
 			CKeyframeMap::LoadFromFile(path);
@@ -363,7 +358,7 @@ TEST(MapFormat, OldVersionAndLyingBlockSizesAreRefused)
 	put64(fnv1a(lying));
 	b.insert(b.end(), lying.begin(), lying.end());
 	b.insert(b.end(), good.begin() + frame + compSize, good.end());
-	writeBytes(path, b, b.size());
+	writeFirstBytes(path, b, b.size());
 	try
 	{
 		CKeyframeMap::LoadFromFile(path);
@@ -384,7 +379,7 @@ TEST(MapFormat, Version1MapsStillLoad)
 	// the landmark selection. It loads; its selection reads as the strongest
 	// corners (the only one then), the rest as stored; saved again it is a
 	// map of the current version that loads to the same content.
-	const auto v1 = fileBytes(std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/CKeyframeMap_v1.bin");
+	const auto v1 = test::fileBytes(std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/CKeyframeMap_v1.bin");
 	const std::string name = "shadyloc::CKeyframeMap";
 	ASSERT_GT(v1.size(), 2 + name.size());
 	ASSERT_EQ(v1[1 + name.size()], 1) << "the fixture is not a version 1 map";
@@ -412,7 +407,7 @@ TEST(MapFormat, Version1MapsStillLoad)
 TEST(MapFormat, Version2MapsStillLoad)
 {
 	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
-	const auto v2 = fileBytes(golden + "CKeyframeMap_v2.bin"), now = fileBytes(golden + "CKeyframeMap.bin");
+	const auto v2 = test::fileBytes(golden + "CKeyframeMap_v2.bin"), now = test::fileBytes(golden + "CKeyframeMap.bin");
 	const std::string name = "shadyloc::CKeyframeMap";
 	ASSERT_GT(v2.size(), 2 + name.size());
 	ASSERT_EQ(v2[1 + name.size()], 2) << "the fixture is not a version 2 map";
@@ -428,7 +423,7 @@ TEST(MapFormat, Version2MapsStillLoad)
 TEST(MapFormat, Version3MapsStillLoadAsBrief)
 {
 	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
-	const auto v3 = fileBytes(golden + "CKeyframeMap_v3.bin"), now = fileBytes(golden + "CKeyframeMap.bin");
+	const auto v3 = test::fileBytes(golden + "CKeyframeMap_v3.bin"), now = test::fileBytes(golden + "CKeyframeMap.bin");
 	const std::string name = "shadyloc::CKeyframeMap";
 	ASSERT_GT(v3.size(), 2 + name.size());
 	ASSERT_EQ(v3[1 + name.size()], 3) << "the fixture is not a version 3 map";
@@ -448,7 +443,7 @@ TEST(MapFormat, Version3MapsStillLoadAsBrief)
 TEST(MapFormat, Version4MapsLoadAsAnchoredRunsWithoutLinks)
 {
 	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
-	const auto v4 = fileBytes(golden + "CKeyframeMap_v4.bin"), now = fileBytes(golden + "CKeyframeMap.bin");
+	const auto v4 = test::fileBytes(golden + "CKeyframeMap_v4.bin"), now = test::fileBytes(golden + "CKeyframeMap.bin");
 	const std::string name = "shadyloc::CKeyframeMap";
 	ASSERT_GT(v4.size(), 2 + name.size());
 	ASSERT_EQ(v4[1 + name.size()], 4) << "the fixture is not a version 4 map";
@@ -466,7 +461,7 @@ TEST(MapFormat, Version4MapsLoadAsAnchoredRunsWithoutLinks)
 TEST(MapFormat, Version5MapsLoadWithThePairsDepths)
 {
 	const std::string golden = std::string(SHADYLOC_SOURCE_DIR) + "/tests/golden/";
-	const auto v5 = fileBytes(golden + "CKeyframeMap_v5.bin"), now = fileBytes(golden + "CKeyframeMap.bin");
+	const auto v5 = test::fileBytes(golden + "CKeyframeMap_v5.bin"), now = test::fileBytes(golden + "CKeyframeMap.bin");
 	const std::string name = "shadyloc::CKeyframeMap";
 	ASSERT_GT(v5.size(), 2 + name.size());
 	ASSERT_EQ(v5[1 + name.size()], 5) << "the fixture is not a version 5 map";
@@ -684,7 +679,7 @@ TEST(MapFormat, KilledSavesLeaveThePreviousFileLoadable)
 	// Old map on disk; the new one is large enough for many 64 kB chunks.
 	const auto oldMap = test::makeSyntheticMap(6, 20, 0);
 	oldMap->saveToFile(path);
-	const auto oldBytes = fileBytes(path);
+	const auto oldBytes = test::fileBytes(path);
 	const auto newMap = test::makeSyntheticMap(60, 150, 40);
 	const size_t total = bytesOf(*newMap).size();
 	const size_t chunks = (total + (64 << 10) - 1) / (64 << 10);
@@ -710,7 +705,7 @@ TEST(MapFormat, KilledSavesLeaveThePreviousFileLoadable)
 		waitpid(pid, &status, 0);
 		ASSERT_TRUE(WIFSIGNALED(status) && WTERMSIG(status) == SIGKILL) << "chunk " << c;
 		killedAt++;
-		EXPECT_EQ(fileBytes(path), oldBytes) << "killed after chunk " << c;
+		EXPECT_EQ(test::fileBytes(path), oldBytes) << "killed after chunk " << c;
 		EXPECT_NO_THROW(CKeyframeMap::LoadFromFile(path)) << "killed after chunk " << c;
 	}
 	EXPECT_GE(killedAt, 20);

@@ -27,7 +27,7 @@ using namespace shadyloc;
 
 namespace
 {
-Eigen::Isometry3d poseAt(double x, double z, double yawDeg)
+Eigen::Isometry3d mapPoseAt(double x, double z, double yawDeg)
 {
 	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
 	T.linear() = Eigen::AngleAxisd(yawDeg * M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
@@ -44,8 +44,8 @@ TEST(MapQueries, NearestKeyframesRespectHeading)
 	r->setup(m->calibration(), 512, 384, m->channels());
 	const uint16_t run = r->addRun("outback");
 	std::vector<Eigen::Isometry3d> poses;
-	for (int i = 0; i <= 20; i++) poses.push_back(poseAt(0, 2.0 * i, 0));
-	for (int i = 20; i >= 0; i--) poses.push_back(poseAt(0.5, 2.0 * i + 1, 180));
+	for (int i = 0; i <= 20; i++) poses.push_back(mapPoseAt(0, 2.0 * i, 0));
+	for (int i = 20; i >= 0; i--) poses.push_back(mapPoseAt(0.5, 2.0 * i + 1, 180));
 	for (size_t i = 0; i < poses.size(); i++)
 	{
 		map::TMapKeyframe k;
@@ -59,12 +59,12 @@ TEST(MapQueries, NearestKeyframesRespectHeading)
 	q.max_distance_m = 3;
 	q.max_angle_deg = 30;
 	// Driving forward at z = 10.2: keyframes at z = 10 (id 5), 12, 8; never the return leg.
-	auto hits = r->nearestKeyframes(poseAt(0.1, 10.2, 5), q);
+	auto hits = r->nearestKeyframes(mapPoseAt(0.1, 10.2, 5), q);
 	ASSERT_FALSE(hits.empty());
 	EXPECT_EQ(hits[0].id, 5u);
 	for (const auto& h : hits) EXPECT_LE(h.id, 20u) << "a keyframe facing the other way was returned";
 	// Driving back at the same place: only the return leg (ids 21..41), z = 11 is id 41 - 5 = 36.
-	hits = r->nearestKeyframes(poseAt(0.4, 10.9, 178), q);
+	hits = r->nearestKeyframes(mapPoseAt(0.4, 10.9, 178), q);
 	ASSERT_FALSE(hits.empty());
 	EXPECT_EQ(hits[0].id, 36u);
 	for (const auto& h : hits) EXPECT_GT(h.id, 20u);
@@ -73,7 +73,7 @@ TEST(MapQueries, NearestKeyframesRespectHeading)
 	std::uniform_real_distribution<double> U(-5, 45), Y(-180, 180);
 	for (int t = 0; t < 300; t++)
 	{
-		const auto T = poseAt(U(rng) / 10, U(rng), Y(rng));
+		const auto T = mapPoseAt(U(rng) / 10, U(rng), Y(rng));
 		q.max_results = 100;
 		const auto got = r->nearestKeyframes(T, q);
 		size_t expected = 0;
@@ -374,7 +374,7 @@ TEST(MapQueries, ReobservationsFindStableLandmarksAndRejectMovedOnes)
 
 namespace
 {
-void writeCorridorRawlog(const std::string& rawlog, const std::string& gtTum, int n)
+void writeSurveyCorridorRawlog(const std::string& rawlog, const std::string& gtTum, int n)
 {
 	sim::SyntheticCorridor corridor;
 	const auto c = corridor.calib();
@@ -398,7 +398,7 @@ TEST(MapSurvey, SurveyAndMapInfoOnASyntheticRun)
 {
 	const std::string dir = test::tempDir("map_survey");
 	const std::string rawlog = dir + "/corridor.rawlog", gt = dir + "/gt.tum", map = dir + "/corridor.kfmap";
-	writeCorridorRawlog(rawlog, gt, 40);  // 10 m
+	writeSurveyCorridorRawlog(rawlog, gt, 40);  // 10 m
 	const std::string ini = dir + "/survey.ini";
 	{
 		std::ofstream f(ini);
@@ -464,7 +464,7 @@ TEST(MapSurvey, AFilteredRunRecordsTheFilterThatMadeItsImages)
 	// (filtered on the fly). Same images, so the same map.
 	const std::string dir = test::tempDir("map_survey_filtered");
 	const std::string raw = dir + "/corridor.rawlog", gt = dir + "/gt.tum", filtered = dir + "/corridor_f.rawlog";
-	writeCorridorRawlog(raw, gt, 24);
+	writeSurveyCorridorRawlog(raw, gt, 24);
 	const std::string invSection =
 		"[invariant]\nclass = CFilterInvariant\noutput_suffix = _inv\nalpha = 0.45\nbeta = 0.5\nscale = 100\n";
 	{

@@ -4,6 +4,8 @@
  * options tables are the ones its declaration generates.
  *
  * SHADYLOC_WRITE_DOCS=1 rewrites the docs' tables instead of comparing them. */
+#include "../support/TestSupport.h"
+
 #include <shadyloc/core/Options.h>
 #include <shadyloc/datasets/Common.h>
 #include <shadyloc/datasets/Folder.h>
@@ -83,7 +85,7 @@ TExample loaded(const std::string& text)
 	return o;
 }
 
-std::string errorOf(const std::function<void()>& f)
+std::string messageOf(const std::function<void()>& f)
 {
 	try
 	{
@@ -128,20 +130,20 @@ TEST(Options, OneDeclarationDrivesLoadDumpAndChecks)
 	EXPECT_EQ(dumped(loaded("[ex]\n" + dumped(o))), dumped(o));
 
 	// All of the strict reader's refusals, and the ranges, name section and key.
-	EXPECT_EQ(errorOf([] { loaded("[ex]\nradius = 1\n"); }),
+	EXPECT_EQ(messageOf([] { loaded("[ex]\nradius = 1\n"); }),
 			  "[ex] radius: this key was renamed to 'radius_px' (same meaning and unit); rename it");
-	EXPECT_EQ(errorOf([] { loaded("[ex]\ncuont = 1\n"); }), "[ex] cuont: unknown key; did you mean 'count'?");
-	EXPECT_EQ(errorOf([] { loaded("[ex]\ncount = 11\n"); }), "[ex] count: must be 0 (off) or in [1, 10]");
-	EXPECT_EQ(errorOf([] { loaded("[ex]\nradius_px = 0\n"); }), "[ex] radius_px: must be > 0");
-	EXPECT_EQ(errorOf([] { loaded("[ex]\nmode = slow\n"); }), "[ex] mode: 'slow' is not one of: fast | exact");
+	EXPECT_EQ(messageOf([] { loaded("[ex]\ncuont = 1\n"); }), "[ex] cuont: unknown key; did you mean 'count'?");
+	EXPECT_EQ(messageOf([] { loaded("[ex]\ncount = 11\n"); }), "[ex] count: must be 0 (off) or in [1, 10]");
+	EXPECT_EQ(messageOf([] { loaded("[ex]\nradius_px = 0\n"); }), "[ex] radius_px: must be > 0");
+	EXPECT_EQ(messageOf([] { loaded("[ex]\nmode = slow\n"); }), "[ex] mode: 'slow' is not one of: fast | exact");
 
 	// Values set in code are checked by the same declaration.
 	TExample bad;
 	bad.radius = std::nan("");
-	EXPECT_EQ(errorOf([&] { bad.validate(); }), "radius_px: must be a finite number");
+	EXPECT_EQ(messageOf([&] { bad.validate(); }), "radius_px: must be a finite number");
 	bad = TExample();
 	bad.mode = static_cast<TExample::Mode>(7);
-	EXPECT_EQ(errorOf([&] { bad.validate(); }), "mode: must be one of: fast, exact");
+	EXPECT_EQ(messageOf([&] { bad.validate(); }), "mode: must be one of: fast, exact");
 }
 
 TEST(Options, TableOfTheDocs)
@@ -490,14 +492,6 @@ const std::vector<TOptionsCase>& optionsCases()
 
 	return cases;
 }
-
-std::string readFile(const std::string& path)
-{
-	std::ifstream in(path);
-	std::ostringstream s;
-	s << in.rdbuf();
-	return s.str();
-}
 }  // namespace
 
 TEST(Options, EveryStructsDumpLoadsBackToTheSameValues)
@@ -515,7 +509,7 @@ TEST(Options, EveryStructDeclaringKeysIsTested)
 	size_t declared = 0;
 	for (const auto& e : std::filesystem::recursive_directory_iterator(std::string(SHADYLOC_SOURCE_DIR) + "/include"))
 	{
-		const std::string t = readFile(e.path().string());
+		const std::string t = test::fileContents(e.path().string());
 		for (size_t at = t.find("void keys(core::KeyVisitor& v)"); at != std::string::npos;
 			 at = t.find("void keys(core::KeyVisitor& v)", at + 1))
 			declared++;
@@ -537,7 +531,7 @@ TEST(Options, DocsTablesAreTheDeclarations)
 	for (const auto& e : std::filesystem::directory_iterator(std::string(SHADYLOC_SOURCE_DIR) + "/docs"))
 	{
 		if (e.path().extension() != ".md") continue;
-		const std::string text = readFile(e.path().string());
+		const std::string text = test::fileContents(e.path().string());
 		std::string out;
 		size_t from = 0;
 		for (size_t at = text.find(open); at != std::string::npos; at = text.find(open, at + 1))

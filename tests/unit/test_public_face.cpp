@@ -35,17 +35,15 @@ namespace
 {
 using namespace shadyloc;
 
-std::string src(const std::string& rel) { return std::string(SHADYLOC_SOURCE_DIR) + "/" + rel; }
-
 /** The shipped simulator configs as one text (their sections are disjoint). */
 std::string simLocaliseConfig()
 {
-	return test::fileContents(src("config/vo_sim.ini")) + "\n" + test::fileContents(src("config/localise_sim.ini"));
+	return test::fileContents(test::sourcePath("config/vo_sim.ini")) + "\n" + test::fileContents(test::sourcePath("config/localise_sim.ini"));
 }
 
 TEST(PublicFace, HeaderIncludesMrptAndTheStandardLibraryOnly)
 {
-	const std::string text = test::fileContents(src("include/shadyloc/Localiser.h"));
+	const std::string text = test::fileContents(test::sourcePath("include/shadyloc/Localiser.h"));
 	ASSERT_FALSE(text.empty());
 	const std::regex inc(R"(#\s*include\s*([<"])([^>"]+)[>"])");
 	int includes = 0;
@@ -102,12 +100,12 @@ CKeyframeMap::Ptr noonMap()
 	const std::string dir = test::simSequenceDir("noon");
 	survey::TSurveyRunOptions o;
 	o.gt = io::readTum(dir + "/noon.tum");
-	mrpt::config::CConfigFileMemory cfg(test::fileContents(src("config/vo_sim.ini")));
+	mrpt::config::CConfigFileMemory cfg(test::fileContents(test::sourcePath("config/vo_sim.ini")));
 	return survey::SurveyRun(dir + "/noon.rawlog", cfg, o).run();
 }
 
 /** Metres and degrees between two poses. */
-std::pair<double, double> poseError(const mrpt::poses::CPose3D& a, const Eigen::Isometry3d& b)
+std::pair<double, double> fixPoseError(const mrpt::poses::CPose3D& a, const Eigen::Isometry3d& b)
 {
 	const Eigen::Isometry3d d = io::toIsometry(a).inverse() * b;
 	return {d.translation().norm(), Eigen::AngleAxisd(d.linear()).angle() * 180 / M_PI};
@@ -153,11 +151,11 @@ TEST(PublicFace, LocalisesSimulatedFramesAmongOtherObservations)
 		const auto& kf = map->keyframe(r->keyframe_id);
 		ASSERT_TRUE(kf.T_gt_kf);
 		const Eigen::Isometry3d T_kf_live = kf.T_gt_kf->inverse() * live.T_world_left[i];
-		const auto [em, ed] = poseError(r->pose_in_keyframe.mean, T_kf_live);
+		const auto [em, ed] = fixPoseError(r->pose_in_keyframe.mean, T_kf_live);
 		EXPECT_LT(em, 0.1) << "frame " << i;
 		EXPECT_LT(ed, 1.0) << "frame " << i;
 		// The map-frame pose is the keyframe-relative one placed at the keyframe.
-		const auto [mm, md] = poseError(r->pose.mean, kf.T_map_kf * T_kf_live);
+		const auto [mm, md] = fixPoseError(r->pose.mean, kf.T_map_kf * T_kf_live);
 		EXPECT_LT(mm, 0.1) << "frame " << i;
 		EXPECT_LT(md, 1.0) << "frame " << i;
 		EXPECT_GT(r->pose.cov(0, 0), 0);
@@ -207,7 +205,7 @@ TEST(PublicFace, LocalisesAgainstAnExperienceInAFrameOfItsOwn)
 		ASSERT_GE(r->keyframe_id, first) << "frame " << i;
 		const auto& kf = map->keyframe(r->keyframe_id);
 		const Eigen::Isometry3d T_kf_live = kf.T_gt_kf->inverse() * live.T_world_left[i];
-		const auto [mm, md] = poseError(r->pose.mean, kf.T_map_kf * T_kf_live);
+		const auto [mm, md] = fixPoseError(r->pose.mean, kf.T_map_kf * T_kf_live);
 		// A true fix by the evaluation's definition (0.5 m; docs/evaluation.md):
 		// most are centimetres off, a single frame of these 15 up to 0.22 m.
 		EXPECT_LT(mm, 0.5) << "frame " << i;

@@ -92,12 +92,6 @@ std::map<std::string, std::map<std::string, std::string>> readGolden(std::istrea
 	}
 	return g;
 }
-
-bool updatingGolden()
-{
-	const char* e = std::getenv("SHADYLOC_UPDATE_GOLDEN");
-	return e && *e && std::string(e) != "0";
-}
 }  // namespace
 
 // What the set is for, checked on the options (no rendering).
@@ -202,7 +196,7 @@ TEST(SimEvalFrozen, FirstFramesMatchCommittedHashes)
 		now << t.name << " options=" << opts.hex() << " frames=" << n << " poses=" << poses.hex()
 			<< " frame0=" << f0.hex() << " frame1=" << f1.hex() << "\n";
 	}
-	if (updatingGolden())
+	if (shadyloc::test::updatingGolden())
 	{
 		std::ofstream(kGolden) << now.str();
 		GTEST_SKIP() << "wrote " << kGolden << " (SHADYLOC_UPDATE_GOLDEN is set): review `git diff tests/golden`";

@@ -1,6 +1,7 @@
 /* Simulator geometry and output: markers placed at known points appear where
  * the written calibration and ground truth project them, with disparity
  * f*b/Z; the rawlog carries what a reader needs; rendering is deterministic. */
+#include "../support/Sequences.h"
 #include "../support/TestSupport.h"
 
 #include <shadyloc/io/Rawlog.h>
@@ -23,13 +24,7 @@ using namespace shadyloc::sim;
 
 namespace
 {
-TSimOptions smallOptions(int w, int h)
-{
-	auto o = TSimOptions::FromFile(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
-	o.camera.width = w;
-	o.camera.height = h;
-	return o;
-}
+using shadyloc::test::smallSimOptions;
 
 /** Centroid of purple (marker-coloured) pixels within radius r of (u, v). */
 bool purpleCentroid(const cv::Mat& bgr, double u, double v, double r, double& cu, double& cv_, int& n)
@@ -59,7 +54,7 @@ bool purpleCentroid(const cv::Mat& bgr, double u, double v, double r, double& cu
 // a fraction of a pixel, and its right-image disparity is f*b/Z.
 TEST(SimGeometry, MarkersProjectWhereGroundTruthSays)
 {
-	auto o = smallOptions(320, 240);
+	auto o = smallSimOptions(320, 240);
 	o.traversals = {o.traversal("noon")};
 	o.traversals[0].frames = 6;
 	o.traversals[0].start_s_m = 230;  // the open stretch: nothing tall near the road
@@ -190,7 +185,7 @@ TEST(SimGeometry, MarkersProjectWhereGroundTruthSays)
 // vehicle's centre, looking along the route (optical axis ~ horizontal).
 TEST(SimGeometry, CameraMountAndConventions)
 {
-	auto o = smallOptions(64, 48);
+	auto o = smallSimOptions(64, 48);
 	StereoSimulator sim(o);
 	const auto T = sim.T_world_left(0);
 	EXPECT_NEAR(T.z(), 1.5, 1e-9);
@@ -217,7 +212,7 @@ TEST(SimGeometry, CameraMountAndConventions)
 // (only canopy-affected pixels change); overcast has no sun at all.
 TEST(SimGeometry, DeterministicAndSeedsMatter)
 {
-	auto o = smallOptions(128, 96);
+	auto o = smallSimOptions(128, 96);
 	StereoSimulator a(o), b(o);
 	auto t = o.traversal("noon");
 	t.start_s_m = 20;  // under the trees

@@ -1,6 +1,8 @@
 /* Simulator physics: the invariant channel cancels the sun/shadow change that
  * dominates log-grey, in rendered frames and in the shading function itself;
  * the narrower the camera's sensitivities, the better. */
+#include "../support/Sequences.h"
+
 #include <shadyloc/image/ColourTransforms.h>
 #include <shadyloc/sim/StereoSimulator.h>
 
@@ -16,14 +18,7 @@ using namespace shadyloc::sim;
 
 namespace
 {
-/** The shipped config, shrunk for speed. */
-TSimOptions smallOptions(int w = 160, int h = 120)
-{
-	auto o = TSimOptions::FromFile(std::string(SHADYLOC_SOURCE_DIR) + "/config/sim.ini");
-	o.camera.width = w;
-	o.camera.height = h;
-	return o;
-}
+using shadyloc::test::smallSimOptions;
 
 shadyloc::image::InvariantParams invParams(const TSimCameraOptions& c)
 {
@@ -47,7 +42,7 @@ struct SunShadeStats
  * compares asphalt pixels in full sun with asphalt pixels in full shadow. */
 SunShadeStats renderedSunShade(double sigma_nm)
 {
-	auto o = smallOptions();
+	auto o = smallSimOptions();
 	o.camera.spectral.sigma_nm = sigma_nm;
 	o.scene.texture_chroma = 0;	 // one spectrum for the asphalt: isolate the illuminant
 	StereoSimulator sim(o);
@@ -93,7 +88,7 @@ SunShadeStats renderedSunShade(double sigma_nm)
 // very broad (sigma 80 nm, overlapping channels) to near-Dirac (2 nm).
 TEST(SimPhysics, ShadingInvariantCancelsShadowAsSensorsNarrow)
 {
-	auto o = smallOptions();
+	auto o = smallSimOptions();
 	const auto& trav = o.traversal("noon");
 	std::map<double, double> worst;	 // sigma -> largest dInv over materials
 	for (double sigma : {80.0, 40.0, 20.0, 10.0, 2.0})
@@ -133,7 +128,7 @@ TEST(SimPhysics, ShadingInvariantCancelsShadowAsSensorsNarrow)
 // near-Dirac sensors: the invariant's premise holds, the change vanishes.
 TEST(SimPhysics, PlanckianIlluminantsCancelForNarrowSensors)
 {
-	auto o = smallOptions();
+	auto o = smallSimOptions();
 	o.camera.spectral.sigma_nm = 1.0;
 	o.camera.grid.step_nm = 1.0;
 	TTraversal sunOnly = o.traversal("evening_warm"), skyOnly = o.traversal("noon");

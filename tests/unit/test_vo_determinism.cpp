@@ -25,8 +25,8 @@ namespace
 // 0.3 m per frame: larger image motion than the accuracy tests' 0.1 m, so the
 // BRIEF match often lands a pixel or two off the patch peak and the sub-pixel
 // refinement has to climb (where the uninitialised read was).
-constexpr int kFrames = 24;
-constexpr double kSpeed = 0.3;
+constexpr int kDeterminismFrames = 24;
+constexpr double kDeterminismSpeed = 0.3;
 
 struct TFrames
 {
@@ -38,7 +38,7 @@ struct TFrames
 const TFrames& frames()
 {
 	static const TFrames f = [] {
-		const auto& seq = test::corridorSequence(kFrames, kSpeed);
+		const auto& seq = test::corridorSequence(kDeterminismFrames, kDeterminismSpeed);
 		TFrames s;
 		s.calib = seq.calib;
 		s.left = seq.left;
@@ -66,7 +66,7 @@ std::vector<vo::TFrameResult> run(const std::string& ch, uint8_t poison)
 	vo::StereoVO v;
 	v.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	std::vector<vo::TFrameResult> out;
-	for (int k = 0; k < kFrames; k++)
+	for (int k = 0; k < kDeterminismFrames; k++)
 	{
 		cv::Mat l, r;
 		conv.convert(s.left[k], l);
@@ -118,7 +118,7 @@ TEST(VODeterminism, AppWritesIdenticalTrajectoriesAcrossProcesses)
 	{
 		const auto& s = frames();
 		io::RawlogWriter w(rawlog);
-		for (int k = 0; k < kFrames; k++)
+		for (int k = 0; k < kDeterminismFrames; k++)
 		{
 			mrpt::obs::CObservationStereoImages obs;
 			obs.sensorLabel = "CAMERA";

@@ -29,7 +29,7 @@ struct TSimSequence
 
 /** The first frames of one traversal at the simulator's default 512x384, from
  * the ctest fixture (tests/support/Sequences.h) or rendered here. */
-TSimSequence render(const std::string& traversal)
+TSimSequence simTraversal(const std::string& traversal)
 {
 	const auto& f = test::simSequence(traversal);
 	TSimSequence seq;
@@ -40,7 +40,7 @@ TSimSequence render(const std::string& traversal)
 	return seq;
 }
 
-eval::TTrajectoryErrors runVO(const TSimSequence& seq, const std::string& ch, size_t* tracked)
+eval::TTrajectoryErrors runSimVO(const TSimSequence& seq, const std::string& ch, size_t* tracked)
 {
 	mrpt::config::CConfigFile cfg(std::string(SHADYLOC_SOURCE_DIR) + "/config/vo_sim.ini");
 	const auto conv = filters::channelFromConfig(cfg, ch, "config/vo_sim.ini");
@@ -80,10 +80,10 @@ class VOSimulated : public ::testing::TestWithParam<const char*>
 TEST_P(VOSimulated, ShortTraversalDriftBothChannels)
 {
 	const std::string trav = GetParam();
-	const auto seq = render(trav);
+	const auto seq = simTraversal(trav);
 	size_t trMono = 0, trInv = 0;
-	const auto em = runVO(seq, "mono", &trMono);
-	const auto ei = runVO(seq, "invariant", &trInv);
+	const auto em = runSimVO(seq, "mono", &trMono);
+	const auto ei = runSimVO(seq, "invariant", &trInv);
 	std::printf(
 		"[ sim VO ] %s 512x384, %.1f m: mono %.2f %% %.4f deg/m (%zu tracked), invariant %.2f %% "
 		"%.4f deg/m (%zu tracked)\n",

@@ -2,6 +2,8 @@
  * covariance gate, sub-pixel refinement, the predicted measurement's
  * covariance), the relative-pose estimator (with and without the motion
  * prior), the keyframe policy, and StereoVO's track()/commit() split. */
+#include "../support/TestSupport.h"
+
 #include <shadyloc/filters/Channel.h>
 #include <shadyloc/sim/SyntheticCorridor.h>
 #include <shadyloc/vo/KeyframeMatcher.h>
@@ -22,17 +24,6 @@ using geometry::Matrix6d;
 
 namespace
 {
-geometry::TStereoCalib calib()
-{
-	geometry::TStereoCalib c;
-	c.fx = c.fy = 400;
-	c.cx = 256;
-	c.cy = 192;
-	c.cxR = 256;
-	c.baseline = 0.12;
-	return c;
-}
-
 Eigen::Isometry3d pose(double tx, double ty, double tz, double yawRad)
 {
 	Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
@@ -47,7 +38,7 @@ features::TBriefDescriptor randomDesc(std::mt19937& rng)
 	for (auto& w : d.w) w = (uint64_t(rng()) << 32) ^ rng();
 	return d;
 }
-features::TBriefDescriptor flipBits(features::TBriefDescriptor d, int n, std::mt19937& rng)
+features::TBriefDescriptor flipRandomBits(features::TBriefDescriptor d, int n, std::mt19937& rng)
 {
 	for (int i = 0; i < n; i++)
 	{
@@ -66,7 +57,7 @@ features::TBriefDescriptor flipBits(features::TBriefDescriptor d, int n, std::mt
  * 6-10 px from each true measurement. */
 struct TScene
 {
-	geometry::TStereoCalib calib = ::calib();
+	geometry::TStereoCalib calib = test::stereoCalib();
 	Eigen::Isometry3d T_curr_kf_true;
 	std::vector<features::TStereoMeasurement> landmarks;
 	features::TStereoFrame frame;
@@ -111,7 +102,7 @@ TScene makeScene(const Eigen::Isometry3d& T_curr_kf, double depth, uint32_t seed
 			m.uL = static_cast<float>(std::round(u));
 			m.v = static_cast<float>(std::round(v));
 			m.uR = static_cast<float>(m.uL - d);
-			m.desc = flipBits(kf.desc, 10, rng);
+			m.desc = flipRandomBits(kf.desc, 10, rng);
 			s.trueMeas.push_back(static_cast<int>(s.frame.meas.size()));
 			s.frame.meas.push_back(m);
 			for (int k = 0; k < 2; k++)
@@ -326,7 +317,7 @@ TEST(VoKeyframeMatcher, SeenFromASideTheLandmarksOwnUncertaintyIsSearchedNotCoun
 TEST(VoKeyframeMatcher, PredictedCovarianceMatchesMonteCarlo)
 {
 	// z = project(exp(xi) T P) + n with xi ~ N(0, C_T), P ~ N(P0, C_P), n ~ N(0, s^2 I).
-	const auto c = calib();
+	const auto c = test::stereoCalib();
 	const Eigen::Isometry3d T = pose(0.2, -0.1, 0.4, 0.1);
 	const Eigen::Vector3d P0(0.8, -0.4, 6.0);
 	Matrix6d CT = Matrix6d::Zero();
@@ -372,7 +363,7 @@ std::vector<geometry::TStereoCorrespondence> makeCorr(
 	std::mt19937 rng(seed);
 	std::uniform_real_distribution<double> ux(-4, 4), uy(-2, 2), uz(3, 25), uo(20, 60);
 	std::normal_distribution<double> nz(0, 0.3);
-	const auto c = calib();
+	const auto c = test::stereoCalib();
 	std::vector<geometry::TStereoCorrespondence> out;
 	while (static_cast<int>(out.size()) < n)
 	{
@@ -406,7 +397,7 @@ TEST(VoRelativePoseEstimator, RecoversThePoseRejectsOutliersGivesCovariance)
 		const vo::RelativePoseEstimator est(opt);
 		vo::TRelativePoseInput in;
 		in.corr = &corr;
-		in.calib = calib();
+		in.calib = test::stereoCalib();
 		const Eigen::Isometry3d pred = pose(0.1, 0.0, 0.5, 0.05);
 		in.T_curr_ref_pred = &pred;
 		vo::TRelativePoseOutput out;
@@ -440,7 +431,7 @@ TEST(VoRelativePoseEstimator, WithoutThePriorTheLargestConsensusWins)
 	const vo::RelativePoseEstimator est(opt);
 	vo::TRelativePoseInput in;
 	in.corr = &corr;
-	in.calib = calib();
+	in.calib = test::stereoCalib();
 	in.T_curr_ref_pred = &T_wrong;
 	vo::TRelativePoseOutput withPrior, without;
 	est.estimate(in, withPrior);
@@ -458,7 +449,7 @@ TEST(VoRelativePoseEstimator, TooFewCorrespondencesAreReported)
 	const auto corr = makeCorr(pose(0, 0, 0.5, 0), 8, 0, 13);
 	vo::TRelativePoseInput in;
 	in.corr = &corr;
-	in.calib = calib();
+	in.calib = test::stereoCalib();
 	vo::TRelativePoseOutput out;
 	vo::RelativePoseEstimator().estimate(in, out);  // min_inliers 10 > 8
 	EXPECT_EQ(out.status, vo::RelativePoseStatus::FewInliers);
@@ -499,7 +490,7 @@ struct TCorridorFrames
 	geometry::TStereoCalib calib;
 	std::vector<cv::Mat> monoL, monoR, invL, invR;
 };
-const TCorridorFrames& corridor()
+const TCorridorFrames& corridorFrames()
 {
 	static const TCorridorFrames f = [] {
 		TCorridorFrames s;
@@ -527,7 +518,7 @@ const TCorridorFrames& corridor()
 
 TEST(VoStereoVO, TrackThenCommitEqualsProcessAndTheCallerCanForceOrForbidKeyframes)
 {
-	const auto& f = corridor();
+	const auto& f = corridorFrames();
 	vo::StereoVO a, b, forced, forbidden;
 	for (auto* v : {&a, &b, &forced, &forbidden}) v->setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	size_t wanted = 0;
@@ -561,7 +552,7 @@ TEST(VoStereoVO, TrackThenCommitEqualsProcessAndTheCallerCanForceOrForbidKeyfram
 
 TEST(VoStereoVO, TwoChannelsShareOneKeyframeSchedule)
 {
-	const auto& f = corridor();
+	const auto& f = corridorFrames();
 	vo::StereoVO mono, inv;
 	mono.setMinLoggingLevel(mrpt::system::LVL_ERROR);
 	inv.setMinLoggingLevel(mrpt::system::LVL_ERROR);

@@ -46,7 +46,7 @@ const TSequence& sequence()
 	return seq;
 }
 
-struct TRun
+struct TVoRun
 {
 	eval::Trajectory est;
 	std::vector<vo::TFrameResult> frames;
@@ -54,7 +54,7 @@ struct TRun
 };
 
 /** Runs the VO on the sequence in one channel; `blank` frames get a flat grey pair. */
-TRun runVO(
+TVoRun runVO(
 	const std::string& ch, const std::vector<int>& blank = {}, const vo::TStereoVOOptions& opts = {})
 {
 	const auto& s = sequence();
@@ -62,7 +62,7 @@ TRun runVO(
 	const auto conv = filters::defaultChannel(ch);
 	vo::StereoVO vo(opts);
 	vo.setMinLoggingLevel(mrpt::system::LVL_ERROR);
-	TRun run;
+	TVoRun run;
 	for (int k = 0; k < kFrames; k++)
 	{
 		cv::Mat l, r;
@@ -81,7 +81,7 @@ TRun runVO(
 	return run;
 }
 
-void printRun(const char* name, const TRun& run, const eval::TTrajectoryErrors& e)
+void printRun(const char* name, const TVoRun& run, const eval::TTrajectoryErrors& e)
 {
 	size_t tracked = 0, inl = 0;
 	for (const auto& f : run.frames)
@@ -100,7 +100,7 @@ void printRun(const char* name, const TRun& run, const eval::TTrajectoryErrors& 
 
 TEST(VOSynthetic, MonoTranslationalErrorBelowOnePercent)
 {
-	const TRun run = runVO("mono");
+	const TVoRun run = runVO("mono");
 	for (const auto& f : run.frames)
 		EXPECT_TRUE(vo::isTracked(f.status)) << "frame " << f.frame << ": " << vo::toString(f.status);
 	const auto e = eval::computeErrors(sequence().gt, run.est);
@@ -137,7 +137,7 @@ TEST(VOSynthetic, MonoTranslationalErrorBelowOnePercent)
 
 TEST(VOSynthetic, InvariantTranslationalErrorBelowThreePercent)
 {
-	const TRun run = runVO("invariant");
+	const TVoRun run = runVO("invariant");
 	int tracked = 0;
 	for (const auto& f : run.frames) tracked += vo::isTracked(f.status);
 	const auto e = eval::computeErrors(sequence().gt, run.est);
@@ -150,7 +150,7 @@ TEST(VOSynthetic, InvariantTranslationalErrorBelowThreePercent)
 TEST(VOSynthetic, BlankFrameIsReportedAndTrackingResumes)
 {
 	// Frame 20 blank (lens cap, dropped exposure): no features at all.
-	const TRun run = runVO("mono", {20});
+	const TVoRun run = runVO("mono", {20});
 	const auto& f20 = run.frames[20];
 	EXPECT_EQ(f20.status, vo::FrameStatus::FewFeatures);
 	EXPECT_EQ(f20.stereo, 0u);
@@ -173,7 +173,7 @@ TEST(VOSynthetic, LongBlankGapIsBridgedByPrediction)
 	// Five blank frames in a row: each is reported; the next good frame is
 	// matched to the old keyframe in the wide window around the
 	// constant-velocity prediction.
-	const TRun run = runVO("mono", {10, 11, 12, 13, 14});
+	const TVoRun run = runVO("mono", {10, 11, 12, 13, 14});
 	for (int k = 10; k <= 14; k++) EXPECT_EQ(run.frames[k].status, vo::FrameStatus::FewFeatures) << k;
 	for (int k = 15; k < kFrames; k++) EXPECT_TRUE(vo::isTracked(run.frames[k].status)) << k;
 	// No wild pose anywhere: predictions over 0.5 m of travel stay within a
@@ -332,8 +332,8 @@ TEST(VOSynthetic, NearLandmarkPreferenceTracksAndKeepsAccuracy)
 	vo::TStereoVOOptions o;
 	o.near_min_disparity = 5;
 	o.near_min_matches = 40;
-	const TRun run = runVO("mono", {}, o);
-	const TRun all = runVO("mono");
+	const TVoRun run = runVO("mono", {}, o);
+	const TVoRun all = runVO("mono");
 	size_t used = 0, usedAll = 0;
 	for (size_t k = 0; k < run.frames.size(); k++)
 	{
