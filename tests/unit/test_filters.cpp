@@ -250,8 +250,7 @@ TEST(FilterConfig, BadOptionsNameSectionAndKey)
 }
 
 // ---- Must-show 6: bad input gives a clear error and no output ----------------
-namespace
-{
+// Not in an anonymous namespace: the parameterised suite derives from it.
 struct BadCase
 {
 	std::string name;
@@ -260,6 +259,8 @@ struct BadCase
 };
 void PrintTo(const BadCase& c, std::ostream* os) { *os << c.name; }
 
+namespace
+{
 void writePlain(const std::string& path, const std::vector<const mrpt::serialization::CSerializable*>& objs)
 {
 	mrpt::io::CFileOutputStream f(path);

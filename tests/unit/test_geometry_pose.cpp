@@ -498,6 +498,9 @@ TEST(GeometryPose, PoseOnlySolveGivesTheSamePoseToTheBit)
 			EXPECT_TRUE(b.T_curr_ref.matrix() == a.T_curr_ref.matrix()) << b.T_curr_ref.matrix() - a.T_curr_ref.matrix();
 			// The pose-only solve says nothing about its covariance.
 			EXPECT_TRUE(b.cov_T_ref_curr.isIdentity(0));
-			if (iterations == 15) EXPECT_LT(transErr(b.T_curr_ref, T), 0.05);
+			if (iterations == 15)
+			{
+				EXPECT_LT(transErr(b.T_curr_ref, T), 0.05);
+			}
 		}
 }
