@@ -7,7 +7,8 @@
 namespace shadyloc
 {
 /** Registers every RTTI/serialisable class of ShadyLoc with MRPT
- * (idempotent). It runs when libshadyloc_localisation loads; the MRPT plugin
- * and the programs call it again, which is harmless. */
+ * (idempotent). Each class already registers itself when
+ * libshadyloc_localisation loads; the MRPT plugin and the programs call this
+ * again, which is harmless. */
 void registerAllClasses();
 }  // namespace shadyloc

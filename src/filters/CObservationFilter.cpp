@@ -14,6 +14,12 @@ using namespace shadyloc;
 
 IMPLEMENTS_VIRTUAL_SERIALIZABLE(CObservationFilter, CSerializable, shadyloc)
 
+namespace
+{
+// Registered when the library loads, after its class id (src/Registration.cpp).
+[[maybe_unused]] const bool filterBaseRegisteredAtLoad = (mrpt::rtti::registerClass(CLASS_ID(CObservationFilter)), true);
+}  // namespace
+
 void CObservationFilter::TCommonOptions::keys(core::KeyVisitor& v)
 {
 	using core::Range;

@@ -13,6 +13,16 @@ IMPLEMENTS_SERIALIZABLE(CFilterLinearise, CObservationFilter, shadyloc)
 
 namespace
 {
+// Registered when the library loads, in the file that defines the class ids
+// and after them: only within one file is the order of initialisation fixed
+// (src/Registration.cpp says why).
+[[maybe_unused]] const bool filtersRegisteredAtLoad =
+	(mrpt::rtti::registerClass(CLASS_ID(CFilterMonochrome)), mrpt::rtti::registerClass(CLASS_ID(CFilterInvariant)),
+	 mrpt::rtti::registerClass(CLASS_ID(CFilterLinearise)), true);
+}  // namespace
+
+namespace
+{
 /** An enum stored as a byte, checked against its last value. */
 template <class E>
 E readEnum(io::BoundedReader& in, const char* field, E last)

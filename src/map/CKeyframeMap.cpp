@@ -45,6 +45,12 @@ MAP_DEFINITION_REGISTER("shadyloc::CKeyframeMap,keyframeMap", shadyloc::CKeyfram
 
 namespace
 {
+// Registered when the library loads, after its class id (src/Registration.cpp).
+[[maybe_unused]] const bool mapRegisteredAtLoad = (mrpt::rtti::registerClass(CLASS_ID(CKeyframeMap)), true);
+}  // namespace
+
+namespace
+{
 constexpr const char* kClass = "shadyloc::CKeyframeMap";
 // Bytes per stored measurement: uL, v, disparity, response (u16 each), zncc
 // (i8), BRIEF (32), patch.
