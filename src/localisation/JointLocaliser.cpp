@@ -44,6 +44,16 @@ std::vector<geometry::TStereoCorrespondence> JointLocaliser::unionIn(
 	return all;
 }
 
+TLocaliserResult JointLocaliser::notRun(const TLocaliserInput& in) const
+{
+	TLocaliserResult r;
+	r.frame = in.frame;
+	r.timestamp = in.timestamp;
+	r.channel = kLabel;
+	r.status = LocaliserStatus::NotRun;
+	return r;
+}
+
 TLocaliserResult JointLocaliser::localise(
 	const TLocaliserInput& in, const std::vector<const TSearchedCorrespondences*>& parts)
 {

@@ -66,6 +66,8 @@ void TSystemOptions::keys(core::KeyVisitor& v)
 	v("joint", joint, "", Range::any(),
 	  "channels whose searches one more localiser solves together, first in policy order (empty = none; runs "
 	  "only when each is a localiser)");
+	v("joint_only_where_a_channel_fails", joint_only_where_a_channel_fails, "", Range::any(),
+	  "... only on frames where one of its channels' localisers has no accepted fix (elsewhere theirs are used)");
 	v("vo_channel", vo_channel, "", Range::any(), "the live VO that predicts for every localiser");
 	v("vo_fallback_channel", vo_fallback_channel, "", Range::any(),
 	  "a second live VO whose step is used where vo_channel's could not be measured (\"\" = none; runs only "
@@ -742,11 +744,14 @@ TLocalisationUpdate LocalisationSystem::processChannels(
 	// ---- the joint localiser on what their searches found (after them in
 	// the update, first in policy order)
 	std::vector<const TLocaliserResult*> inOrder;
+	const bool jointRuns =
+		m_joint && !(m_opts.joint_only_where_a_channel_fails &&
+					 std::all_of(m_jointPipes.begin(), m_jointPipes.end(), [&](size_t i) { return res[i].accepted(); }));
 	if (m_joint)
 	{
 		std::vector<const TSearchedCorrespondences*> parts;
 		for (const size_t i : m_jointPipes) parts.push_back(&searched[i]);
-		u.localisers.push_back(m_joint->localise(in, parts));
+		u.localisers.push_back(jointRuns ? m_joint->localise(in, parts) : m_joint->notRun(in));
 		inOrder.push_back(&u.localisers.back());
 	}
 	for (size_t k = 0; k < order.size(); k++) inOrder.push_back(&u.localisers[k]);
@@ -759,6 +764,9 @@ TLocalisationUpdate LocalisationSystem::processChannels(
 	{
 		u.used = fix->channel;
 		m_track.fix(fusedFix(*fix, pred, u.track_confirmed));
+		// Not run: its next solve is motion-tested against the system's fix
+		// (an accepted one, never a seed of its own).
+		if (m_joint && !jointRuns) m_joint->startFrom(u.frame, m_track.estimate());
 	}
 	else
 	{
@@ -770,6 +778,7 @@ TLocalisationUpdate LocalisationSystem::processChannels(
 			if (res[i].status == LocaliserStatus::Unconfirmed) seeds.push_back(res[i].pose());
 		}
 		if (m_joint && u.localisers.back().status == LocaliserStatus::Unconfirmed) seeds.push_back(u.localisers.back().pose());
+		if (m_joint && !jointRuns) m_joint->forgetSolve();
 		m_track.noFix(seeds);
 		// ---- relocalisation, on this frame
 		const SearchScope scope = m_track.searchNeeded(allLost);

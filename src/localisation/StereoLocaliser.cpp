@@ -129,6 +129,7 @@ std::string toString(LocaliserStatus s)
 		case LocaliserStatus::PredictionInconsistent: return "prediction_inconsistent";
 		case LocaliserStatus::MotionInconsistent: return "motion_inconsistent";
 		case LocaliserStatus::Contradicted: return "contradicted";
+		case LocaliserStatus::NotRun: return "not_run";
 	}
 	return "?";
 }

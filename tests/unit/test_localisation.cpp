@@ -268,8 +268,9 @@ TEST_F(LocalisationCorridor, JointLocaliserSolvesBothChannelsMatchesAndComesFirs
 	// fixes are as accurate as the channels' (5 cm, 0.5 deg), it fixes most
 	// frames, it is used whenever it has a fix (first in policy order; here
 	// nothing contradicts it), and the system localises no fewer frames.
+	// (Run on every frame here, so that its own fixes are judged.)
 	auto plain = makeSystem(s_map, 2);
-	auto withJoint = makeSystem(s_map, 2, "[localise]\njoint = mono invariant\n");
+	auto withJoint = makeSystem(s_map, 2, "[localise]\njoint = mono invariant\njoint_only_where_a_channel_fails = false\n");
 	ASSERT_NE(withJoint->jointLocaliser(), nullptr);
 	ASSERT_EQ(plain->jointLocaliser(), nullptr);
 	const auto base = liveRun(*plain, 1, 40, 0.3);
@@ -297,6 +298,67 @@ TEST_F(LocalisationCorridor, JointLocaliserSolvesBothChannelsMatchesAndComesFirs
 	EXPECT_GE(localised, localisedBefore);
 	// The baseline alone has no joint localiser to run.
 	EXPECT_EQ(makeSystem(s_map, 1, "[localise]\njoint = mono invariant\n", {"mono"})->jointLocaliser(), nullptr);
+}
+
+TEST_F(LocalisationCorridor, JointLocaliserRunsOnlyWhereAChannelFails)
+{
+	// The default: where both channel localisers' own fixes are accepted the
+	// joint solve is not run and theirs are used; the system localises as
+	// many frames as with the joint solve on every frame.
+	const std::string joint = "[localise]\njoint = mono invariant\n";
+	auto lazy = makeSystem(s_map, 2, joint);
+	auto every = makeSystem(s_map, 2, joint + "joint_only_where_a_channel_fails = false\n");
+	const auto run = liveRun(*lazy, 1, 40, 0.3), runEvery = liveRun(*every, 1, 40, 0.3);
+	int bothFixed = 0, localised = 0, localisedEvery = 0;
+	for (size_t i = 0; i < run.ups.size(); i++)
+	{
+		const auto& u = run.ups[i];
+		const TLocaliserResult* j = u.result("joint");
+		ASSERT_NE(j, nullptr);
+		const bool bothFix = u.result("mono")->accepted() && u.result("invariant")->accepted();
+		bothFixed += bothFix;
+		EXPECT_EQ(j->status == LocaliserStatus::NotRun, bothFix) << "frame " << i << ": " << toString(j->status);
+		if (bothFix)
+		{
+			EXPECT_NE(u.used, "joint") << "frame " << i;
+		}
+		localised += u.localised();
+		localisedEvery += runEvery.ups[i].localised();
+	}
+	EXPECT_GE(bothFixed, 30);
+	EXPECT_GE(localised, localisedEvery);
+
+	// Where one channel's fix is never accepted (capped at a sigma no solve
+	// reaches, 0.1 mm; the places the search finds are verified as before),
+	// the joint solve runs on every frame; where neither channel's is, its
+	// fixes are used and true. (Its consistent_frames is 1 here: a search on every lost
+	// frame restarts its chain, so a hypothesis only the joint solve holds
+	// is not confirmed by K = 3 consistent frames; it is confirmed on a
+	// confirmed track.)
+	auto blindChannels = makeSystem(
+		s_map, 2,
+		joint + "[localiser.mono]\nmax_sigma_m = 0.0001\n[localiser.invariant]\nmax_sigma_m = 0.0001\n"
+				"[localiser.joint]\nconsistent_frames = 1\n");
+	const auto hard = liveRun(*blindChannels, 1, 40, 0.3);
+	auto oneBlind = makeSystem(s_map, 2, joint + "[localiser.invariant]\nmax_sigma_m = 0.0001\n");
+	for (const auto& u : liveRun(*oneBlind, 1, 40, 0.3).ups)
+		EXPECT_NE(u.result("joint")->status, LocaliserStatus::NotRun) << "frame " << u.frame;
+	int jointFixes = 0;
+	for (size_t i = 0; i < hard.ups.size(); i++)
+	{
+		const auto& u = hard.ups[i];
+		const TLocaliserResult* j = u.result("joint");
+		ASSERT_NE(j, nullptr);
+		EXPECT_NE(j->status, LocaliserStatus::NotRun) << "frame " << i;
+		EXPECT_FALSE(u.result("mono")->accepted() || u.result("invariant")->accepted()) << "frame " << i;
+		if (!j->accepted()) continue;
+		jointFixes++;
+		EXPECT_EQ(u.used, "joint") << "frame " << i;
+		const auto [em, ed] = fixError(*s_map, j->kf_id, j->T_kf_live, hard.gt[i].T);
+		EXPECT_LT(em, 0.05) << "frame " << i;
+		EXPECT_LT(ed, 0.5) << "frame " << i;
+	}
+	EXPECT_GE(jointFixes, 30);
 }
 
 TEST_F(LocalisationCorridor, StartKeyframeRestrictsTheFirstSearch)

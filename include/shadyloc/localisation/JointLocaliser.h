@@ -40,6 +40,9 @@ class JointLocaliser
 	 * channels() order (null or empty: that channel did not search). The
 	 * union is solved in the first searching channel's keyframe. */
 	TLocaliserResult localise(const TLocaliserInput& in, const std::vector<const TSearchedCorrespondences*>& parts);
+	/** The result of a frame it was not run on (status NotRun); the system
+	 * then sets its acceptance state (startFrom, forgetSolve). */
+	TLocaliserResult notRun(const TLocaliserInput& in) const;
 
 	/** See StereoLocaliser::reset, startFrom, between. */
 	void reset() { m_accept.reset(); }

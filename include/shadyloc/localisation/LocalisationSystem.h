@@ -64,6 +64,13 @@ struct TSystemOptions
 	 * order. Runs only when every channel named is one of the localisers, so
 	 * the baseline (`--localisers mono`) stays the paper's. Empty = none. */
 	std::vector<std::string> joint;
+	/** The joint solve runs only on frames where one of its channels'
+	 * localisers has no accepted fix: where each channel holds alone, their
+	 * fixes are used (the cross-check chooses among them) and the joint
+	 * localiser's motion test starts from the frame's fix; where one
+	 * channel is weak or none holds, the joint solve adds fixes and
+	 * accuracy. */
+	bool joint_only_where_a_channel_fails = true;
 	std::string vo_channel = "mono";  //!< the channel of the live VO that predicts for all
 	/** A second live VO on this channel ("" = none) whose step replaces the
 	 * VO channel's where that one could not measure the step (too few

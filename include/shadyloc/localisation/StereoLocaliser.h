@@ -276,7 +276,8 @@ enum class LocaliserStatus
 	Uncertain,	//!< the fix's covariance exceeds max_sigma_m / max_sigma_deg (when set)
 	PredictionInconsistent,	 //!< the fix disagrees with the prediction
 	MotionInconsistent,	 //!< its frame-to-frame motion disagrees with VO's
-	Contradicted  //!< accepted, but a more certain fix of the same frame disagrees (the system's cross-check)
+	Contradicted,  //!< accepted, but a more certain fix of the same frame disagrees (the system's cross-check)
+	NotRun	//!< the joint localiser, not run: each of its channels' own fixes was accepted (`joint_only_where_a_channel_fails`)
 };
 std::string toString(LocaliserStatus s);
 
