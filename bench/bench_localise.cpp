@@ -182,7 +182,7 @@ BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_joint, 2, "[localise]\njoint =\n
 	->Unit(benchmark::kMillisecond)
 	->UseManualTime()
 	->Iterations(600);
-// The joint solve on every frame, not only where no channel's fix was accepted.
+// The joint solve on every frame, not only where one of its channels has no accepted fix.
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_joint_every_frame, 2, "[localise]\njoint_only_where_a_channel_fails = false\n")
 	->Unit(benchmark::kMillisecond)
 	->UseManualTime()
