@@ -329,20 +329,24 @@ TEST_F(LocalisationCorridor, JointLocaliserRunsOnlyWhereAChannelFails)
 	EXPECT_GE(localised, localisedEvery);
 
 	// Where one channel's fix is never accepted (capped at a sigma no solve
-	// reaches, 0.1 mm; the places the search finds are verified as before),
-	// the joint solve runs on every frame; where neither channel's is, its
-	// fixes are used and true. (Its consistent_frames is 1 here: a search on every lost
-	// frame restarts its chain, so a hypothesis only the joint solve holds
-	// is not confirmed by K = 3 consistent frames; it is confirmed on a
-	// confirmed track.)
+	// reaches, 0.1 mm), it runs on every frame.
+	auto oneRefused = makeSystem(s_map, 2, joint + "[localiser.invariant]\nmax_sigma_m = 0.0001\n");
+	for (const auto& u : liveRun(*oneRefused, 1, 40, 0.3).ups)
+		EXPECT_NE(u.result("joint")->status, LocaliserStatus::NotRun) << "frame " << u.frame;
+}
+
+TEST_F(LocalisationCorridor, JointLocaliserFixesWhereNeitherChannelDoes)
+{
+	// Both channels' fixes refused (a sigma cap no solve meets; the places
+	// the search finds are verified as before): the joint solve runs on
+	// every frame, and its fixes are used and true. Its consistent_frames is
+	// 1 here: the search on every lost frame restarts its chain, so a place
+	// only the joint solve holds would not reach K = 3 (docs/localisation.md).
 	auto blindChannels = makeSystem(
 		s_map, 2,
-		joint + "[localiser.mono]\nmax_sigma_m = 0.0001\n[localiser.invariant]\nmax_sigma_m = 0.0001\n"
-				"[localiser.joint]\nconsistent_frames = 1\n");
+		"[localise]\njoint = mono invariant\n[localiser.mono]\nmax_sigma_m = 0.0001\n"
+		"[localiser.invariant]\nmax_sigma_m = 0.0001\n[localiser.joint]\nconsistent_frames = 1\n");
 	const auto hard = liveRun(*blindChannels, 1, 40, 0.3);
-	auto oneBlind = makeSystem(s_map, 2, joint + "[localiser.invariant]\nmax_sigma_m = 0.0001\n");
-	for (const auto& u : liveRun(*oneBlind, 1, 40, 0.3).ups)
-		EXPECT_NE(u.result("joint")->status, LocaliserStatus::NotRun) << "frame " << u.frame;
 	int jointFixes = 0;
 	for (size_t i = 0; i < hard.ups.size(); i++)
 	{
