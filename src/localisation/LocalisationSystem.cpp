@@ -778,7 +778,6 @@ TLocalisationUpdate LocalisationSystem::processChannels(
 			if (res[i].status == LocaliserStatus::Unconfirmed) seeds.push_back(res[i].pose());
 		}
 		if (m_joint && u.localisers.back().status == LocaliserStatus::Unconfirmed) seeds.push_back(u.localisers.back().pose());
-		if (m_joint && !jointRuns) m_joint->forgetSolve();
 		m_track.noFix(seeds);
 		// ---- relocalisation, on this frame
 		const SearchScope scope = m_track.searchNeeded(allLost);
