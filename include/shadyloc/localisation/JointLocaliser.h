@@ -41,7 +41,7 @@ class JointLocaliser
 	 * union is solved in the first searching channel's keyframe. */
 	TLocaliserResult localise(const TLocaliserInput& in, const std::vector<const TSearchedCorrespondences*>& parts);
 	/** The result of a frame it was not run on (status NotRun); the system
-	 * then sets its acceptance state (startFrom, forgetSolve). */
+	 * then starts its acceptance from the frame's fix (startFrom). */
 	TLocaliserResult notRun(const TLocaliserInput& in) const;
 
 	/** See StereoLocaliser::reset, startFrom, between. */
