@@ -105,6 +105,8 @@ void TSystemOptions::keys(core::KeyVisitor& v)
 	  "... at most this many keyframes a frame, the next slice of the map each time (0: the whole map)");
 	v("seed_with_unconfirmed", track.seed_with_unconfirmed, "", Range::any(),
 	  "a consistent but unconfirmed solve narrows the next search (never a fix, never validates)");
+	v("seed_with_places", track.seed_with_places, "", Range::any(),
+	  "a verified place that is no fix narrows the next search with its own covariance (never validates)");
 	v("global_sigma_m", track.global_sigma_m, "m", Range::atLeast(0), "");
 	v("global_sigma_deg", track.global_sigma_deg, "deg", Range::atLeast(0), "");
 }

@@ -124,7 +124,8 @@ void Track::adoptPlace(const TKeyframePose& place)
 	m_est = place;
 	m_est.valid = true;
 	m_est.cov = withPlaceSigma(place.cov);
-	m_seed = TKeyframePose();
+	// Where to search next (its own covariance), never what is tested against.
+	m_seed = m_opts.seed_with_places ? place : TKeyframePose();
 	m_rival = TKeyframePose();
 	m_confirmed = false;
 	m_framesSinceFix = 0;

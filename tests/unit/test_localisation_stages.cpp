@@ -235,6 +235,29 @@ TEST(LocalisationStages, UnconfirmedSeedNarrowsTheSearchButNeverValidates)
 	EXPECT_FALSE(t.confirmed());
 }
 
+// A verified place that is no fix narrows the next search with its own
+// covariance; the track it is tested against keeps global_sigma added (with
+// the added sigma alone the next frame's gates were 45-60 px wide and the
+// monochrome search failed where the place's own 10 px found it again).
+TEST(LocalisationStages, VerifiedPlaceNarrowsTheNextSearchButNeverValidates)
+{
+	TTrackOptions o;
+	Track t(o);
+	t.adoptPlace(poseAt(2.0, 0.01));
+	const TKeyframePose pred = t.predict(step(0.5));
+	EXPECT_GE(geometry::translationSigma(pred.cov), o.global_sigma_m);	// tested against: the place made wide
+	ASSERT_TRUE(t.searchSeed().valid);
+	EXPECT_NEAR(t.searchSeed().T_kf_live.translation().z(), 2.5, 1e-9);
+	EXPECT_LT(geometry::translationSigma(t.searchSeed().cov), 0.05);  // searched in: its own covariance and one step
+	EXPECT_FALSE(t.confirmed());
+
+	o.seed_with_places = false;
+	Track u(o);
+	u.adoptPlace(poseAt(2.0, 0.01));
+	u.predict(step(0.5));
+	EXPECT_FALSE(u.searchSeed().valid);
+}
+
 // The track is a confirmed place after a fix until its uncertainty outgrows
 // the bound; the place is searched for around dead reckoning after
 // relocalise_after_frames, everywhere after global_search_after_frames.
