@@ -106,7 +106,7 @@ void TSystemOptions::keys(core::KeyVisitor& v)
 	v("seed_with_unconfirmed", track.seed_with_unconfirmed, "", Range::any(),
 	  "a consistent but unconfirmed solve narrows the next search (never a fix, never validates)");
 	v("seed_with_places", track.seed_with_places, "", Range::any(),
-	  "a verified place that is no fix narrows the next search with its own covariance (never validates)");
+	  "a verified place that is no fix narrows the next search with its own covariance (never validates; off: it held places in another world)");
 	v("global_sigma_m", track.global_sigma_m, "m", Range::atLeast(0), "");
 	v("global_sigma_deg", track.global_sigma_deg, "deg", Range::atLeast(0), "");
 }

@@ -741,7 +741,7 @@ TGlobalPlace StereoLocaliser::globalSearch(
 	for (int c = 0; c < o.global_candidates && c < static_cast<int>(votes.size()); c++)
 	{
 		const bool nearGuess = guess && c == 0;	 // putNearestFirst: no votes needed
-		if (!nearGuess && -votes[c].first < o.min_matches) continue;
+		if (!nearGuess && -votes[c].first < o.global_min_votes) continue;
 		if (auto v = verifyPlace(meas, calib, seed, votes[c].second, guess, solves))
 		{
 			v->votes = -votes[c].first;

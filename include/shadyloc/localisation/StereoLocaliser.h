@@ -202,6 +202,11 @@ struct TLocaliserOptions
 	// ---- global search
 	int global_vote_hamming = 50;  //!< a landmark votes for its keyframe when a live descriptor is this close [bits]
 	int global_candidates = 5;	//!< keyframes verified geometrically, most votes first
+	/** ... each with at least this many votes. Fewer (1) let the check find
+	 * places under hard light, where the right keyframe led the votes with
+	 * 8-14, but the check alone also verified places in a map of another
+	 * world (periodic facades): measured, not shipped (docs/localisation.md). */
+	int global_min_votes = 15;
 	/** First pass of a verification: BRIEF in a circle this large around each
 	 * landmark's projection from the candidate keyframe's own pose (the live
 	 * camera is near it); the second pass is the gate around that solve [px]. */

@@ -56,10 +56,10 @@ struct TTrackOptions
 	bool seed_with_unconfirmed = true;
 	/** A verified place that starts or continues a hypothesis narrows the
 	 * next frame's search with its own covariance; the track it is tested
-	 * against keeps global_sigma added. With the added sigma alone the next
-	 * frame's gates were 45-60 px wide, and under hard light the
-	 * monochrome search failed in them where 10 px gates found the place. */
-	bool seed_with_places = true;
+	 * against keeps global_sigma added. Off by default: it found more under
+	 * hard light, but its narrow gates also held places verified in a map of
+	 * another world, so they became fixes (docs/localisation.md). */
+	bool seed_with_places = false;
 	/** While the track is confirmed, a fix is the solve fused with the
 	 * prediction (fuseWithPrediction), not the solve alone. */
 	bool fuse_prediction = true;
