@@ -687,7 +687,7 @@ TEST(LocalisationRelocalisation, AGuessOfThePoseFindsPlacesSeenFromAnotherHeadin
 // global_min_votes: with a floor of 1 the votes only rank the candidates and
 // the geometric check decides (under hard light the right keyframe led the
 // votes with 8-14 and, below the floor of 15, was never checked;
-// docs/localisation.md, "Checking what the votes rank first"). Here fewer
+// docs/localisation.md, "Finding places sooner under hard light"). Fewer
 // votes come from a stricter vote.
 TEST(LocalisationRelocalisation, VotesRankTheCandidatesTheCheckDecides)
 {
