@@ -205,7 +205,7 @@ struct TLocaliserOptions
 	/** ... each with at least this many votes. Fewer (1) let the check find
 	 * places under hard light, where the right keyframe led the votes with
 	 * 8-14, but the check alone also verified places in a map of another
-	 * world (periodic facades): measured, not shipped (docs/localisation.md). */
+	 * world (its facades): measured, not shipped (docs/localisation.md). */
 	int global_min_votes = 15;
 	/** First pass of a verification: BRIEF in a circle this large around each
 	 * landmark's projection from the candidate keyframe's own pose (the live
