@@ -105,8 +105,6 @@ void TSystemOptions::keys(core::KeyVisitor& v)
 	  "... at most this many keyframes a frame, the next slice of the map each time (0: the whole map)");
 	v("seed_with_unconfirmed", track.seed_with_unconfirmed, "", Range::any(),
 	  "a consistent but unconfirmed solve narrows the next search (never a fix, never validates)");
-	v("seed_with_places", track.seed_with_places, "", Range::any(),
-	  "a verified place that is no fix narrows the next search with its own covariance (never validates; off: it held places in another world)");
 	v("global_sigma_m", track.global_sigma_m, "m", Range::atLeast(0), "");
 	v("global_sigma_deg", track.global_sigma_deg, "deg", Range::atLeast(0), "");
 }
@@ -688,7 +686,8 @@ void LocalisationSystem::searchPlace(
 			const PlaceTest agreesWith = [&](const TKeyframePose& pred) {
 				return placeAgrees(place, pred, link, lo.prediction_chi2);
 			};
-			const PlaceOutcome outcome = m_track.placeFound(place, agreesWith, places[i].certain, lo.consistent_frames);
+			const PlaceOutcome outcome =
+				m_track.placeFound(place, agreesWith, places[i].certain, lo.consistent_frames, lo.place_seeds_search);
 			if (outcome == PlaceOutcome::Fix) u.used = m_pipes[i].setup.channel.label;
 			// The verified place is each localiser's first consistent frame
 			// (unless the track outranked it).

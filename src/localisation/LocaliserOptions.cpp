@@ -76,7 +76,10 @@ void TLocaliserOptions::keys(core::KeyVisitor& v)
 	v("consistent_frames", consistent_frames, "", Range::atLeast(0), "K");
 	v("global_vote_hamming", global_vote_hamming, "bits", Range::openClosed(0, 256), "");
 	v("global_candidates", global_candidates, "", Range::atLeast(1), "");
-	v("global_min_votes", global_min_votes, "", Range::atLeast(0), "... each with at least this many votes (fewer: places in another world too)");
+	v("global_min_votes", global_min_votes, "", Range::atLeast(0),
+	  "... each with at least this many votes (1: the check alone decides; only where it verifies nothing in another world)");
+	v("place_seeds_search", place_seeds_search, "", Range::any(),
+	  "a place this localiser verifies narrows the next search with its own covariance (never validates)");
 	v("global_window_px", global_window_px, "px", Range::above(0), "first pass of a verification");
 	v("global_min_inliers", global_min_inliers, "", Range::atLeast(3), "");
 	v("global_ambiguity_ratio", global_ambiguity_ratio, "", Range::openClosed(0, 1), "");

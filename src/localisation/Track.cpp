@@ -119,20 +119,21 @@ Matrix6d Track::withPlaceSigma(const Matrix6d& cov) const
 	return cov + c;	 // one frame's solve, unconfirmed
 }
 
-void Track::adoptPlace(const TKeyframePose& place)
+void Track::adoptPlace(const TKeyframePose& place, bool seedsSearch)
 {
 	m_est = place;
 	m_est.valid = true;
 	m_est.cov = withPlaceSigma(place.cov);
 	// Where to search next (its own covariance), never what is tested against.
-	m_seed = m_opts.seed_with_places ? place : TKeyframePose();
+	m_seed = seedsSearch ? place : TKeyframePose();
 	m_rival = TKeyframePose();
 	m_confirmed = false;
 	m_framesSinceFix = 0;
 	m_distSinceFix = 0;
 }
 
-PlaceOutcome Track::placeFound(const TKeyframePose& place, const PlaceTest& agreesWith, bool certain, int K)
+PlaceOutcome Track::placeFound(
+	const TKeyframePose& place, const PlaceTest& agreesWith, bool certain, int K, bool seedsSearch)
 {
 	const bool confirmedTrack = confirmed();
 	const bool agrees = agreesWith(m_est);
@@ -161,7 +162,7 @@ PlaceOutcome Track::placeFound(const TKeyframePose& place, const PlaceTest& agre
 			return PlaceOutcome::Fix;
 		}
 	}
-	adoptPlace(place);
+	adoptPlace(place, seedsSearch);
 	m_places = places;
 	return PlaceOutcome::Hypothesis;
 }

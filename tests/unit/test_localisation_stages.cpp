@@ -235,17 +235,17 @@ TEST(LocalisationStages, UnconfirmedSeedNarrowsTheSearchButNeverValidates)
 	EXPECT_FALSE(t.confirmed());
 }
 
-// seed_with_places: a verified place that is no fix narrows the next search
-// with its own covariance; the track it is tested against keeps global_sigma
-// added (with the added sigma alone the next frame's gates were 45-60 px wide
-// and the monochrome search failed where the place's own 10 px found it
-// again). Off by default (docs/localisation.md).
+// place_seeds_search: a verified place that is no fix narrows the next
+// search with its own covariance; the track it is tested against keeps
+// global_sigma added (with the added sigma alone the next frame's gates were
+// 45-60 px wide and the monochrome search failed where the place's own 10 px
+// found it again). A localiser option: on for monochrome only
+// (docs/localisation.md, "Finding places sooner under hard light").
 TEST(LocalisationStages, VerifiedPlaceNarrowsTheNextSearchButNeverValidates)
 {
 	TTrackOptions o;
-	o.seed_with_places = true;
 	Track t(o);
-	t.adoptPlace(poseAt(2.0, 0.01));
+	t.adoptPlace(poseAt(2.0, 0.01), /*seedsSearch=*/true);
 	const TKeyframePose pred = t.predict(step(0.5));
 	EXPECT_GE(geometry::translationSigma(pred.cov), o.global_sigma_m);	// tested against: the place made wide
 	ASSERT_TRUE(t.searchSeed().valid);
@@ -253,11 +253,22 @@ TEST(LocalisationStages, VerifiedPlaceNarrowsTheNextSearchButNeverValidates)
 	EXPECT_LT(geometry::translationSigma(t.searchSeed().cov), 0.05);  // searched in: its own covariance and one step
 	EXPECT_FALSE(t.confirmed());
 
-	o.seed_with_places = false;
 	Track u(o);
-	u.adoptPlace(poseAt(2.0, 0.01));
+	u.adoptPlace(poseAt(2.0, 0.01), /*seedsSearch=*/false);
 	u.predict(step(0.5));
 	EXPECT_FALSE(u.searchSeed().valid);
+
+	// Through placeFound, as the system calls it: a new hypothesis seeds
+	// only when its localiser's places may.
+	const PlaceTest never = [](const TKeyframePose&) { return false; };
+	Track w(o);
+	EXPECT_EQ(w.placeFound(poseAt(2.0, 0.01), never, true, 3, /*seedsSearch=*/true), PlaceOutcome::Hypothesis);
+	w.predict(step(0.5));
+	EXPECT_TRUE(w.searchSeed().valid);
+	Track x(o);
+	EXPECT_EQ(x.placeFound(poseAt(2.0, 0.01), never, true, 3, /*seedsSearch=*/false), PlaceOutcome::Hypothesis);
+	x.predict(step(0.5));
+	EXPECT_FALSE(x.searchSeed().valid);
 }
 
 // The track is a confirmed place after a fix until its uncertainty outgrows

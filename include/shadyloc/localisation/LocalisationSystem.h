@@ -90,7 +90,7 @@ struct TSystemOptions
 	 * last fix), confirmed_max_sigma_m, relocalise_after_frames,
 	 * relocalise_window_m, global_search_after_frames,
 	 * global_keyframes_per_frame, global_sigma_m,
-	 * global_sigma_deg, seed_with_unconfirmed, seed_with_places. */
+	 * global_sigma_deg, seed_with_unconfirmed. */
 	TTrackOptions track;
 
 	void keys(core::KeyVisitor& v);  //!< every key, declared once (core/Options.h)

@@ -202,11 +202,17 @@ struct TLocaliserOptions
 	// ---- global search
 	int global_vote_hamming = 50;  //!< a landmark votes for its keyframe when a live descriptor is this close [bits]
 	int global_candidates = 5;	//!< keyframes verified geometrically, most votes first
-	/** ... each with at least this many votes. Fewer (1) let the check find
-	 * places under hard light, where the right keyframe led the votes with
-	 * 8-14, but the check alone also verified places in a map of another
-	 * world (its facades): measured, not shipped (docs/localisation.md). */
+	/** ... each with at least this many votes. 1 lets the votes only rank
+	 * and the check decide: under hard light the right keyframe led the
+	 * votes with 8-14. Only for a channel whose check does not verify
+	 * places in another world (config: monochrome 1; every place verified
+	 * in another world was an invariant one, docs/localisation.md). */
 	int global_min_votes = 15;
+	/** A place this localiser verifies (no fix yet) narrows the next frame's
+	 * search with its own covariance, as an unconfirmed solve does; the
+	 * track keeps global_sigma added for testing. Off for a channel whose
+	 * places alias: their narrow gates held places in another world. */
+	bool place_seeds_search = false;
 	/** First pass of a verification: BRIEF in a circle this large around each
 	 * landmark's projection from the candidate keyframe's own pose (the live
 	 * camera is near it); the second pass is the gate around that solve [px]. */

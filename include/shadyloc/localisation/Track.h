@@ -54,12 +54,6 @@ struct TTrackOptions
 	double global_sigma_deg = 1.0;
 	/** An unconfirmed, consistent solve narrows the next frame's search. */
 	bool seed_with_unconfirmed = true;
-	/** A verified place that starts or continues a hypothesis narrows the
-	 * next frame's search with its own covariance; the track it is tested
-	 * against keeps global_sigma added. Off by default: it found more under
-	 * hard light, but its narrow gates also held places verified in a map of
-	 * another world, so they became fixes (docs/localisation.md). */
-	bool seed_with_places = false;
 	/** While the track is confirmed, a fix is the solve fused with the
 	 * prediction (fuseWithPrediction), not the solve alone. */
 	bool fuse_prediction = true;
@@ -173,8 +167,11 @@ class Track
 	/** Whether (and where) to search for the place now. `allLost`: every
 	 * localiser said its gates outgrew the ceiling. */
 	SearchScope searchNeeded(bool allLost) const;
-	/** A verified place becomes the track: a new, unconfirmed hypothesis. */
-	void adoptPlace(const TKeyframePose& place);
+	/** A verified place becomes the track: a new, unconfirmed hypothesis,
+	 * tested against with global_sigma added. With `seedsSearch` (its
+	 * localiser's place_seeds_search) it also narrows the next frame's
+	 * search with its own covariance; it never validates. */
+	void adoptPlace(const TKeyframePose& place, bool seedsSearch = false);
 	/** A verified place of the relocalisation. `agreesWith`: the place
 	 * against a prediction for its frame (placeAgrees); `certain`: within the
 	 * fix bounds. A fix when it agrees with a confirmed track, or is the K-th
@@ -184,8 +181,9 @@ class Track
 	 * continues the hypothesis it agrees with, or starts a new one, unless a
 	 * confirmed track is the more certain (confirmed_track_outranks_places):
 	 * then the place is the track's rival, and the next place that agrees
-	 * with the rival overturns the track. */
-	PlaceOutcome placeFound(const TKeyframePose& place, const PlaceTest& agreesWith, bool certain, int K);
+	 * with the rival overturns the track. `seedsSearch`: see adoptPlace. */
+	PlaceOutcome placeFound(
+		const TKeyframePose& place, const PlaceTest& agreesWith, bool certain, int K, bool seedsSearch = false);
 	/** Verified places that agree in the current unconfirmed hypothesis
 	 * (0: none, or the track is a fix's). */
 	int hypothesisPlaces() const { return m_places; }
