@@ -234,7 +234,9 @@ void SettingsSection::renamed(const std::vector<TRenamedKey>& table)
 		std::vector<std::string> keys;
 		m_c.getAllKeys(m_section, keys);
 		if (std::find(keys.begin(), keys.end(), r.from) != keys.end())
-			fail(r.from, "this key was renamed to '" + r.to + "' (same meaning and unit); rename it");
+			fail(r.from, r.section.empty()
+							 ? "this key was renamed to '" + r.to + "' (same meaning and unit); rename it"
+							 : "this key moved to '" + r.to + "' in " + r.section + "; move it there");
 	}
 }
 

@@ -62,6 +62,8 @@ void both(bool parallel, A&& a, B&& b)
 void TSystemOptions::keys(core::KeyVisitor& v)
 {
 	using core::Range;
+	// A system key for one stop; whether places seed is each localiser's now.
+	v.renamed({{"seed_with_places", "place_seeds_search", "[localiser] or [localiser.<channel>]"}});
 	v("localisers", localisers, "", Range::any(), "policy order: the first with an accepted fix is used");
 	v("joint", joint, "", Range::any(),
 	  "channels whose searches one more localiser solves together, first in policy order (empty = none; runs "

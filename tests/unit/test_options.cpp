@@ -569,3 +569,15 @@ TEST(Options, DocsTablesAreTheDeclarations)
 			EXPECT_TRUE(documented.count(c.name)) << "no docs table for '" << c.name << "'";
 		}
 }
+
+// [localise] seed_with_places became each localiser's place_seeds_search
+// (twenty-second session): a config that still sets it is refused, naming
+// where the key lives now.
+TEST(Options, AMovedKeyIsRefusedNamingItsNewSection)
+{
+	mrpt::config::CConfigFileMemory c("[localise]\nseed_with_places = true\n");
+	localisation::TSystemOptions o;
+	EXPECT_EQ(messageOf([&] { o.load(c, "localise"); }),
+			  "[localise] seed_with_places: this key moved to 'place_seeds_search' in [localiser] or "
+			  "[localiser.<channel>]; move it there");
+}

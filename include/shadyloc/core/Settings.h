@@ -65,6 +65,7 @@ struct TRenamedKey
 {
 	std::string from;  //!< old key
 	std::string to;	 //!< its new name
+	std::string section = "";  //!< where it lives now, when it moved out of this section
 };
 
 /** Strict reader of one section. Each read*() declares its key as known and,
