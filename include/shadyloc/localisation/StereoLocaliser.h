@@ -210,8 +210,9 @@ struct TLocaliserOptions
 	int global_min_votes = 15;
 	/** A place this localiser verifies (no fix yet) narrows the next frame's
 	 * search with its own covariance, as an unconfirmed solve does; the
-	 * track keeps global_sigma added for testing. Off for a channel whose
-	 * places alias: their narrow gates held places in another world. */
+	 * track that solves are judged against keeps global_sigma added. Off
+	 * for a channel whose places alias: their narrow gates held places in
+	 * another world. */
 	bool place_seeds_search = false;
 	/** First pass of a verification: BRIEF in a circle this large around each
 	 * landmark's projection from the candidate keyframe's own pose (the live
