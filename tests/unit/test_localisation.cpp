@@ -262,6 +262,32 @@ TEST_F(LocalisationCorridor, SameResultsWithOneAndTwoThreads)
 	}
 }
 
+// place_seeds_search, through the system: the place the first frame's
+// search verifies (the monochrome localiser's, first in policy order) seeds
+// the next frame's search only where that localiser's own key says so. The
+// next frame's gates show it: the place's own covariance gives a few
+// pixels, the track's (global_sigma added) several times that.
+TEST_F(LocalisationCorridor, AVerifiedPlaceSeedsTheNextSearchOnlyWhereItsLocaliserSays)
+{
+	auto monoSeeds = makeSystem(s_map, 2, "[localiser.mono]\nplace_seeds_search = true\n");
+	auto otherSeeds = makeSystem(s_map, 2, "[localiser.invariant]\nplace_seeds_search = true\n");
+	const auto a = liveRun(*monoSeeds, 1, 2, 0.3);
+	const auto b = liveRun(*otherSeeds, 1, 2, 0.3);
+	for (const auto* run : {&a, &b})
+	{
+		ASSERT_TRUE(run->ups[0].global_search);
+		ASSERT_TRUE(run->ups[0].place.ok) << run->ups[0].place.why;
+		ASSERT_FALSE(run->ups[0].localised());	// a hypothesis, not yet a fix
+	}
+	const auto* seeded = a.ups[1].result("mono");
+	const auto* unseeded = b.ups[1].result("mono");
+	ASSERT_TRUE(seeded && unseeded);
+	std::cout << "median gate after a verified place: " << seeded->gate.median_axis_px << " px seeded, "
+			  << unseeded->gate.median_axis_px << " px from the track\n";
+	EXPECT_GT(seeded->gate.median_axis_px, 0.0);
+	EXPECT_LT(2.0 * seeded->gate.median_axis_px, unseeded->gate.median_axis_px);
+}
+
 TEST_F(LocalisationCorridor, JointLocaliserSolvesBothChannelsMatchesAndComesFirst)
 {
 	// The same live run with the joint localiser ([localise] joint): its
