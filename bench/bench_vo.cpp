@@ -341,6 +341,43 @@ void BM_StageFastGrid(benchmark::State& st, bool invariant)
 BENCHMARK_CAPTURE(BM_StageFastGrid, mono, false)->Unit(benchmark::kMicrosecond);
 BENCHMARK_CAPTURE(BM_StageFastGrid, invariant, true)->Unit(benchmark::kMicrosecond);
 
+/** The invariant channel's corners as shipped (ORB pyramid: 3 levels of
+ * 1.4, FAST threshold 5), both images of a pair: CornerDescriber (the right
+ * image's candidates without orientations, the left's measured only for the
+ * corners the grid keeps) against cv::ORB::detect and the grid, the same
+ * corners (FeaturesOrb.CornersAreOpenCvOrbsWithAnglesWhereDescribed). */
+void BM_StageOrbCorners(benchmark::State& st, bool viaOpenCvOrb)
+{
+	const auto& d = data();
+	features::TStereoFeatureOptions o;
+	o.descriptor = features::DescriptorKind::Orb;
+	o.orb_levels = 3;
+	o.orb_scale_factor = 1.4;
+	o.fast_threshold = 5;
+	const features::CornerDescriber cd(o);
+	auto detect = [&](const cv::Mat& img, int perCell, int border, features::CornerUse use, std::vector<cv::KeyPoint>& out) {
+		if (!viaOpenCvOrb) return cd.detect(img, perCell, border, out, use);
+		std::vector<cv::KeyPoint> all;
+		cv::ORB::create(
+			4 * o.grid_cols * o.grid_rows * perCell, static_cast<float>(o.orb_scale_factor), o.orb_levels,
+			std::max(border, 3), 0, 2, cv::ORB::FAST_SCORE, features::kOrbPatchSize, o.fast_threshold)
+			->detect(img, all);
+		features::spreadOverGrid(all, img.cols, img.rows, o.grid_cols, o.grid_rows, perCell, border, out);
+	};
+	std::vector<cv::KeyPoint> kl, kr;
+	size_t i = 0;
+	for (auto _ : st)
+	{
+		const size_t k = i++ % d.invL.size();
+		detect(d.invL[k], o.max_per_cell, cd.border(), features::CornerUse::Described, kl);
+		detect(d.invR[k], o.max_per_cell_right, o.patch_radius + 3, features::CornerUse::Candidates, kr);
+	}
+	st.counters["left"] = static_cast<double>(kl.size());
+	st.counters["right"] = static_cast<double>(kr.size());
+}
+BENCHMARK_CAPTURE(BM_StageOrbCorners, corner_describer, false)->Unit(benchmark::kMicrosecond);
+BENCHMARK_CAPTURE(BM_StageOrbCorners, opencv_orb, true)->Unit(benchmark::kMicrosecond);
+
 void BM_StageStereoMeasurements(benchmark::State& st)
 {
 	const auto& d = data();

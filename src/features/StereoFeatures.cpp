@@ -145,6 +145,124 @@ cv::Ptr<cv::ORB> makeOrb(const TStereoFeatureOptions& o, int nFeatures, int edge
 		nFeatures, static_cast<float>(o.orb_scale_factor), o.orb_levels, edge, 0, 2, cv::ORB::FAST_SCORE,
 		kOrbPatchSize, o.fast_threshold);
 }
+
+/** Half-width of each row of ORB's circular orientation patch of radius h
+ * (rows 0..h): the rounded circle, made symmetric under swapping rows and
+ * columns, as ORB measures it (so that its descriptors see the same angle). */
+std::vector<int> orientationRowEnds(int h)
+{
+	std::vector<int> end(static_cast<size_t>(h) + 2, 0);
+	const int vmax = cvFloor(h * std::sqrt(2.f) / 2 + 1), vmin = cvCeil(h * std::sqrt(2.f) / 2);
+	for (int v = 0; v <= vmax; v++) end[v] = cvRound(std::sqrt(double(h) * h - v * v));
+	// The rows above the diagonal take the columns' extents below it.
+	for (int v = h, col = 0; v >= vmin; v--, col++)
+	{
+		while (end[col] == end[col + 1]) col++;
+		end[v] = col;
+	}
+	return end;
+}
+
+/** Orientation [deg] of the circular patch (radius h) at integer (x, y):
+ * the direction of its intensity centroid (Rublee et al., "ORB: an
+ * efficient alternative to SIFT or SURF", ICCV 2011, eq. 1-3). */
+float centroidAngleDeg(const cv::Mat& img, int x, int y, int h, const std::vector<int>& rowEnd)
+{
+	const uint8_t* c = img.ptr<uint8_t>(y) + x;
+	const ptrdiff_t step = static_cast<ptrdiff_t>(img.step);
+	int m01 = 0, m10 = 0;
+	for (int u = -h; u <= h; u++) m10 += u * c[u];
+	for (int v = 1; v <= h; v++)
+	{
+		int rowDiff = 0;
+		for (int u = -rowEnd[v]; u <= rowEnd[v]; u++)
+		{
+			const int below = c[u + v * step], above = c[u - v * step];
+			rowDiff += below - above;
+			m10 += u * (below + above);
+		}
+		m01 += v * rowDiff;
+	}
+	return cv::fastAtan2(static_cast<float>(m01), static_cast<float>(m10));
+}
+
+/** One level of ORB's pyramid: the image and its scale to level 0. */
+struct TPyramidLevel
+{
+	cv::Mat img;
+	float scale = 1.f;
+};
+
+/** ORB's detection without its orientations: its pyramid (each level
+ * resized from the one before), FAST with non-maximum suppression per level,
+ * corners within `edge` px of a level's edge dropped, the strongest kept per
+ * level in ORB's shares of `nFeatures`; positions in level-0 pixels, octave
+ * and size set. The same corners in the same order as cv::ORB::detect
+ * (FeaturesOrb.CornersAreOpenCvOrbsWithAnglesWhereDescribed), without the
+ * orientation of every corner: most are never described. */
+std::vector<TPyramidLevel> orbPyramidCorners(
+	const cv::Mat& grey8, const TStereoFeatureOptions& o, int nFeatures, int edge, std::vector<cv::KeyPoint>& all)
+{
+	const int n = o.orb_levels;
+	const double scaleFactor = static_cast<float>(o.orb_scale_factor);	// ORB keeps it as the float it was given
+	std::vector<TPyramidLevel> levels(static_cast<size_t>(n));
+	// ORB's share per level: a geometric series over the levels' areas.
+	const float factor = static_cast<float>(1.0 / scaleFactor);
+	float share = nFeatures * (1 - factor) / (1 - static_cast<float>(std::pow(double(factor), double(n))));
+	std::vector<int> perLevel(static_cast<size_t>(n));
+	int sum = 0;
+	for (int l = 0; l + 1 < n; l++, share *= factor) sum += perLevel[l] = cvRound(share);
+	perLevel[n - 1] = std::max(nFeatures - sum, 0);
+	all.clear();
+	std::vector<cv::KeyPoint> kps;
+	for (int l = 0; l < n; l++)
+	{
+		auto& L = levels[l];
+		L.scale = static_cast<float>(std::pow(scaleFactor, double(l)));
+		if (l == 0)
+			L.img = grey8;
+		else
+		{
+			const float inv = 1.0f / L.scale;
+			const cv::Size sz(cvRound(grey8.cols * inv), cvRound(grey8.rows * inv));
+			cv::resize(levels[l - 1].img, L.img, sz, 0, 0, cv::INTER_LINEAR_EXACT);
+		}
+		cv::FAST(L.img, kps, o.fast_threshold, true, cv::FastFeatureDetector::TYPE_9_16);
+		cv::KeyPointsFilter::runByImageBorder(kps, L.img.size(), edge);
+		cv::KeyPointsFilter::retainBest(kps, perLevel[l]);
+		for (auto& k : kps)
+		{
+			k.octave = l;
+			k.size = kOrbPatchSize * L.scale;
+			k.pt *= L.scale;
+		}
+		all.insert(all.end(), kps.begin(), kps.end());
+	}
+	return levels;
+}
+
+/** Sets the ORB orientation of corners found by orbPyramidCorners, on the
+ * level each was found in. A patch reaching over a level's edge reads the
+ * edge reflected, as ORB's bordered pyramid does. */
+void setOrbAngles(const std::vector<TPyramidLevel>& levels, std::vector<cv::KeyPoint>& kps)
+{
+	constexpr int h = kOrbPatchSize / 2;
+	static const std::vector<int> rowEnd = orientationRowEnds(h);
+	std::vector<cv::Mat> padded(levels.size());	 // made only where a patch needs it
+	for (auto& k : kps)
+	{
+		const auto& L = levels[static_cast<size_t>(k.octave)];
+		const int x = cvRound(k.pt.x / L.scale), y = cvRound(k.pt.y / L.scale);
+		if (x >= h && y >= h && x + h < L.img.cols && y + h < L.img.rows)
+		{
+			k.angle = centroidAngleDeg(L.img, x, y, h, rowEnd);
+			continue;
+		}
+		cv::Mat& P = padded[static_cast<size_t>(k.octave)];
+		if (P.empty()) cv::copyMakeBorder(L.img, P, h, h, h, h, cv::BORDER_REFLECT_101 + cv::BORDER_ISOLATED);
+		k.angle = centroidAngleDeg(P, x + h, y + h, h, rowEnd);
+	}
+}
 }  // namespace
 
 CornerDescriber::CornerDescriber(const TStereoFeatureOptions& o) : m_opts(o), m_brief(o.brief_patch_size, o.brief_seed)
@@ -155,7 +273,8 @@ CornerDescriber::CornerDescriber(const TStereoFeatureOptions& o) : m_opts(o), m_
 	m_border = std::max({descRadius, o.patch_radius + 4, kPatchSize / 2 + 3});
 }
 
-void CornerDescriber::detect(const cv::Mat& grey8, int perCell, int border, std::vector<cv::KeyPoint>& out) const
+void CornerDescriber::detect(
+	const cv::Mat& grey8, int perCell, int border, std::vector<cv::KeyPoint>& out, CornerUse use) const
 {
 	const auto& o = m_opts;
 	if (o.descriptor == DescriptorKind::Brief)
@@ -167,12 +286,14 @@ void CornerDescriber::detect(const cv::Mat& grey8, int perCell, int border, std:
 	// several times what the grid keeps and let the grid choose (all when
 	// perCell <= 0). Its edge threshold is the border, so no corner the grid
 	// would keep is lost before it (the right image's candidates reach closer
-	// to the edge than described corners).
+	// to the edge than described corners). Orientations only for the corners
+	// kept, and only where they will be described.
 	const int cells = o.grid_cols * o.grid_rows;
 	const int nFeatures = perCell > 0 ? 4 * cells * perCell : 1 << 20;
 	std::vector<cv::KeyPoint> all;
-	makeOrb(o, nFeatures, std::max(border, 3))->detect(grey8, all);
+	const auto levels = orbPyramidCorners(grey8, o, nFeatures, std::max(border, 3), all);
 	spreadOverGrid(all, grey8.cols, grey8.rows, o.grid_cols, o.grid_rows, perCell, border, out);
+	if (use == CornerUse::Described) setOrbAngles(levels, out);
 }
 
 void CornerDescriber::describe(
@@ -799,7 +920,7 @@ void StereoFeatureExtractor::process(
 	const int borderR = r + 3;
 	std::vector<cv::KeyPoint> kl, kr;
 	m_corners.detect(left, o.max_per_cell, m_corners.border(), kl);
-	m_corners.detect(right, o.max_per_cell_right, borderR, kr);
+	m_corners.detect(right, o.max_per_cell_right, borderR, kr, CornerUse::Candidates);
 	out.cornersLeft = kl.size();
 	out.cornersRight = kr.size();
 	out.timings.detect_ms = msSince(t0);

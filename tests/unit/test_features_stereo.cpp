@@ -1,6 +1,7 @@
 /* Tests of the stereo features: BRIEF, FAST grid, stereo matching on real
  * Middlebury pairs against ground-truth disparity, landmark covariances. */
 #include <shadyloc/features/Brief.h>
+#include <shadyloc/filters/Channel.h>
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/image/ColourTransforms.h>
 #include <shadyloc/sim/SyntheticCorridor.h>
@@ -9,6 +10,7 @@
 
 #include <mrpt/config/CConfigFileMemory.h>
 
+#include <opencv2/features2d.hpp>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
@@ -520,6 +522,64 @@ TEST(FeaturesOrb, OrientedDescriptorsSurviveAQuarterTurnWhereBriefDoesNot)
 	ASSERT_GT(no, 50u);
 	EXPECT_GT(hb, 90.0);
 	EXPECT_LT(ho, 40.0);
+}
+
+TEST(FeaturesOrb, CornersAreOpenCvOrbsWithAnglesWhereDescribed)
+{
+	// CornerDescriber measures orientations only of the corners it keeps
+	// for description; the corners themselves, their order and the angles
+	// it measures must be cv::ORB::detect's, or maps and live frames change.
+	const sim::SyntheticCorridor corridor;
+	cv::Mat l, r, mono, inv;
+	corridor.render(sim::SyntheticCorridor::examplePose(3), l, r, 3);
+	image::toMonochrome(l, mono, image::ChannelOrder::BGR);
+	filters::defaultChannel("invariant").convert(l, inv);
+	features::TStereoFeatureOptions deflt, shipped;	 // OpenCV's pyramid; the shipped invariant channel's
+	deflt.descriptor = shipped.descriptor = features::DescriptorKind::Orb;
+	shipped.orb_levels = 3;
+	shipped.orb_scale_factor = 1.4;
+	shipped.fast_threshold = 5;
+	size_t compared = 0, coarse = 0;
+	for (const auto& fo : {deflt, shipped})
+		for (const cv::Mat& img : {mono, inv})
+		{
+			const features::CornerDescriber cd(fo);
+			struct TCase
+			{
+				int perCell, border;
+				features::CornerUse use;
+			};
+			for (const TCase c : {TCase{fo.max_per_cell, cd.border(), features::CornerUse::Described},
+								  TCase{fo.max_per_cell_right, 6, features::CornerUse::Candidates},
+								  TCase{0, cd.border(), features::CornerUse::Described}})
+			{
+				const int nFeatures = c.perCell > 0 ? 4 * fo.grid_cols * fo.grid_rows * c.perCell : 1 << 20;
+				std::vector<cv::KeyPoint> all, want, got;
+				cv::ORB::create(
+					nFeatures, static_cast<float>(fo.orb_scale_factor), fo.orb_levels, std::max(c.border, 3), 0, 2,
+					cv::ORB::FAST_SCORE, features::kOrbPatchSize, fo.fast_threshold)
+					->detect(img, all);
+				features::spreadOverGrid(all, img.cols, img.rows, fo.grid_cols, fo.grid_rows, c.perCell, c.border, want);
+				cd.detect(img, c.perCell, c.border, got, c.use);
+				ASSERT_EQ(got.size(), want.size());
+				ASSERT_GT(got.size(), 100u);
+				for (size_t i = 0; i < got.size(); i++)
+				{
+					ASSERT_EQ(got[i].pt, want[i].pt) << "corner " << i;
+					ASSERT_EQ(got[i].response, want[i].response) << "corner " << i;
+					ASSERT_EQ(got[i].octave, want[i].octave) << "corner " << i;
+					ASSERT_EQ(got[i].size, want[i].size) << "corner " << i;
+					if (c.use == features::CornerUse::Described)
+						ASSERT_EQ(got[i].angle, want[i].angle) << "corner " << i;
+					else
+						ASSERT_EQ(got[i].angle, -1.f) << "corner " << i << ": a candidate has no orientation";
+					coarse += got[i].octave > 0;
+				}
+				compared += got.size();
+			}
+		}
+	std::printf("[orb-corners] %zu corners compared, %zu from coarser levels\n", compared, coarse);
+	EXPECT_GT(coarse, 100u);
 }
 
 TEST(FeaturesOrb, StereoMeasurementsFromThePyramid)

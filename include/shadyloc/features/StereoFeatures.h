@@ -224,6 +224,15 @@ struct TStereoFeatureOptions : public mrpt::config::CLoadableOptions
 	void validate() const;
 };
 
+/** What a corner is detected for: to be described (ORB: its orientation
+ * is measured), or only as a candidate position (the right image's stereo
+ * candidates, which are never described). */
+enum class CornerUse
+{
+	Described,
+	Candidates
+};
+
 /** Detection and description of one image's corners as the options say
  * (FAST + BRIEF, or ORB): the one place both stereo frames and single images
  * (the image localiser) get their features from. */
@@ -237,9 +246,12 @@ class CornerDescriber
 
 	/** Corners of grey8 spread by the options' grid, `perCell` per cell, at
 	 * least `border` px from the edges. BRIEF: single-scale FAST. ORB: FAST
-	 * on ORB's pyramid (positions in level-0 pixels, octave and angle set),
-	 * ranked by FAST score so the map's 16-bit response keeps its meaning. */
-	void detect(const cv::Mat& grey8, int perCell, int border, std::vector<cv::KeyPoint>& out) const;
+	 * on ORB's pyramid (positions in level-0 pixels, octave set, and the
+	 * angle where `use` is Described), ranked by FAST score so the map's
+	 * 16-bit response keeps its meaning: the corners cv::ORB::detect finds. */
+	void detect(
+		const cv::Mat& grey8, int perCell, int border, std::vector<cv::KeyPoint>& out,
+		CornerUse use = CornerUse::Described) const;
 
 	/** Descriptors at corners of grey8 (as detect() returned them).
 	 * desc[i] is valid where ok[i]; a corner whose patch does not fit is not.
