@@ -187,6 +187,13 @@ BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_joint_every_frame, 2, "[localise]\n
 	->Unit(benchmark::kMillisecond)
 	->UseManualTime()
 	->Iterations(600);
+// The patch pass after every solve, as before the twenty-third session
+// (shipped: only where the descriptor solve keeps fewer than 60 inliers;
+// docs/localisation.md, "Where the patch pass runs").
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_patch_pass_always, 2, "[localiser]\npatch_search_max_inliers = 0\n")
+	->Unit(benchmark::kMillisecond)
+	->UseManualTime()
+	->Iterations(600);
 // Without the patch pass and the warped patches (docs/localisation.md,
 // "Patches that follow the viewpoint"): their cost is the difference.
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_patch_pass, 2, "[localiser]\npatch_search = false\nwarp_patches = false\n")

@@ -40,6 +40,8 @@ void TLocaliserOptions::keys(core::KeyVisitor& v)
 	  "... where it moves pixel offsets by more than this share");
 	v("patch_search", patch_search, "", Range::any(),
 	  "after a solve, search unmatched landmarks by projection with their patches, solve again");
+	v("patch_search_max_inliers", patch_search_max_inliers, "", Range::atLeast(0),
+	  "... only where the descriptor solve keeps fewer inliers than this (0: after every solve)");
 	v("patch_search_radius_px", patch_search_radius_px, "px", Range::closed(0, 10),
 	  "... the patch climbs at most this far from the projection");
 	v("patch_min_zncc", patch_min_zncc, "", Range::openClosed(0, 1), "... and must correlate this well there");

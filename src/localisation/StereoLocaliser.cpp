@@ -515,7 +515,8 @@ LocaliserStatus StereoLocaliser::searchAndSolve(
 	const bool sharp = in.track_confirmed || translationSigma(in.prediction.cov) <= o.patch_prediction_max_sigma_m;
 	const bool fromPrediction = !solved && o.patch_search_from_prediction && sharp &&
 								(status == LocaliserStatus::FewMatches || status == LocaliserStatus::FewInliers);
-	if (o.patch_search && (solved || fromPrediction))
+	const bool heldByDescriptors = solved && o.patch_search_max_inliers > 0 && r.inliers >= o.patch_search_max_inliers;
+	if (o.patch_search && !heldByDescriptors && (solved || fromPrediction))
 	{
 		// The prediction is taken in `ref`, as the first pass took it.
 		const Eigen::Isometry3d T_curr_ref = solved ? po.T_curr_ref : pred.T_kf_live.inverse();

@@ -639,6 +639,60 @@ TEST(LocalisationSecondSearch, WiderGatesRescueARightButOverConfidentPrediction)
 	EXPECT_EQ(twice.status, LocaliserStatus::PredictionInconsistent);
 }
 
+TEST(LocalisationPatchPass, RunsOnlyWhereTheDescriptorSolveIsThin)
+{
+	// One live frame 0.3 m past map keyframe 3, predicted there to 2 cm and
+	// 0.2 deg. The patch pass adds landmarks the descriptors missed; with
+	// patch_search_max_inliers it runs only where the descriptor solve keeps
+	// fewer inliers than that, and the frame is still solved on the true pose.
+	const auto map = surveyCorridor(11, 8);
+	sim::TCorridorOptions co;
+	co.seed = 11;
+	const sim::SyntheticCorridor corridor(co);
+	const uint32_t kf = 3;
+	const Eigen::Isometry3d T_kf = corridorPose(2.0 + kf * kSpacing, 0.0, 2.0 * std::sin(0.7 * kf));
+	const Eigen::Isometry3d T_live = T_kf * Eigen::Translation3d(0.0, 0.0, 0.3);
+	cv::Mat l, r, gl, gr;
+	corridor.render(T_live, l, r, 7200);
+	filters::defaultChannel("mono").convertPair(l, r, gl, gr);
+	features::TStereoFrame live;
+	features::StereoFeatureExtractor(featureOptions("mono")).process(gl, gr, corridor.calib(), live);
+	TLocaliserInput in;
+	in.frame = 1;
+	in.meas = &live;
+	in.calib = corridor.calib();
+	in.prediction.valid = true;
+	in.prediction.kf = kf;
+	in.prediction.T_kf_live = T_kf.inverse() * T_live;
+	in.prediction.cov.diagonal() << 4e-4, 4e-4, 4e-4, std::pow(0.2 * kDeg, 2), std::pow(0.2 * kDeg, 2),
+		std::pow(0.2 * kDeg, 2);
+	const auto run = [&](int maxInliers) {
+		TLocaliserOptions o;
+		o.min_inliers = 15;
+		o.patch_search_max_inliers = maxInliers;
+		StereoLocaliser loc(*map, "mono", o);
+		return loc.localise(in);
+	};
+	const auto always = run(0);
+	ASSERT_TRUE(always.solved) << toString(always.status);
+	ASSERT_GT(always.patch_matches, 0) << "the pass found nothing to add: the test shows nothing";
+	const int descriptorInliers = always.inliers - always.patch_matches;	// at most: not every patch is an inlier
+	const auto thin = run(descriptorInliers + always.patch_matches + 1);  // above any descriptor solve here
+	EXPECT_EQ(thin.patch_matches, always.patch_matches);
+	EXPECT_EQ(thin.inliers, always.inliers);
+	const auto held = run(15);	// the descriptor solve alone keeps at least this many
+	ASSERT_TRUE(held.solved) << toString(held.status);
+	EXPECT_EQ(held.patch_matches, 0);
+	EXPECT_GE(held.inliers, 15);
+	EXPECT_LT(held.inliers, always.inliers);
+	const Eigen::Isometry3d truth = T_kf.inverse() * T_live;
+	for (const auto* res : {&always, &held})
+	{
+		EXPECT_LT((res->T_kf_live.translation() - truth.translation()).norm(), 0.05);
+		EXPECT_LT(Eigen::AngleAxisd(res->T_kf_live.linear().transpose() * truth.linear()).angle() / kDeg, 0.3);
+	}
+}
+
 namespace
 {
 /** Places found for live frames `lateral` metres to the side of the survey

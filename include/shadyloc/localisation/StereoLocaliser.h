@@ -139,6 +139,10 @@ struct TLocaliserOptions
 	 * projection with their patches and solve again with them
 	 * (docs/localisation.md, "Search by projection with patches"). */
 	bool patch_search = true;
+	/** ... only where the descriptor solve keeps fewer inliers than this (0:
+	 * after every solve): a solve that many inliers hold gains little
+	 * from more (docs/localisation.md, "Where the patch pass runs"). */
+	int patch_search_max_inliers = 0;
 	int patch_search_radius_px = 2;	 //!< ... the patch climbs at most this far from the projection [px]
 	double patch_min_zncc = 0.8;  //!< ... and must correlate this well there (no descriptor vouches for it)
 	/** ... and when the descriptors find too few matches or inliers while
