@@ -317,7 +317,10 @@ void LocalisationSystem::reset()
 		{
 			t->vo.reset();
 			t->havePrev = false;
+			t->standby.reset();
+			t->trackedLast = false;
 		}
+	m_lastVoStep.reset();
 	for (auto& p : m_pipes)
 		if (p.localiser) p.localiser->reset();
 	if (m_joint) m_joint->reset();
@@ -410,6 +413,7 @@ bool LocalisationSystem::voMotion(
 	bool measured = false;
 	u.motion = motionOf(u.vo, m_vo, measured);
 	if (u.motion.valid) u.motion_from = m_pipes[0].setup.channel.label;
+	if (measured) m_lastVoStep = u.motion.T_prev_curr;
 	return measured;
 }
 
@@ -417,11 +421,37 @@ void LocalisationSystem::fallbackMotion(
 	const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib, double timestamp,
 	bool voMeasured, TLocalisationUpdate& u)
 {
-	m_voFallback->vo.track(meas[m_voFallback->pipe], calib, timestamp);
-	u.vo_fallback = m_voFallback->vo.commit();
+	TVOTrack& fb = *m_voFallback;
+	const features::TStereoFrame& mine = meas[fb.pipe];
+	if (voMeasured)
+	{
+		// Not needed: this frame is where it starts from when it is.
+		fb.trackedLast = false;
+		fb.standby = TVOTrack::TStandby{mine, calib, timestamp};
+		return;
+	}
+	const Eigen::Isometry3d* prior = nullptr;
+	if (!fb.trackedLast)
+	{
+		// Needed from this frame on: the frame before is its keyframe, and
+		// the VO channel's last measured step predicts this one.
+		fb.vo.reset();
+		fb.havePrev = false;
+		if (fb.standby)
+		{
+			fb.vo.track(std::move(fb.standby->meas), fb.standby->calib, fb.standby->timestamp);
+			bool unused = false;
+			(void)motionOf(fb.vo.commit(), fb, unused);
+		}
+		if (m_lastVoStep) prior = &*m_lastVoStep;
+	}
+	fb.standby.reset();
+	fb.trackedLast = true;
+	fb.vo.track(mine, calib, timestamp, prior);
+	u.vo_fallback = fb.vo.commit();
 	bool measured = false;
-	TMotion f = motionOf(u.vo_fallback, *m_voFallback, measured);	// every frame: it advances the track
-	if (!voMeasured && measured)
+	TMotion f = motionOf(u.vo_fallback, fb, measured);
+	if (measured)
 	{
 		u.motion = f;
 		u.motion_from = m_pipes[m_voFallback->pipe].setup.channel.label;
@@ -469,8 +499,8 @@ TLocaliserInput LocalisationSystem::frontEndOverlappingLocalisers(
 	// localiser. Thread 2: the other channels' features, then (once the
 	// prediction is made) their localisers. The fallback VO, whose step is
 	// needed only where the VO channel's was not measured, runs before the
-	// prediction then, else after thread 1's localiser. The same work as one
-	// thread does in order, so the same results.
+	// prediction then; else its standby is kept after thread 1's localiser.
+	// The same work as one thread does in order, so the same results.
 	const size_t n = m_pipes.size();
 	std::vector<double> msConv(n, 0), frontEndEnd(2, 0);
 	const auto t0 = Clock::now();

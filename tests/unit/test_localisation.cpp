@@ -442,6 +442,49 @@ TEST_F(LocalisationCorridor, FallbackVOCarriesThePredictionWhereTheVOChannelCann
 	EXPECT_GT(std::abs(dWithout - truePath), 0.2 * truePath) << "the blind VO's guesses happened to add up";
 }
 
+TEST_F(LocalisationCorridor, FallbackVOStartsFromTheFrameBeforeTheVOChannelFails)
+{
+	// The fallback VO runs only where the monochrome VO cannot measure its
+	// step. Here the monochrome images of frames 6-8 are flat (no features):
+	// the fallback starts from frame 5, kept while it was not needed, so the
+	// step into frame 6 is measured too, and each measured step is the true
+	// one (kStep along the corridor, within 10 %).
+	auto sys = makeSystem(s_map, 2);
+	const auto labels = sys->channelLabels();
+	sim::TCorridorOptions co;
+	co.seed = 1;
+	const sim::SyntheticCorridor corridor(co);
+	std::vector<TLocalisationUpdate> ups;
+	for (int i = 0; i < 12; i++)
+	{
+		const Eigen::Isometry3d T = corridorPose(2.3 + i * kStep, 0.3, 0.0);
+		cv::Mat l, r;
+		corridor.render(T, l, r, 5000 + i);
+		const bool monoBlind = i >= 6 && i <= 8;
+		ups.push_back(sys->processChannels(
+			[&](size_t c, cv::Mat& gl, cv::Mat& gr) {
+				filters::defaultChannel(labels[c]).convertPair(l, r, gl, gr);
+				if (monoBlind && labels[c] == "mono")
+				{
+					gl.setTo(128);
+					gr.setTo(128);
+				}
+			},
+			corridor.calib(), 500.0 + 0.1 * i));
+	}
+	for (int i = 2; i < 12; i++)
+	{
+		SCOPED_TRACE("frame " + std::to_string(i));
+		const bool blind = i >= 6 && i <= 8;
+		if (blind) EXPECT_EQ(ups[i].motion_from, "invariant");
+		if (ups[i].motion_from.empty()) continue;
+		EXPECT_NEAR(ups[i].motion.T_prev_curr.translation().norm(), kStep, 0.1 * kStep);
+	}
+	// Where the monochrome VO measures, the fallback is not run.
+	EXPECT_EQ(ups[4].motion_from, "mono");
+	EXPECT_EQ(ups[4].vo_fallback.ms.total, 0.0) << "the fallback VO ran where it was not needed";
+}
+
 TEST(LocalisationOptions, OverridesUnknownKeysAndRanges)
 {
 	mrpt::config::CConfigFileMemory cfg(

@@ -256,6 +256,16 @@ class LocalisationSystem : public mrpt::system::COutputLogger
 		bool havePrev = false;
 		vo::TFrameResult prev;
 		TVOTrack(const vo::TStereoVOOptions& o, const features::TStereoFeatureOptions& f) : vo(o, f) {}
+		// The fallback VO runs on demand: where it is not needed it keeps
+		// the frame as its standby, to start from when it is.
+		struct TStandby
+		{
+			features::TStereoFrame meas;
+			geometry::TStereoCalib calib;
+			double timestamp = 0;
+		};
+		std::optional<TStandby> standby;
+		bool trackedLast = false;  //!< it tracked the previous frame: it goes on from its own keyframe
 	};
 	/** The VO's increment from the previous frame with its covariance;
 	 * `measured` tells whether the VO measured it (else a constant-velocity
@@ -267,6 +277,7 @@ class LocalisationSystem : public mrpt::system::COutputLogger
 	std::vector<TPipe> m_pipes;	 //!< the VO channel first
 	TVOTrack m_vo;
 	std::unique_ptr<TVOTrack> m_voFallback;	 //!< null: no fallback VO
+	std::optional<Eigen::Isometry3d> m_lastVoStep;	//!< the VO channel's last measured step (T_prev_curr)
 	std::unique_ptr<JointLocaliser> m_joint;  //!< null: no joint localiser
 	std::vector<size_t> m_jointPipes;  //!< the pipes whose searches it joins, in its channels' order
 	/** Channel i's grey pair made and measured (meas[i]); its conversion time in msConvert[i]. */
@@ -277,8 +288,11 @@ class LocalisationSystem : public mrpt::system::COutputLogger
 	bool voMotion(
 		const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib, double timestamp,
 		TLocalisationUpdate& u);
-	/** The fallback VO on its channel's measurements (every frame): its step
-	 * replaces u.motion where the VO channel's was not measured. */
+	/** The fallback VO on its channel's measurements, only where the VO
+	 * channel did not measure its step: it starts from the frame before
+	 * (kept as its standby; the VO channel's last measured step predicts the
+	 * first step) and goes on while it is needed; its step replaces u.motion.
+	 * Elsewhere the frame becomes its standby. */
 	void fallbackMotion(
 		const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib, double timestamp,
 		bool voMeasured, TLocalisationUpdate& u);
