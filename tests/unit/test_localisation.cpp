@@ -626,6 +626,26 @@ TEST(LocalisationOptions, DumpLoadsBackIdentically)
 	EXPECT_EQ(ds2.str(), ds.str());
 }
 
+namespace
+{
+/** The seed-11 corridor's keyframe `kf` pose (surveyCorridor(11, ...)) and
+ * one live monochrome frame at T_live, measured as the localiser's channel. */
+Eigen::Isometry3d seed11KeyframePose(uint32_t kf) { return corridorPose(2.0 + kf * kSpacing, 0.0, 2.0 * std::sin(0.7 * kf)); }
+features::TStereoFrame seed11LiveFrame(const Eigen::Isometry3d& T_live, uint32_t renderSeed, geometry::TStereoCalib& calib)
+{
+	sim::TCorridorOptions co;
+	co.seed = 11;
+	const sim::SyntheticCorridor corridor(co);
+	cv::Mat l, r, gl, gr;
+	corridor.render(T_live, l, r, renderSeed);
+	filters::defaultChannel("mono").convertPair(l, r, gl, gr);
+	features::TStereoFrame live;
+	features::StereoFeatureExtractor(featureOptions("mono")).process(gl, gr, corridor.calib(), live);
+	calib = corridor.calib();
+	return live;
+}
+}  // namespace
+
 TEST(LocalisationSecondSearch, WiderGatesRescueARightButOverConfidentPrediction)
 {
 	// One live frame at map keyframe 3 turned by 2 deg, predicted at the
@@ -636,22 +656,13 @@ TEST(LocalisationSecondSearch, WiderGatesRescueARightButOverConfidentPrediction)
 	// judges the solve against the unscaled prediction (here: inconsistent),
 	// so the wider search can only win matches, not acceptance.
 	const auto map = surveyCorridor(11, 8);
-	sim::TCorridorOptions co;
-	co.seed = 11;
-	const sim::SyntheticCorridor corridor(co);
 	const uint32_t kf = 3;
-	const Eigen::Isometry3d T_kf = corridorPose(2.0 + kf * kSpacing, 0.0, 2.0 * std::sin(0.7 * kf));
+	const Eigen::Isometry3d T_kf = seed11KeyframePose(kf);
 	const Eigen::Isometry3d T_live = T_kf * Eigen::AngleAxisd(2.0 * kDeg, Eigen::Vector3d::UnitY());
-	cv::Mat l, r, gl, gr;
-	corridor.render(T_live, l, r, 7000);
-	filters::defaultChannel("mono").convertPair(l, r, gl, gr);
-	features::TStereoFrame live;
-	features::StereoFeatureExtractor(featureOptions("mono")).process(gl, gr, corridor.calib(), live);
-
 	TLocaliserInput in;
+	const features::TStereoFrame live = seed11LiveFrame(T_live, 7000, in.calib);
 	in.frame = 1;
 	in.meas = &live;
-	in.calib = corridor.calib();
 	in.prediction.valid = true;
 	in.prediction.kf = kf;
 	in.prediction.T_kf_live = Eigen::Isometry3d::Identity();
@@ -689,21 +700,13 @@ TEST(LocalisationPatchPass, RunsOnlyWhereTheDescriptorSolveIsThin)
 	// patch_search_max_inliers it runs only where the descriptor solve keeps
 	// fewer inliers than that, and the frame is still solved on the true pose.
 	const auto map = surveyCorridor(11, 8);
-	sim::TCorridorOptions co;
-	co.seed = 11;
-	const sim::SyntheticCorridor corridor(co);
 	const uint32_t kf = 3;
-	const Eigen::Isometry3d T_kf = corridorPose(2.0 + kf * kSpacing, 0.0, 2.0 * std::sin(0.7 * kf));
+	const Eigen::Isometry3d T_kf = seed11KeyframePose(kf);
 	const Eigen::Isometry3d T_live = T_kf * Eigen::Translation3d(0.0, 0.0, 0.3);
-	cv::Mat l, r, gl, gr;
-	corridor.render(T_live, l, r, 7200);
-	filters::defaultChannel("mono").convertPair(l, r, gl, gr);
-	features::TStereoFrame live;
-	features::StereoFeatureExtractor(featureOptions("mono")).process(gl, gr, corridor.calib(), live);
 	TLocaliserInput in;
+	const features::TStereoFrame live = seed11LiveFrame(T_live, 7200, in.calib);
 	in.frame = 1;
 	in.meas = &live;
-	in.calib = corridor.calib();
 	in.prediction.valid = true;
 	in.prediction.kf = kf;
 	in.prediction.T_kf_live = T_kf.inverse() * T_live;
