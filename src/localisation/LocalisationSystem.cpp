@@ -425,9 +425,8 @@ void LocalisationSystem::fallbackMotion(
 	const features::TStereoFrame& mine = meas[fb.pipe];
 	if (voMeasured)
 	{
-		// Not needed: this frame is where it starts from when it is.
+		// Not needed: this frame becomes its standby at the frame's end.
 		fb.trackedLast = false;
-		fb.standby = TVOTrack::TStandby{mine, calib, timestamp};
 		return;
 	}
 	const Eigen::Isometry3d* prior = nullptr;
@@ -454,7 +453,7 @@ void LocalisationSystem::fallbackMotion(
 	if (measured)
 	{
 		u.motion = f;
-		u.motion_from = m_pipes[m_voFallback->pipe].setup.channel.label;
+		u.motion_from = m_pipes[fb.pipe].setup.channel.label;
 	}
 }
 
@@ -844,6 +843,10 @@ TLocalisationUpdate LocalisationSystem::processChannels(
 				r.gate.predicted, r.sigma_m, r.rms_px, r.var_factor, toString(r.status).c_str());
 	u.ms_total = msSince(tAll);
 	if (m_hook) m_hook(u, meas, calib);
+	// A frame the fallback VO did not track is where it starts from when it
+	// is next needed: its measurements are kept, not copied.
+	if (m_voFallback && !m_voFallback->trackedLast)
+		m_voFallback->standby = TVOTrack::TStandby{std::move(meas[m_voFallback->pipe]), calib, timestamp};
 	return u;
 }
 

@@ -292,7 +292,7 @@ class LocalisationSystem : public mrpt::system::COutputLogger
 	 * channel did not measure its step: it starts from the frame before
 	 * (kept as its standby; the VO channel's last measured step predicts the
 	 * first step) and goes on while it is needed; its step replaces u.motion.
-	 * Elsewhere the frame becomes its standby. */
+	 * Elsewhere the frame becomes its standby (at the end of the frame). */
 	void fallbackMotion(
 		const std::vector<features::TStereoFrame>& meas, const geometry::TStereoCalib& calib, double timestamp,
 		bool voMeasured, TLocalisationUpdate& u);
