@@ -476,7 +476,10 @@ TEST_F(LocalisationCorridor, FallbackVOStartsFromTheFrameBeforeTheVOChannelFails
 	{
 		SCOPED_TRACE("frame " + std::to_string(i));
 		const bool blind = i >= 6 && i <= 8;
-		if (blind) EXPECT_EQ(ups[i].motion_from, "invariant");
+		if (blind)
+		{
+			EXPECT_EQ(ups[i].motion_from, "invariant");
+		}
 		if (ups[i].motion_from.empty()) continue;
 		EXPECT_NEAR(ups[i].motion.T_prev_curr.translation().norm(), kStep, 0.1 * kStep);
 	}
