@@ -137,6 +137,7 @@ void BM_CombinedFrame(benchmark::State& st, int threads, const char* extra = "")
 	auto sys = localisation::LocalisationSystem::FromConfig(cfg, d.map, {}, threads, "vo_sim.ini + localise_sim.ini");
 	std::vector<double> ms, voMs;
 	std::map<std::string, std::vector<double>> localiserMs;	 // each stage's and localiser's own time, by label
+	std::map<std::string, std::map<std::string, double>> stageMs;  // inside each localiser: summed over the frames
 	size_t i = 0, fixes = 0;
 	for (auto _ : st)
 	{
@@ -152,7 +153,16 @@ void BM_CombinedFrame(benchmark::State& st, int threads, const char* extra = "")
 		st.SetIterationTime(t);
 		ms.push_back(1e3 * t);
 		voMs.push_back(u.vo.ms.total);
-		for (const auto& r : u.localisers) localiserMs[r.channel].push_back(r.ms);
+		for (const auto& r : u.localisers)
+		{
+			localiserMs[r.channel].push_back(r.ms);
+			auto& m = stageMs[r.channel];
+			m["search"] += r.ms_stage.search;
+			m["solve"] += r.ms_stage.solve;
+			m["patch_search"] += r.ms_stage.patch_search;
+			m["patch_solve"] += r.ms_stage.patch_solve;
+			m["covariance"] += r.ms_stage.covariance;
+		}
 		localiserMs["front_end"].push_back(u.ms_front_end);
 		localiserMs["convert"].push_back(u.ms_convert);
 		localiserMs["relocalise"].push_back(u.ms_relocalise);
@@ -164,6 +174,10 @@ void BM_CombinedFrame(benchmark::State& st, int threads, const char* extra = "")
 	// Where the frame's time goes: with 2 threads the channel localisers overlap, the joint one runs after both
 	// (0 ms on the frames it is not run).
 	for (const auto& [label, v] : localiserMs) setCounters(st, v, label + "_");
+	// Inside each localiser, the mean per frame (a stage that does not run on a frame adds 0).
+	for (const auto& [label, m] : stageMs)
+		for (const auto& [stage, sum] : m)
+			st.counters[label + "_" + stage + "_mean_ms"] = ms.empty() ? 0.0 : sum / static_cast<double>(ms.size());
 	st.counters["fix_share"] = ms.empty() ? 0.0 : static_cast<double>(fixes) / static_cast<double>(ms.size());
 }
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads2, 2)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(600);
@@ -290,6 +304,52 @@ void BM_VOFrameMono(benchmark::State& st)
 	setCounters(st, ms, "");
 }
 BENCHMARK(BM_VOFrameMono)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(600);
+
+/** One channel's front end alone on the same frames (conversion, then the
+ * stereo features): where its time goes, by stage. */
+void BM_ChannelFrontEnd(benchmark::State& st, const char* channel)
+{
+	const auto& d = data();
+	if (!d.skip.empty())
+	{
+		st.SkipWithError(d.skip.c_str());
+		return;
+	}
+	mrpt::config::CConfigFileMemory cfg(d.cfgText);
+	const auto ch = filters::channelFromConfig(cfg, channel, "vo_sim.ini");
+	const features::StereoFeatureExtractor fx(vo::featureOptionsFor(cfg, ch.label));
+	std::vector<double> ms, convert, detect, stereo, describe, kept;
+	size_t i = 0;
+	for (auto _ : st)
+	{
+		const auto& f = d.frames[i++ % d.frames.size()];
+		const auto t0 = Clock::now();
+		cv::Mat l, r;
+		ch.convertPair(f.left, f.right, l, r);
+		const double tc = std::chrono::duration<double>(Clock::now() - t0).count();
+		features::TStereoFrame out;
+		fx.process(l, r, f.calib, out);
+		const double t = std::chrono::duration<double>(Clock::now() - t0).count();
+		st.SetIterationTime(t);
+		ms.push_back(1e3 * t);
+		convert.push_back(1e3 * tc);
+		detect.push_back(out.timings.detect_ms);
+		stereo.push_back(out.timings.stereo_ms);
+		describe.push_back(out.timings.describe_ms);
+		kept.push_back(static_cast<double>(out.meas.size()));
+	}
+	setCounters(st, ms, "");
+	setCounters(st, convert, "convert_");
+	setCounters(st, detect, "detect_");
+	setCounters(st, stereo, "stereo_");
+	setCounters(st, describe, "describe_");
+	st.counters["measurements"] = percentile(kept, 0.5);
+}
+BENCHMARK_CAPTURE(BM_ChannelFrontEnd, mono, "mono")->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(300);
+BENCHMARK_CAPTURE(BM_ChannelFrontEnd, invariant, "invariant")
+	->Unit(benchmark::kMillisecond)
+	->UseManualTime()
+	->Iterations(300);
 
 }  // namespace
 

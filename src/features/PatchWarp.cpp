@@ -17,6 +17,21 @@ Eigen::Matrix3d intrinsics(const geometry::TStereoCalib& c)
 	K << c.fx, 0, c.cx, 0, c.fy, c.cy, 0, 0, 1;
 	return K;
 }
+
+/** std::lround clamped to +-4096, without the library call (a warped
+ * pattern rounds 512 offsets): the truncation, and a step away from zero
+ * where the dropped fraction (exact: Sterbenz) is at least a half. */
+int roundOffset(double x)
+{
+	if (!(std::abs(x) < 4096.0)) return x > 0 ? 4096 : -4096;
+	int t = static_cast<int>(x);
+	const double f = x - t;
+	if (f >= 0.5)
+		t++;
+	else if (f <= -0.5)
+		t--;
+	return t;
+}
 }  // namespace
 
 bool planeInducedAffine(
@@ -49,9 +64,8 @@ WarpedBriefPattern::WarpedBriefPattern(const BriefExtractor& brief, const Eigen:
 		for (int k = 0; k < 2; k++)
 		{
 			const Eigen::Vector2d d = A * Eigen::Vector2d(p[i][2 * k], p[i][2 * k + 1]);
-			const long dx = std::lround(d.x()), dy = std::lround(d.y());
-			m_pattern[i][2 * k] = static_cast<int16_t>(std::clamp<long>(dx, -4096, 4096));
-			m_pattern[i][2 * k + 1] = static_cast<int16_t>(std::clamp<long>(dy, -4096, 4096));
+			m_pattern[i][2 * k] = static_cast<int16_t>(roundOffset(d.x()));
+			m_pattern[i][2 * k + 1] = static_cast<int16_t>(roundOffset(d.y()));
 			m_reach = std::max({m_reach, std::abs(static_cast<int>(m_pattern[i][2 * k])),
 								std::abs(static_cast<int>(m_pattern[i][2 * k + 1]))});
 		}

@@ -329,7 +329,35 @@ void CornerDescriber::describe(
 	}
 }
 
-float zncc(const cv::Mat& a, int xa, int ya, const cv::Mat& b, int xb, int yb, int r)
+namespace
+{
+/** The sums of zncc over a (2R+1)^2 window, R fixed (the stereo matcher's
+ * hot loop: unrolled and vectorised by the compiler). Integer sums are
+ * exact in any order, so every R gives the generic loop's values. */
+template <int R>
+void znccSums(const cv::Mat& a, int xa, int ya, const cv::Mat& b, int xb, int yb, int64_t s[5])
+{
+	// 32-bit sums cannot overflow here: (2R+1)^2 * 255^2 < 2^31 for R <= 90.
+	static_assert(R <= 90);
+	int32_t sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
+	for (int dy = -R; dy <= R; dy++)
+	{
+		const uint8_t* pa = a.ptr<uint8_t>(ya + dy) + xa - R;
+		const uint8_t* pb = b.ptr<uint8_t>(yb + dy) + xb - R;
+		for (int dx = 0; dx <= 2 * R; dx++)
+		{
+			const int32_t va = pa[dx], vb = pb[dx];
+			sa += va;
+			sb += vb;
+			saa += va * va;
+			sbb += vb * vb;
+			sab += va * vb;
+		}
+	}
+	s[0] = sa, s[1] = sb, s[2] = saa, s[3] = sbb, s[4] = sab;
+}
+
+void znccSums(const cv::Mat& a, int xa, int ya, const cv::Mat& b, int xb, int yb, int r, int64_t s[5])
 {
 	int sa = 0, sb = 0;
 	int64_t saa = 0, sbb = 0, sab = 0;
@@ -347,6 +375,21 @@ float zncc(const cv::Mat& a, int xa, int ya, const cv::Mat& b, int xb, int yb, i
 			sab += va * vb;
 		}
 	}
+	s[0] = sa, s[1] = sb, s[2] = saa, s[3] = sbb, s[4] = sab;
+}
+}  // namespace
+
+float zncc(const cv::Mat& a, int xa, int ya, const cv::Mat& b, int xb, int yb, int r)
+{
+	int64_t s[5];
+	switch (r)
+	{
+		case 2: znccSums<2>(a, xa, ya, b, xb, yb, s); break;
+		case 3: znccSums<3>(a, xa, ya, b, xb, yb, s); break;
+		case 4: znccSums<4>(a, xa, ya, b, xb, yb, s); break;
+		default: znccSums(a, xa, ya, b, xb, yb, r, s);
+	}
+	const int64_t sa = s[0], sb = s[1], saa = s[2], sbb = s[3], sab = s[4];
 	const double n = (2 * r + 1) * (2 * r + 1);
 	const double va = saa - double(sa) * sa / n, vb = sbb - double(sb) * sb / n;
 	if (va < 1e-6 || vb < 1e-6) return -1.f;

@@ -18,6 +18,7 @@ namespace
 {
 using core::kDeg;
 using core::msSince;
+using core::timed;
 
 double angleBetweenAxesDeg(const Eigen::Isometry3d& A, const Eigen::Isometry3d& B)
 {
@@ -323,6 +324,7 @@ void StereoLocaliser::searchLocalMap(
 		mi.T_curr_kf_pred = pinv.T;
 		mi.cov_T_curr_kf_pred = pinv.cov * (gateScale * gateScale);
 		mi.brief = briefPattern();
+		mi.taken = &taken;	// not refined again for a farther keyframe
 		vo::TKeyframeMatchOutput mo;
 		m_matcher.match(mi, mo);
 		if (k == ref) out.gate = mo.gate;  // the lost test reads the reference keyframe's gates
@@ -410,7 +412,7 @@ TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in, TSearchedC
 		handOver();
 		return fail(searchStatus);
 	}
-	describeSolve(o, in.calib, mo.corr, po, in.frame, r);
+	timed(r.ms_stage.covariance, [&] { describeSolve(o, in.calib, mo.corr, po, in.frame, r); });
 	handOver();
 
 	// ---- 4. acceptance (FixAcceptance.h) ---------------------------------------------------
@@ -470,7 +472,9 @@ LocaliserStatus StereoLocaliser::searchAndSolve(
 			first = r;
 			retried = true;
 		}
-		searchLocalMap(in, ref, pred, attempt == 0 ? 1.0 : o.retry_gate_scale, mo, keyframeOf);
+		timed(r.ms_stage.search, [&] {
+			searchLocalMap(in, ref, pred, attempt == 0 ? 1.0 : o.retry_gate_scale, mo, keyframeOf);
+		});
 		r.gate = mo.gate;
 		r.matches = static_cast<int>(mo.corr.size());
 		r.warped = mo.warped;
@@ -487,7 +491,7 @@ LocaliserStatus StereoLocaliser::searchAndSolve(
 		}
 		pi.corr = &mo.corr;
 		po = vo::TRelativePoseOutput();
-		m_estimator.estimate(pi, po);
+		timed(r.ms_stage.solve, [&] { m_estimator.estimate(pi, po); });
 		r.inliers = static_cast<int>(po.inliers);
 		r.rms_px = po.rms_px;
 		if (po.status == vo::RelativePoseStatus::SolverFailed)
@@ -521,13 +525,13 @@ LocaliserStatus StereoLocaliser::searchAndSolve(
 		// The prediction is taken in `ref`, as the first pass took it.
 		const Eigen::Isometry3d T_curr_ref = solved ? po.T_curr_ref : pred.T_kf_live.inverse();
 		vo::TKeyframeMatchOutput more = mo;
-		searchLocalMapByPatches(in, ref, T_curr_ref, more, keyframeOf);
+		timed(r.ms_stage.patch_search, [&] { searchLocalMapByPatches(in, ref, T_curr_ref, more, keyframeOf); });
 		const int added = static_cast<int>(more.corr.size() - mo.corr.size());
 		vo::TRelativePoseOutput po2;
 		if (added > 0 && static_cast<int>(more.corr.size()) >= o.min_matches)
 		{
 			pi.corr = &more.corr;
-			m_estimator.estimate(pi, po2);
+			timed(r.ms_stage.patch_solve, [&] { m_estimator.estimate(pi, po2); });
 		}
 		// At the prediction the patches are found where the prediction puts
 		// them, so they agree with it whether it is right or not: the solve

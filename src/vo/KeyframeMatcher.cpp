@@ -46,6 +46,8 @@ void checkInput(const TKeyframeMatchInput& in)
 		throw std::invalid_argument("KeyframeMatcher: input without landmarks or frame");
 	if (in.frame->left.type() != CV_8UC1 || in.frame->left.empty())
 		throw std::invalid_argument("KeyframeMatcher: the frame's left image must be a non-empty CV_8UC1");
+	if (in.taken && in.taken->size() != in.frame->meas.size())
+		throw std::invalid_argument("KeyframeMatcher: the taken mask must have one entry per current measurement");
 }
 
 /** Where is landmark lm's patch in img near (x0, y0): through the warp A
@@ -107,12 +109,16 @@ TPredictedMeasurement KeyframeMatcher::predict(
 
 Eigen::Matrix3d KeyframeMatcher::gateMatrix(const Eigen::Matrix3d& S) const
 {
+	return gateMatrix(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(0.5 * (S + S.transpose())));
+}
+
+Eigen::Matrix3d KeyframeMatcher::gateMatrix(const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>& es) const
+{
 	// An axis of {r : r^T G^-1 r <= chi2} has half-length sqrt(chi2 lambda).
 	const double chi2 = m_opts.gate_chi2;
 	const double lo = m_opts.gate_min_px * m_opts.gate_min_px / chi2;
 	const double maxPx = std::max(m_opts.gate_max_px, m_opts.gate_landmark_max_px);
 	const double hi = maxPx * maxPx / chi2;
-	Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (S + S.transpose()));
 	const Eigen::Vector3d lam = es.eigenvalues().cwiseMax(lo).cwiseMin(hi);
 	return es.eigenvectors() * lam.asDiagonal() * es.eigenvectors().transpose();
 }
@@ -134,9 +140,12 @@ int KeyframeMatcher::searchDescriptors(
 	std::vector<double> axes;
 	int overflow = 0, tooUncertain = 0;
 	const bool splitCeiling = gate && o.gate_landmark_max_px > 0;
+	auto axisOf = [&](const Eigen::Vector3d& eigenvalues) {
+		return std::sqrt(o.gate_chi2 * std::max(0.0, eigenvalues.maxCoeff()));
+	};
 	auto longestAxis = [&](const Eigen::Matrix3d& S) {
-		Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (S + S.transpose()), Eigen::EigenvaluesOnly);
-		return std::sqrt(o.gate_chi2 * std::max(0.0, es.eigenvalues().maxCoeff()));
+		return axisOf(Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(0.5 * (S + S.transpose()), Eigen::EigenvaluesOnly)
+						  .eigenvalues());
 	};
 	const double W = in.frame->left.cols, H = in.frame->left.rows;
 	for (size_t j = 0; j < kfm.size(); j++)
@@ -148,10 +157,13 @@ int KeyframeMatcher::searchDescriptors(
 		{
 			const auto pm = predict(calib, in.T_curr_kf_pred, in.cov_T_curr_kf_pred, kfm[j].P, kfm[j].cov, o.sigma_px);
 			if (!pm.ok) continue;
+			// One decomposition for the gate and its axis (the eigenvalues are
+			// the same whether the vectors are computed or not).
+			const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (pm.S + pm.S.transpose()));
 			if (pm.z.x() >= 0 && pm.z.x() < W && pm.z.y() >= 0 && pm.z.y() < H)
 			{
 				// The longest axis of the unclamped gate: sqrt(chi2 lambda_max).
-				const double axis = longestAxis(pm.S);
+				const double axis = axisOf(es.eigenvalues());
 				axes.push_back(axis);
 				// The ceiling on the prediction's part only (see gate_landmark_max_px).
 				const double predAxis = splitCeiling ? longestAxis(predict(
@@ -170,7 +182,7 @@ int KeyframeMatcher::searchDescriptors(
 					if (!o.gate_clamp) continue;
 				}
 			}
-			const Eigen::Matrix3d G = gateMatrix(pm.S);
+			const Eigen::Matrix3d G = gateMatrix(es);
 			Ginv = G.inverse();
 			zp = pm.z;
 			u = zp.x();
@@ -192,11 +204,20 @@ int KeyframeMatcher::searchDescriptors(
 		const int r1 = std::min(grid.rows - 1, static_cast<int>((v + hv) / MeasGrid::kCell));
 		int b1 = 999, b2 = 999, bi = -1;
 		// Through the landmark's warp, the candidates' descriptors are made
-		// again with the warped tests (features/PatchWarp.h).
-		Eigen::Matrix2d A;
+		// again with the warped tests (features/PatchWarp.h), built at the
+		// first candidate inside the gate (most gates hold none).
 		std::optional<features::WarpedBriefPattern> warped;
-		// BRIEF tests only: ORB's are oriented, and a map says which it holds.
-		if (in.brief && !in.frame->smoothed.empty() && warpOf(in, kfm[j], A)) warped.emplace(*in.brief, A);
+		bool warpChecked = false;
+		const auto warpedPattern = [&]() -> const features::WarpedBriefPattern* {
+			if (!warpChecked)
+			{
+				warpChecked = true;
+				Eigen::Matrix2d A;
+				// BRIEF tests only: ORB's are oriented, and a map says which it holds.
+				if (in.brief && !in.frame->smoothed.empty() && warpOf(in, kfm[j], A)) warped.emplace(*in.brief, A);
+			}
+			return warped ? &*warped : nullptr;
+		};
 		features::TBriefDescriptor wd;
 		for (int rr = r0; rr <= r1; rr++)
 			for (int cc = c0; cc <= c1; cc++)
@@ -213,10 +234,11 @@ int KeyframeMatcher::searchDescriptors(
 						const double du = m.uL - u, dv = m.v - v;
 						if (du * du + dv * dv > r2) continue;
 					}
-					const int d = !warped ? features::hamming(kfm[j].desc, m.desc)
-										  : warped->compute(in.frame->smoothed, static_cast<int>(m.uL), static_cast<int>(m.v), wd)
-											  ? features::hamming(kfm[j].desc, wd)
-											  : 999;
+					const auto* wp = warpedPattern();
+					const int d = !wp ? features::hamming(kfm[j].desc, m.desc)
+									  : wp->compute(in.frame->smoothed, static_cast<int>(m.uL), static_cast<int>(m.v), wd)
+										  ? features::hamming(kfm[j].desc, wd)
+										  : 999;
 					if (d < b1)
 					{
 						b2 = b1;
@@ -323,7 +345,7 @@ void KeyframeMatcher::match(const TKeyframeMatchInput& in, TKeyframeMatchOutput&
 	const cv::Mat& img = fr.left;
 	for (size_t j = 0; j < kfm.size(); j++)
 	{
-		if (matchOf[j] < 0) continue;
+		if (matchOf[j] < 0 || (in.taken && (*in.taken)[static_cast<size_t>(matchOf[j])])) continue;
 		const auto& m = fr.meas[matchOf[j]];
 		float xs, ys;
 		Eigen::Matrix2d A;

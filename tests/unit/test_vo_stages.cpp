@@ -174,6 +174,40 @@ TEST(VoKeyframeMatcher, CircleFindsTrueMatchesAndRefinesToSubPixel)
 	EXPECT_LT(worst, 0.1);
 }
 
+TEST(VoKeyframeMatcher, TakenMeasurementsAreNeitherRefinedNorReturnedTheRestUnchanged)
+{
+	const auto s = makeScene(pose(0.05, -0.02, 0.3, 0.02), 6.0, 4);
+	vo::KeyframeMatcher m;
+	vo::TKeyframeMatchOutput all, masked;
+	const auto in = inputFor(s, pose(0.08, -0.02, 0.3, 0.02));
+	m.match(in, all);
+	ASSERT_GE(all.corr.size(), 20u);
+	// Every third landmark's true measurement is taken (a nearer keyframe has it).
+	std::vector<uint8_t> taken(s.frame.meas.size(), 0);
+	for (size_t j = 0; j < s.trueMeas.size(); j += 3) taken[static_cast<size_t>(s.trueMeas[j])] = 1;
+	auto withMask = in;
+	withMask.taken = &taken;
+	m.match(withMask, masked);
+	// Exactly the unmasked output without the taken measurements' correspondences.
+	size_t k = 0;
+	for (size_t i = 0; i < all.corr.size(); i++)
+	{
+		if (taken[static_cast<size_t>(all.measurement[i])]) continue;
+		ASSERT_LT(k, masked.corr.size());
+		EXPECT_EQ(masked.landmark[k], all.landmark[i]);
+		EXPECT_EQ(masked.measurement[k], all.measurement[i]);
+		EXPECT_EQ(masked.corr[k].z_curr, all.corr[i].z_curr);
+		k++;
+	}
+	EXPECT_EQ(k, masked.corr.size());
+	EXPECT_LT(masked.corr.size(), all.corr.size());
+	EXPECT_EQ(masked.descriptor_matches, all.descriptor_matches);  // the search itself saw every measurement
+	// A mask of the wrong size is refused.
+	std::vector<uint8_t> wrong(s.frame.meas.size() + 1, 0);
+	withMask.taken = &wrong;
+	EXPECT_THROW(m.match(withMask, masked), std::invalid_argument);
+}
+
 TEST(VoKeyframeMatcher, CircleWidensWhenTheFirstTryFindsTooFew)
 {
 	const auto s = makeScene(pose(0.0, 0.0, 0.3, 0.0), 5.0, 2);

@@ -16,4 +16,13 @@ inline double msSince(std::chrono::steady_clock::time_point t0)
 	return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+/** Runs f and adds its time to acc [ms]. */
+template <class F>
+void timed(double& acc, F&& f)
+{
+	const auto t0 = std::chrono::steady_clock::now();
+	f();
+	acc += msSince(t0);
+}
+
 }  // namespace shadyloc::core

@@ -344,6 +344,13 @@ struct TLocaliserResult
 	int consistent = 0;	 //!< consecutive consistent frames so far
 	vo::TGateStats gate;
 	double ms = 0;	//!< time of this localiser on this frame [ms]
+	/** Where that time went [ms]: the descriptor search of the local map
+	 * (both gate attempts), its RANSAC and robust solve, the patch pass's
+	 * search and solve, the fix's covariance (the bootstrap). */
+	struct TStageMs
+	{
+		double search = 0, solve = 0, patch_search = 0, patch_solve = 0, covariance = 0;
+	} ms_stage;
 	/** The last search's correspondences, inliers of its solve marked (none
 	 * without a search): what `shadyloc localise --gif` draws. */
 	std::vector<TLiveMatch> live_matches;

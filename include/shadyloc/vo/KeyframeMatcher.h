@@ -25,6 +25,7 @@
 #include <shadyloc/geometry/PoseSolver.h>
 #include <shadyloc/geometry/StereoCamera.h>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <vector>
@@ -127,6 +128,12 @@ struct TKeyframeMatchInput
 	 * landmark's warp; null = descriptors compared unwarped (ORB's oriented
 	 * tests; the patches are still warped). */
 	const features::BriefExtractor* brief = nullptr;
+	/** Per current measurement, 1 where it is already matched (to a nearer
+	 * keyframe's landmark): a landmark whose descriptor match is such a
+	 * measurement is neither refined nor returned. The descriptor search
+	 * itself still sees every measurement, so the other matches are the
+	 * ones it makes without the mask. Null = none taken. */
+	const std::vector<uint8_t>* taken = nullptr;
 };
 
 /** A landmark's predicted stereo measurement and its covariance. */
@@ -204,6 +211,8 @@ class KeyframeMatcher
 	/** The gate's matrix: S with its eigenvalues clamped so that every axis of
 	 * {r : r^T G^-1 r <= gate_chi2} lies in [gate_min_px, gate_max_px]. */
 	Eigen::Matrix3d gateMatrix(const Eigen::Matrix3d& S) const;
+	/** The same from S's decomposition (S symmetrised). */
+	Eigen::Matrix3d gateMatrix(const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>& es) const;
 
 	const TOptions& options() const { return m_opts; }
 
