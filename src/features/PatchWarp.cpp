@@ -59,16 +59,22 @@ double warpDistortion(const Eigen::Matrix2d& A) { return (A - Eigen::Matrix2d::I
 
 WarpedBriefPattern::WarpedBriefPattern(const BriefExtractor& brief, const Eigen::Matrix2d& A)
 {
+	// A times each offset, written out in the order Eigen's product sums it
+	// (the same values), rounded; built for every warped landmark searched.
+	const double a00 = A(0, 0), a01 = A(0, 1), a10 = A(1, 0), a11 = A(1, 1);
 	const auto& p = brief.pattern();
-	for (size_t i = 0; i < p.size() && i < m_pattern.size(); i++)
-		for (int k = 0; k < 2; k++)
+	const size_t n = std::min(p.size(), m_pattern.size());
+	int reach = 0;
+	for (size_t i = 0; i < n; i++)
+		for (int k = 0; k < 4; k += 2)
 		{
-			const Eigen::Vector2d d = A * Eigen::Vector2d(p[i][2 * k], p[i][2 * k + 1]);
-			m_pattern[i][2 * k] = static_cast<int16_t>(roundOffset(d.x()));
-			m_pattern[i][2 * k + 1] = static_cast<int16_t>(roundOffset(d.y()));
-			m_reach = std::max({m_reach, std::abs(static_cast<int>(m_pattern[i][2 * k])),
-								std::abs(static_cast<int>(m_pattern[i][2 * k + 1]))});
+			const double px = p[i][k], py = p[i][k + 1];
+			const int dx = roundOffset(a00 * px + a01 * py), dy = roundOffset(a10 * px + a11 * py);
+			m_pattern[i][k] = static_cast<int16_t>(dx);
+			m_pattern[i][k + 1] = static_cast<int16_t>(dy);
+			reach = std::max({reach, std::abs(dx), std::abs(dy)});
 		}
+	m_reach = reach;
 }
 
 bool WarpedBriefPattern::compute(const cv::Mat& img, int x, int y, TBriefDescriptor& d) const

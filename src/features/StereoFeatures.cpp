@@ -79,6 +79,8 @@ void TStereoFeatureOptions::keys(core::KeyVisitor& v)
 			 "brief (single-scale FAST + BRIEF) or orb (OpenCV ORB: pyramid, orientation)");
 	v("orb_levels", orb_levels, "", Range::closed(1, 16), "ORB pyramid levels, 1 = single scale");
 	v("orb_scale_factor", orb_scale_factor, "", Range::openClosed(1, 2), "ORB size ratio of neighbouring levels");
+	v("orb_right_levels", orb_right_levels, "", Range::closed(0, 16),
+	  "ORB levels the right image's stereo candidates come from, 0 = all");
 }
 
 void TStereoFeatureOptions::loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s)
@@ -193,17 +195,16 @@ struct TPyramidLevel
 	float scale = 1.f;
 };
 
-/** ORB's detection without its orientations: its pyramid (each level
- * resized from the one before), FAST with non-maximum suppression per level,
+/** ORB's detection without its orientations: its pyramid of n levels (each
+ * level resized from the one before), FAST with non-maximum suppression per level,
  * corners within `edge` px of a level's edge dropped, the strongest kept per
  * level in ORB's shares of `nFeatures`; positions in level-0 pixels, octave
  * and size set. The same corners in the same order as cv::ORB::detect
  * (FeaturesOrb.CornersAreOpenCvOrbsWithAnglesWhereDescribed), without the
  * orientation of every corner: most are never described. */
 std::vector<TPyramidLevel> orbPyramidCorners(
-	const cv::Mat& grey8, const TStereoFeatureOptions& o, int nFeatures, int edge, std::vector<cv::KeyPoint>& all)
+	const cv::Mat& grey8, const TStereoFeatureOptions& o, int n, int nFeatures, int edge, std::vector<cv::KeyPoint>& all)
 {
-	const int n = o.orb_levels;
 	const double scaleFactor = static_cast<float>(o.orb_scale_factor);	// ORB keeps it as the float it was given
 	std::vector<TPyramidLevel> levels(static_cast<size_t>(n));
 	// ORB's share per level: a geometric series over the levels' areas.
@@ -291,7 +292,9 @@ void CornerDescriber::detect(
 	const int cells = o.grid_cols * o.grid_rows;
 	const int nFeatures = perCell > 0 ? 4 * cells * perCell : 1 << 20;
 	std::vector<cv::KeyPoint> all;
-	const auto levels = orbPyramidCorners(grey8, o, nFeatures, std::max(border, 3), all);
+	const int nLevels = use == CornerUse::Candidates && o.orb_right_levels > 0 ? std::min(o.orb_levels, o.orb_right_levels)
+																			   : o.orb_levels;
+	const auto levels = orbPyramidCorners(grey8, o, nLevels, nFeatures, std::max(border, 3), all);
 	spreadOverGrid(all, grey8.cols, grey8.rows, o.grid_cols, o.grid_rows, perCell, border, out);
 	if (use == CornerUse::Described) setOrbAngles(levels, out);
 }

@@ -582,6 +582,47 @@ TEST(FeaturesOrb, CornersAreOpenCvOrbsWithAnglesWhereDescribed)
 	EXPECT_GT(coarse, 100u);
 }
 
+TEST(FeaturesOrb, RightCandidatesFromTheFinestLevelsWhenAsked)
+{
+	// orb_right_levels = k: the right image's candidates are the full
+	// detection's corners of its k finest levels (no grid limit here), and the
+	// described left corners are unchanged.
+	const sim::SyntheticCorridor corridor;
+	cv::Mat l, r, inv;
+	corridor.render(sim::SyntheticCorridor::examplePose(3), l, r, 3);
+	filters::defaultChannel("invariant").convert(r, inv);
+	features::TStereoFeatureOptions all;
+	all.descriptor = features::DescriptorKind::Orb;
+	all.orb_levels = 3;
+	all.orb_scale_factor = 1.4;
+	all.fast_threshold = 5;
+	std::vector<cv::KeyPoint> full, left0;
+	features::CornerDescriber(all).detect(inv, 0, 6, full, features::CornerUse::Candidates);
+	features::CornerDescriber(all).detect(inv, all.max_per_cell, 40, left0, features::CornerUse::Described);
+	for (const int k : {1, 2})
+	{
+		SCOPED_TRACE("orb_right_levels " + std::to_string(k));
+		auto fewer = all;
+		fewer.orb_right_levels = k;
+		const features::CornerDescriber cd(fewer);
+		std::vector<cv::KeyPoint> got, want, left;
+		cd.detect(inv, 0, 6, got, features::CornerUse::Candidates);
+		for (const auto& c : full)
+			if (c.octave < k) want.push_back(c);
+		ASSERT_GT(want.size(), 100u);
+		ASSERT_LT(want.size(), full.size());
+		ASSERT_EQ(got.size(), want.size());
+		for (size_t i = 0; i < got.size(); i++)
+		{
+			ASSERT_EQ(got[i].pt, want[i].pt) << "corner " << i;
+			ASSERT_EQ(got[i].octave, want[i].octave) << "corner " << i;
+		}
+		cd.detect(inv, all.max_per_cell, 40, left, features::CornerUse::Described);
+		ASSERT_EQ(left.size(), left0.size());
+		for (size_t i = 0; i < left.size(); i++) ASSERT_EQ(left[i].pt, left0[i].pt) << "left corner " << i;
+	}
+}
+
 TEST(FeaturesOrb, StereoMeasurementsFromThePyramid)
 {
 	// ORB through the one stereo pipeline: corners from every pyramid level,

@@ -216,6 +216,10 @@ struct TStereoFeatureOptions : public mrpt::config::CLoadableOptions
 	int orb_levels = 8;
 	/** ORB: size ratio of neighbouring pyramid levels (> 1). Descriptor-defining. */
 	double orb_scale_factor = 1.2;
+	/** ORB: the right image's stereo candidates from this many pyramid levels
+	 * (from the finest), 0 = all (orb_levels). The matcher correlates at full
+	 * resolution: a coarse level's corner is a candidate within a pixel or two. */
+	int orb_right_levels = 0;
 
 	void keys(core::KeyVisitor& v);  //!< every key, declared once (core/Options.h)
 	void loadFromConfigFile(const mrpt::config::CConfigFileBase& c, const std::string& s) override;
