@@ -8,8 +8,10 @@
  * on the same frames, for the ratio. Each iteration is one frame, the run
  * played in order and restarted (as a new run, from the global search) at its
  * end. Counters: median and 95th percentile per frame [ms], from the frames
- * timed one by one. Goal (the issue): combined median >= 40 Hz, 95th
- * percentile >= 20 Hz.
+ * timed one by one; each localiser's stages (mean per frame) and each
+ * channel's front end alone (BM_ChannelFrontEnd). Goals (issue #20):
+ * combined median >= 60 Hz, 95th percentile >= 40 Hz, and the combined
+ * median at most twice the VO's, both from one run.
  *
  * Needs rawlogs/generated (scripts/make-default-dataset.sh) and the built
  * `shadyloc` (the map is surveyed once into $TMPDIR/shadyloc_bench_localise);
