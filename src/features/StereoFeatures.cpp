@@ -17,6 +17,7 @@
 #include <optional>
 #include <ostream>
 #include <stdexcept>
+#include <type_traits>
 #include <vector>
 
 #ifdef __SSE2__
@@ -334,43 +335,26 @@ void CornerDescriber::describe(
 
 namespace
 {
-/** The sums of zncc over a (2R+1)^2 window, R fixed (the stereo matcher's
- * hot loop: unrolled and vectorised by the compiler). Integer sums are
- * exact in any order, so every R gives the generic loop's values. */
+/** The sums of zncc over a (2r+1)^2 window. With R > 0 the radius is R,
+ * fixed at compile time (the stereo matcher's hot loop: unrolled and
+ * vectorised by the compiler), with 32-bit sums: (2R+1)^2 * 255^2 < 2^31
+ * for R <= 90. R = 0 takes r at run time, with 64-bit squares. Integer sums
+ * are exact in any order, so both give the same values. */
 template <int R>
-void znccSums(const cv::Mat& a, int xa, int ya, const cv::Mat& b, int xb, int yb, int64_t s[5])
-{
-	// 32-bit sums cannot overflow here: (2R+1)^2 * 255^2 < 2^31 for R <= 90.
-	static_assert(R <= 90);
-	int32_t sa = 0, sb = 0, saa = 0, sbb = 0, sab = 0;
-	for (int dy = -R; dy <= R; dy++)
-	{
-		const uint8_t* pa = a.ptr<uint8_t>(ya + dy) + xa - R;
-		const uint8_t* pb = b.ptr<uint8_t>(yb + dy) + xb - R;
-		for (int dx = 0; dx <= 2 * R; dx++)
-		{
-			const int32_t va = pa[dx], vb = pb[dx];
-			sa += va;
-			sb += vb;
-			saa += va * va;
-			sbb += vb * vb;
-			sab += va * vb;
-		}
-	}
-	s[0] = sa, s[1] = sb, s[2] = saa, s[3] = sbb, s[4] = sab;
-}
-
 void znccSums(const cv::Mat& a, int xa, int ya, const cv::Mat& b, int xb, int yb, int r, int64_t s[5])
 {
-	int sa = 0, sb = 0;
-	int64_t saa = 0, sbb = 0, sab = 0;
-	for (int dy = -r; dy <= r; dy++)
+	static_assert(R >= 0 && R <= 90);
+	using Square = std::conditional_t<(R > 0), int32_t, int64_t>;
+	const int rr = R > 0 ? R : r;
+	int32_t sa = 0, sb = 0;
+	Square saa = 0, sbb = 0, sab = 0;
+	for (int dy = -rr; dy <= rr; dy++)
 	{
-		const uint8_t* pa = a.ptr<uint8_t>(ya + dy) + xa - r;
-		const uint8_t* pb = b.ptr<uint8_t>(yb + dy) + xb - r;
-		for (int dx = 0; dx <= 2 * r; dx++)
+		const uint8_t* pa = a.ptr<uint8_t>(ya + dy) + xa - rr;
+		const uint8_t* pb = b.ptr<uint8_t>(yb + dy) + xb - rr;
+		for (int dx = 0; dx <= 2 * rr; dx++)
 		{
-			const int va = pa[dx], vb = pb[dx];
+			const int32_t va = pa[dx], vb = pb[dx];
 			sa += va;
 			sb += vb;
 			saa += va * va;
@@ -387,10 +371,10 @@ float zncc(const cv::Mat& a, int xa, int ya, const cv::Mat& b, int xb, int yb, i
 	int64_t s[5];
 	switch (r)
 	{
-		case 2: znccSums<2>(a, xa, ya, b, xb, yb, s); break;
-		case 3: znccSums<3>(a, xa, ya, b, xb, yb, s); break;
-		case 4: znccSums<4>(a, xa, ya, b, xb, yb, s); break;
-		default: znccSums(a, xa, ya, b, xb, yb, r, s);
+		case 2: znccSums<2>(a, xa, ya, b, xb, yb, r, s); break;
+		case 3: znccSums<3>(a, xa, ya, b, xb, yb, r, s); break;
+		case 4: znccSums<4>(a, xa, ya, b, xb, yb, r, s); break;
+		default: znccSums<0>(a, xa, ya, b, xb, yb, r, s);
 	}
 	const int64_t sa = s[0], sb = s[1], saa = s[2], sbb = s[3], sab = s[4];
 	const double n = (2 * r + 1) * (2 * r + 1);

@@ -192,6 +192,47 @@ TEST(FeaturesBrief, PatternIsFixedAndDescriptorsDiscriminate)
 	EXPECT_LT(features::hamming(d1, d2), 60);
 }
 
+TEST(FeaturesZncc, EveryRadiusIsTheNormalisedCorrelation)
+{
+	// zncc takes an unrolled path for the radii in use and a general one
+	// for the rest: each must be the textbook normalised cross-correlation.
+	std::mt19937 rng(11);
+	cv::Mat a(40, 40, CV_8UC1), b(40, 40, CV_8UC1);
+	cv::randu(a, 0, 256);
+	cv::randu(b, 0, 256);
+	// b partly a scaled and shifted copy of a, so high scores occur too.
+	cv::Mat half = a(cv::Rect(0, 0, 40, 20)) * 0.7 + 30;
+	half.copyTo(b(cv::Rect(0, 0, 40, 20)));
+	for (int r = 1; r <= 7; r++)
+		for (int t = 0; t < 50; t++)
+		{
+			const int xa = r + static_cast<int>(rng() % (40 - 2 * r)), ya = r + static_cast<int>(rng() % (40 - 2 * r));
+			const int xb = r + static_cast<int>(rng() % (40 - 2 * r)), yb = t % 2 ? ya : r + static_cast<int>(rng() % (40 - 2 * r));
+			double ma = 0, mb = 0;
+			const double n = (2 * r + 1) * (2 * r + 1);
+			for (int dy = -r; dy <= r; dy++)
+				for (int dx = -r; dx <= r; dx++)
+				{
+					ma += a.at<uint8_t>(ya + dy, xa + dx) / n;
+					mb += b.at<uint8_t>(yb + dy, xb + dx) / n;
+				}
+			double sab = 0, saa = 0, sbb = 0;
+			for (int dy = -r; dy <= r; dy++)
+				for (int dx = -r; dx <= r; dx++)
+				{
+					const double da = a.at<uint8_t>(ya + dy, xa + dx) - ma, db = b.at<uint8_t>(yb + dy, xb + dx) - mb;
+					sab += da * db;
+					saa += da * da;
+					sbb += db * db;
+				}
+			ASSERT_NEAR(features::zncc(a, xa, ya, b, xb, yb, r), sab / std::sqrt(saa * sbb), 1e-5)
+				<< "radius " << r << ", sample " << t;
+		}
+	// Where b is 0.7 a + 30 (the copied half, same pixel; rounded to whole
+	// grey levels), the score is 1 but for the rounding.
+	EXPECT_GT(features::zncc(a, 10, 8, b, 10, 8, 3), 0.9999);
+}
+
 TEST(FeaturesBrief, HammingCountsEveryDifferingBit)
 {
 	// The hand-written popcount against the compiler's, on edge words and
