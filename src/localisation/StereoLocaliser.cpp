@@ -332,8 +332,7 @@ void StereoLocaliser::searchLocalMap(
 		out.warped += mo.warped;
 		for (size_t c = 0; c < mo.corr.size(); c++)
 		{
-			const int m = mo.measurement[c];
-			if (taken[static_cast<size_t>(m)]) continue;
+			const int m = mo.measurement[c];  // never a taken one (mi.taken)
 			geometry::TStereoCorrespondence corr = mo.corr[c];
 			if (k != ref && !intoReference(corr, T_ref_k.T, calibKf)) continue;
 			taken[static_cast<size_t>(m)] = 1;

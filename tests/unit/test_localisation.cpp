@@ -647,6 +647,19 @@ features::TStereoFrame seed11LiveFrame(const Eigen::Isometry3d& T_live, uint32_t
 	calib = corridor.calib();
 	return live;
 }
+
+/** A prediction at map keyframe kf with independent standard deviations
+ * sigmaM on each axis and sigmaDeg on each rotation. */
+TKeyframePose predictionAt(uint32_t kf, const Eigen::Isometry3d& T_kf_live, double sigmaM, double sigmaDeg)
+{
+	TKeyframePose p;
+	p.valid = true;
+	p.kf = kf;
+	p.T_kf_live = T_kf_live;
+	const double r2 = std::pow(sigmaDeg * kDeg, 2);
+	p.cov.diagonal() << sigmaM * sigmaM, sigmaM * sigmaM, sigmaM * sigmaM, r2, r2, r2;
+	return p;
+}
 }  // namespace
 
 TEST(LocalisationSecondSearch, WiderGatesRescueARightButOverConfidentPrediction)
@@ -666,11 +679,7 @@ TEST(LocalisationSecondSearch, WiderGatesRescueARightButOverConfidentPrediction)
 	const features::TStereoFrame live = seed11LiveFrame(T_live, 7000, in.calib);
 	in.frame = 1;
 	in.meas = &live;
-	in.prediction.valid = true;
-	in.prediction.kf = kf;
-	in.prediction.T_kf_live = Eigen::Isometry3d::Identity();
-	in.prediction.cov.diagonal() << 1e-4, 1e-4, 1e-4, std::pow(0.1 * kDeg, 2), std::pow(0.1 * kDeg, 2),
-		std::pow(0.1 * kDeg, 2);
+	in.prediction = predictionAt(kf, Eigen::Isometry3d::Identity(), 0.01, 0.1);
 	const auto run = [&](double scale) {
 		TLocaliserOptions o;
 		o.min_inliers = 15;
@@ -710,11 +719,7 @@ TEST(LocalisationPatchPass, RunsOnlyWhereTheDescriptorSolveIsThin)
 	const features::TStereoFrame live = seed11LiveFrame(T_live, 7200, in.calib);
 	in.frame = 1;
 	in.meas = &live;
-	in.prediction.valid = true;
-	in.prediction.kf = kf;
-	in.prediction.T_kf_live = T_kf.inverse() * T_live;
-	in.prediction.cov.diagonal() << 4e-4, 4e-4, 4e-4, std::pow(0.2 * kDeg, 2), std::pow(0.2 * kDeg, 2),
-		std::pow(0.2 * kDeg, 2);
+	in.prediction = predictionAt(kf, T_kf.inverse() * T_live, 0.02, 0.2);
 	const auto run = [&](int maxInliers) {
 		TLocaliserOptions o;
 		o.min_inliers = 15;
