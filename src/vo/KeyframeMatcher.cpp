@@ -205,7 +205,7 @@ int KeyframeMatcher::searchDescriptors(
 		int b1 = 999, b2 = 999, bi = -1;
 		// Through the landmark's warp, the candidates' descriptors are made
 		// again with the warped tests (features/PatchWarp.h), built at the
-		// first candidate inside the gate (most gates hold none).
+		// first candidate inside the gate (a gate may hold none).
 		std::optional<features::WarpedBriefPattern> warped;
 		bool warpChecked = false;
 		const auto warpedPattern = [&]() -> const features::WarpedBriefPattern* {
