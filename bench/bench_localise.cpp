@@ -168,6 +168,7 @@ void BM_CombinedFrame(benchmark::State& st, int threads, const char* extra = "")
 		localiserMs["front_end"].push_back(u.ms_front_end);
 		localiserMs["convert"].push_back(u.ms_convert);
 		localiserMs["relocalise"].push_back(u.ms_relocalise);
+		localiserMs["wait"].push_back(u.ms_wait);
 		fixes += u.localised();
 	}
 	setCounters(st, ms, "");
@@ -221,6 +222,11 @@ BENCHMARK_CAPTURE(
 // "Patches that follow the viewpoint"): their cost is the difference.
 // The monochrome localiser's patch pass bounded as the invariant one's (60 inliers, the twenty-third session's).
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_mono_patch_bound_60, 2, "[localiser.mono]\npatch_search_max_inliers = 60\n")
+	->Unit(benchmark::kMillisecond)
+	->UseManualTime()
+	->Iterations(600);
+// The bootstrap's resamples by the chord method (solve's Jacobians kept): its cost is the difference.
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_bootstrap_chord, 2, "[localiser]\nbootstrap_relinearise = false\n")
 	->Unit(benchmark::kMillisecond)
 	->UseManualTime()
 	->Iterations(600);

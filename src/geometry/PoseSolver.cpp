@@ -239,12 +239,13 @@ namespace
 /** One correspondence's robust normal-equation terms at T (the residual's
  * covariance: pixel noise plus the landmark's, seen through the projection;
  * Huber IRLS weight); false when it does not project. */
-bool normalTerms(
+/** The residual r and Jacobian J of a correspondence at T, and W, the
+ * inverse of r's covariance (pixel noise plus the landmark's, seen through
+ * the projection); false when it does not project. */
+bool whitenedLinearisation(
 	const TStereoCalib& calib, const Eigen::Isometry3d& T, const TStereoCorrespondence& c, const TPoseSolverOptions& o,
-	Matrix6d& H, Vector6d& g, double& sqNorm)
+	Eigen::Vector3d& r, Matrix36d& J, Eigen::Matrix3d& W)
 {
-	Eigen::Vector3d r;
-	Matrix36d J;
 	if (!stereoResidual(calib, T, c.P_ref, c.z_curr, r, &J)) return false;
 	Eigen::Matrix3d S = measurementVariances(o).asDiagonal();
 	if (o.use_landmark_covariance)
@@ -252,9 +253,28 @@ bool normalTerms(
 		const Eigen::Matrix3d JP = J.leftCols<3>() * T.linear();  // d r / d P_ref
 		S += JP * c.cov_ref * JP.transpose();
 	}
-	const Eigen::Matrix3d W = S.inverse();
-	const double e = std::sqrt(std::max(0.0, r.dot(W * r)));  // whitened norm
-	const double w = e <= o.huber_k ? 1.0 : o.huber_k / e;
+	W = S.inverse();
+	return true;
+}
+
+/** Huber IRLS weight of a residual of whitened norm sqrt(r^T W r). */
+double huberWeight(const Eigen::Vector3d& r, const Eigen::Matrix3d& W, double k)
+{
+	const double e = std::sqrt(std::max(0.0, r.dot(W * r)));
+	return e <= k ? 1.0 : k / e;
+}
+
+/** One correspondence's robust normal-equation terms at T (Huber IRLS
+ * weight); false when it does not project. */
+bool normalTerms(
+	const TStereoCalib& calib, const Eigen::Isometry3d& T, const TStereoCorrespondence& c, const TPoseSolverOptions& o,
+	Matrix6d& H, Vector6d& g, double& sqNorm)
+{
+	Eigen::Vector3d r;
+	Matrix36d J;
+	Eigen::Matrix3d W;
+	if (!whitenedLinearisation(calib, T, c, o, r, J, W)) return false;
+	const double w = huberWeight(r, W, o.huber_k);
 	const Eigen::Matrix<double, 6, 3> JtW = w * J.transpose() * W;
 	H.noalias() = JtW * J;
 	g.noalias() = JtW * r;
@@ -357,6 +377,44 @@ TPoseSolution solveStereoPoseCounted(
 			H += double(count[i]) * ti.H;
 			g += double(count[i]) * ti.g;
 			sumSq += count[i] * ti.sq;
+			used += count[i];
+		}
+	});
+}
+
+std::vector<TFrozenTerms> frozenTermsAt(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const Eigen::Isometry3d& T,
+	const TPoseSolverOptions& o)
+{
+	std::vector<TFrozenTerms> out(c.size());
+	Eigen::Vector3d r;
+	Matrix36d J;
+	for (size_t i = 0; i < c.size(); i++)
+	{
+		auto& f = out[i];
+		f.ok = whitenedLinearisation(calib, T, c[i], o, r, J, f.W);
+		if (!f.ok) continue;
+		f.JtW.noalias() = J.transpose() * f.W;
+		f.JtWJ.noalias() = f.JtW * J;
+	}
+	return out;
+}
+
+TPoseSolution solveStereoPoseCountedChord(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const std::vector<int>& count,
+	const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o, const std::vector<TFrozenTerms>& at)
+{
+	if (count.size() != c.size() || at.size() != c.size())
+		throw std::invalid_argument("solveStereoPoseCountedChord: count or at not one per correspondence");
+	if (o.covariance) throw std::invalid_argument("solveStereoPoseCountedChord: gives no covariance (o.covariance)");
+	return gaussNewton(T_init, o, [&](const Eigen::Isometry3d& T, int, Matrix6d& H, Vector6d& g, double&, int& used) {
+		Eigen::Vector3d r;
+		for (size_t i = 0; i < c.size(); i++)
+		{
+			if (count[i] <= 0 || !at[i].ok || !stereoResidual(calib, T, c[i].P_ref, c[i].z_curr, r)) continue;
+			const double cw = count[i] * huberWeight(r, at[i].W, o.huber_k);
+			H.noalias() += cw * at[i].JtWJ;
+			g.noalias() += cw * (at[i].JtW * r);
 			used += count[i];
 		}
 	});

@@ -93,12 +93,20 @@ Matrix6d bootstrapCovariance(
 	const Eigen::Isometry3d T_ref_curr = T_curr_ref.inverse();
 	// Every resample starts at the solve: its first linearisation is shared,
 	// and a resample is a count per inlier rather than a copied list.
-	const auto atSolve = geometry::normalTermsAt(calib, in, T_curr_ref, so);
+	std::vector<geometry::TNormalTerms> atSolve;
+	std::vector<geometry::TFrozenTerms> frozen;
+	if (o.bootstrap_relinearise)
+		atSolve = geometry::normalTermsAt(calib, in, T_curr_ref, so);
+	else
+		frozen = geometry::frozenTermsAt(calib, in, T_curr_ref, so);
 	std::vector<std::optional<Vector6d>> xi(samples);
 	auto solveRange = [&](size_t b0, size_t b1) {
 		for (size_t b = b0; b < b1; b++)
 		{
-			const auto sol = geometry::solveStereoPoseCounted(calib, in, counts[b], T_curr_ref, so, &atSolve);
+			const auto sol =
+				o.bootstrap_relinearise
+					? geometry::solveStereoPoseCounted(calib, in, counts[b], T_curr_ref, so, &atSolve)
+					: geometry::solveStereoPoseCountedChord(calib, in, counts[b], T_curr_ref, so, frozen);
 			if (sol.ok) xi[b] = geometry::localLeft(sol.T_curr_ref.inverse(), T_ref_curr);
 		}
 	};

@@ -501,7 +501,7 @@ TLocaliserInput LocalisationSystem::frontEndOverlappingLocalisers(
 	// prediction then; else its standby is kept after thread 1's localiser.
 	// The same work as one thread does in order, so the same results.
 	const size_t n = m_pipes.size();
-	std::vector<double> msConv(n, 0), frontEndEnd(2, 0);
+	std::vector<double> msConv(n, 0), frontEndEnd(2, 0), doneAt(2, 0);
 	const auto t0 = Clock::now();
 	std::promise<void> othersExtracted, predicted;
 	std::future<void> othersReady = othersExtracted.get_future(), prediction = predicted.get_future();
@@ -528,6 +528,7 @@ TLocaliserInput LocalisationSystem::frontEndOverlappingLocalisers(
 				othersReady.get();
 				fallbackMotion(meas, calib, timestamp, measured, u);
 			}
+			doneAt[0] = msSince(t0);
 		}
 		catch (...)
 		{
@@ -550,8 +551,10 @@ TLocaliserInput LocalisationSystem::frontEndOverlappingLocalisers(
 		prediction.get();  // rethrows the first thread's failure
 		for (size_t i = 1; i < n; i++)
 			if (m_pipes[i].localiser) localise(i, in);
+		doneAt[1] = msSince(t0);
 	};
 	both(true, first, others);
+	u.ms_wait = std::abs(doneAt[0] - doneAt[1]);
 	for (const double c : msConv) u.ms_convert += c;
 	u.ms_front_end = std::max(frontEndEnd[0], frontEndEnd[1]);
 	return in;

@@ -67,6 +67,8 @@ void TLocaliserOptions::keys(core::KeyVisitor& v)
 	v("cov_scale", cov_scale, "", Range::atLeast(1), "the solver's covariance is scaled by this");
 	v("bootstrap_samples", bootstrap_samples, "", Range::closed(2, 1000).orOff(),
 	  "resamples of the inliers for the bootstrap covariance (0 = off)");
+	v("bootstrap_relinearise", bootstrap_relinearise, "", Range::any(),
+	  "each resample's steps re-linearise (false: the chord method, the solve's Jacobians kept, residuals and Huber weights re-evaluated)");
 	v("max_sigma_m", max_sigma_m, "m", Range::atLeast(0), "a fix less certain than this is not used (0 = no cap)");
 	v("max_sigma_deg", max_sigma_deg, "deg", Range::atLeast(0), "(0 = no cap)");
 	v("uncertain_breaks_chain", uncertain_breaks_chain, "", Range::any(), "an uncertain solve needs K consistent frames again");

@@ -472,6 +472,49 @@ TEST(GeometryPose, CountedSolveEqualsTheSolveOverTheRepeatedList)
 	EXPECT_THROW(solveStereoPoseCounted(stereoCalib(), c, std::vector<int>(3, 1), T, so), std::invalid_argument);
 }
 
+TEST(GeometryPose, ChordSolveReachesTheRelinearisedResamplesPose)
+{
+	// The chord method keeps the solve's Jacobians: a resample's pose must be
+	// the re-linearised solver's to a small share of how far the resample
+	// moves it from the solve, yet not simply stay at the solve. Outliers and
+	// far landmarks keep the Huber weights and the nonlinearity in play.
+	const Eigen::Isometry3d T = somePose();
+	const auto c = makeProblem(T, 40, 3, 0.5, 9);
+	TPoseSolverOptions so;
+	so.max_iterations = 30;
+	const auto fit = solveStereoPose(stereoCalib(), c, {}, T, so);
+	ASSERT_TRUE(fit.ok);
+	so.covariance = false;
+	const auto frozen = frozenTermsAt(stereoCalib(), c, fit.T_curr_ref, so);
+	std::mt19937 rng(5);
+	std::uniform_int_distribution<size_t> pick(0, c.size() - 1);
+	for (int b = 0; b < 10; b++)
+	{
+		std::vector<int> count(c.size(), 0);
+		for (size_t k = 0; k < c.size(); k++) count[pick(rng)]++;
+		const auto exact = solveStereoPoseCounted(stereoCalib(), c, count, fit.T_curr_ref, so);
+		const auto chord = solveStereoPoseCountedChord(stereoCalib(), c, count, fit.T_curr_ref, so, frozen);
+		ASSERT_TRUE(exact.ok && chord.ok);
+		const double moved = transErr(exact.T_curr_ref, fit.T_curr_ref);
+		ASSERT_GT(moved, 1e-4);  // a resample moves the pose by about its sigma (mm to cm here)
+		EXPECT_LT(transErr(chord.T_curr_ref, exact.T_curr_ref), 0.02 * moved);
+		EXPECT_LT(rotErrDeg(chord.T_curr_ref, exact.T_curr_ref), 0.02 * rotErrDeg(exact.T_curr_ref, fit.T_curr_ref) + 1e-6);
+	}
+	// The frozen terms at the solve give its first step exactly: a resample
+	// of every correspondence once stays at the solve.
+	const auto same =
+		solveStereoPoseCountedChord(stereoCalib(), c, std::vector<int>(c.size(), 1), fit.T_curr_ref, so, frozen);
+	ASSERT_TRUE(same.ok);
+	EXPECT_LT(transErr(same.T_curr_ref, fit.T_curr_ref), 1e-7);
+	EXPECT_THROW(
+		solveStereoPoseCountedChord(stereoCalib(), c, std::vector<int>(3, 1), T, so, frozen), std::invalid_argument);
+	TPoseSolverOptions withCov = so;
+	withCov.covariance = true;
+	EXPECT_THROW(
+		solveStereoPoseCountedChord(stereoCalib(), c, std::vector<int>(c.size(), 1), T, withCov, frozen),
+		std::invalid_argument);
+}
+
 TEST(GeometryPose, PoseOnlySolveGivesTheSamePoseToTheBit)
 {
 	// RANSAC's local optimisation and the bootstrap's resamples use only the

@@ -162,6 +162,34 @@ TPoseSolution solveStereoPoseCounted(
 	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const std::vector<int>& count,
 	const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o, const std::vector<TNormalTerms>* atInit = nullptr);
 
+/** One correspondence linearised at a pose for the chord iteration: J^T W
+ * and J^T W J without the Huber weight, and W (the residual's inverse
+ * covariance); ok is false when the landmark does not project. */
+struct TFrozenTerms
+{
+	Eigen::Matrix<double, 6, 3> JtW = Eigen::Matrix<double, 6, 3>::Zero();
+	Matrix6d JtWJ = Matrix6d::Zero();
+	Eigen::Matrix3d W = Eigen::Matrix3d::Zero();
+	bool ok = false;
+};
+
+/** The frozen terms of every correspondence at T. */
+std::vector<TFrozenTerms> frozenTermsAt(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const Eigen::Isometry3d& T,
+	const TPoseSolverOptions& o);
+
+/** solveStereoPoseCounted by the chord method (a simplified Gauss-Newton):
+ * every step re-evaluates each residual and its Huber weight at the
+ * iterate, but keeps the Jacobian and covariance of `at` (frozenTermsAt
+ * T_init). A resample's pose moves from T_init by about its own sigma, so
+ * the frozen Jacobians differ from the iterate's by that share of the
+ * landmark's depth: the fixed point is the same to first order, at about a
+ * quarter of the arithmetic per term (no Jacobian, no 3x3 covariance
+ * propagated and inverted). Needs o.covariance false. */
+TPoseSolution solveStereoPoseCountedChord(
+	const TStereoCalib& calib, const std::vector<TStereoCorrespondence>& c, const std::vector<int>& count,
+	const Eigen::Isometry3d& T_init, const TPoseSolverOptions& o, const std::vector<TFrozenTerms>& at);
+
 
 /** Two-view bundle adjustment from T_init: the pose and every used landmark
  * are unknowns; each landmark has its stereo measurement z_ref in the

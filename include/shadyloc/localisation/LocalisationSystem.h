@@ -143,6 +143,9 @@ struct TLocalisationUpdate
 	 * the prediction) [ms]. */
 	double ms_front_end = 0;
 	double ms_relocalise = 0;  //!< of which the place search of a frame without a fix [ms]
+	/** With two threads: how long the thread that finished first waited for
+	 * the other (0 on one thread) [ms]. */
+	double ms_wait = 0;
 
 	/** The localiser result of a channel, or nullptr. */
 	const TLocaliserResult* result(const std::string& channel) const;

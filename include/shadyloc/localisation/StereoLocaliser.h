@@ -177,6 +177,12 @@ struct TLocaliserOptions
 	 * bootstrap's in every direction; the bootstrap's is an empirical spread
 	 * and is not scaled again (fixCovariance; docs/localisation.md) [-]. */
 	int bootstrap_samples = 30;
+	/** Each resample's steps re-linearise every correspondence (Gauss-Newton);
+	 * off: the Jacobians and covariances are those at the solve, the
+	 * residuals and Huber weights re-evaluated at every step (the chord
+	 * method, geometry::solveStereoPoseCountedChord: the same fixed point to
+	 * first order, for a fraction of the arithmetic). */
+	bool bootstrap_relinearise = true;
 
 	/** A fix whose standard deviation (largest axis of the scaled covariance)
 	 * exceeds these is not accepted (status uncertain; 0 = no cap): 3.6 sigma
