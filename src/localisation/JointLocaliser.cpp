@@ -3,6 +3,7 @@
 #include <shadyloc/localisation/FixEstimate.h>
 #include <shadyloc/core/Units.h>
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 
@@ -20,6 +21,12 @@ JointLocaliser::JointLocaliser(
 	m_opts.validate();
 	if (m_channels.size() < 2) throw std::invalid_argument("joint: names fewer than two channels");
 	for (const auto& c : m_channels) map.channelIndex(c);  // throws naming the map's channels
+}
+
+void keepJointShare(TSearchedCorrespondences& s, bool channelFix, JointPatchMatches take)
+{
+	const bool patches = take == JointPatchMatches::All || (take == JointPatchMatches::OfFixes && channelFix);
+	if (!patches) s.corr.resize(std::min(s.corr.size(), s.patch_from));
 }
 
 geometry::TPoseWithCov JointLocaliser::between(uint32_t a, uint32_t b) const

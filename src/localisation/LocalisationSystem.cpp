@@ -70,6 +70,10 @@ void TSystemOptions::keys(core::KeyVisitor& v)
 	  "only when each is a localiser)");
 	v("joint_only_where_a_channel_fails", joint_only_where_a_channel_fails, "", Range::any(),
 	  "... only on frames where one of its channels' localisers has no accepted fix (elsewhere theirs are used)");
+	v.choice("joint_patch_matches", joint_patch_matches,
+			 {{"all", JointPatchMatches::All}, {"of_fixes", JointPatchMatches::OfFixes}, {"none", JointPatchMatches::None}},
+			 "all | of_fixes | none: a channel's patch-pass matches the joint localiser takes (of_fixes: where its solve "
+			 "was accepted)");
 	v("vo_channel", vo_channel, "", Range::any(), "the live VO that predicts for every localiser");
 	v("vo_fallback_channel", vo_fallback_channel, "", Range::any(),
 	  "a second live VO whose step is used where vo_channel's could not be measured (\"\" = none; runs only "
@@ -785,7 +789,11 @@ TLocalisationUpdate LocalisationSystem::processChannels(
 	if (m_joint)
 	{
 		std::vector<const TSearchedCorrespondences*> parts;
-		for (const size_t i : m_jointPipes) parts.push_back(&searched[i]);
+		for (const size_t i : m_jointPipes)
+		{
+			keepJointShare(searched[i], res[i].accepted(), m_opts.joint_patch_matches);
+			parts.push_back(&searched[i]);
+		}
 		u.localisers.push_back(jointRuns ? m_joint->localise(in, parts) : m_joint->notRun(in));
 		inOrder.push_back(&u.localisers.back());
 	}

@@ -405,6 +405,7 @@ TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in, TSearchedC
 		if (!searched || searchStatus == LocaliserStatus::Lost) return;
 		searched->kf = r.kf_id;
 		searched->corr = std::move(mo.corr);
+		searched->patch_from = searched->corr.size() - std::min(searched->corr.size(), size_t(std::max(0, r.patch_matches)));
 	};
 	if (searchStatus != LocaliserStatus::Ok)
 	{

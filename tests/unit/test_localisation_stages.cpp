@@ -621,6 +621,57 @@ TEST(LocalisationStages, JointLocaliserSolvesTheUnionOfTwoChannelsSearches)
 	EXPECT_THROW(JointLocaliser(*map, {"mono", "colour"}, o), std::exception);
 }
 
+// A channel's patch-pass matches confirm the pose they were found at: two
+// channels whose rejected solves found 25 patches each at a pose 0.5 m off
+// outvote their 15 descriptor matches each in the union. Taking the
+// patches only of channels whose solve was accepted (of_fixes), the joint
+// solve rests on the descriptor matches and finds the truth.
+TEST(LocalisationStages, JointLocaliserTakesPatchMatchesOnlyOfAcceptedChannelSolves)
+{
+	const auto map = test::makeSyntheticMap(4, 4, 0);
+	const geometry::TStereoCalib cal = map->calibration();
+	TLocaliserOptions o;
+	Eigen::Isometry3d truth = Eigen::Isometry3d::Identity();
+	truth.translation() = Eigen::Vector3d(0.1, 0, 0.9);
+	Eigen::Isometry3d off = truth;
+	off.translation() += Eigen::Vector3d(0.3, 0, 0.4);	// 0.5 m
+	auto channel = [&](uint32_t seed) {
+		auto s = searchOf(cal, truth, 15, 3, 30, 0.3, seed);
+		const auto patches = searchOf(cal, off, 25, 3, 30, 0.3, seed + 100);
+		s.patch_from = s.corr.size();
+		s.corr.insert(s.corr.end(), patches.corr.begin(), patches.corr.end());
+		return s;
+	};
+	TLocaliserInput in;
+	in.frame = 3;
+	in.calib = cal;
+	in.prediction = poseAt(0.9, 1.0);  // wide: the solve, not the prediction, decides
+	in.track_confirmed = true;
+	in.motion = step(0.9);
+	auto jointWith = [&](JointPatchMatches take, bool fixA, bool fixB) {
+		auto a = channel(1), b = channel(2);
+		keepJointShare(a, fixA, take);
+		keepJointShare(b, fixB, take);
+		JointLocaliser joint(*map, {"mono", "invariant"}, o);
+		return std::make_pair(joint.localise(in, {&a, &b}), a.corr.size() + b.corr.size());
+	};
+	const auto [all, nAll] = jointWith(JointPatchMatches::All, false, false);
+	ASSERT_TRUE(all.solved);
+	EXPECT_EQ(nAll, 80u);
+	EXPECT_LT((all.T_kf_live.translation() - off.translation()).norm(), 0.05) << "the patches' pose wins the union";
+	const auto [ofFixes, nOf] = jointWith(JointPatchMatches::OfFixes, false, false);
+	ASSERT_TRUE(ofFixes.solved);
+	EXPECT_EQ(nOf, 30u);
+	EXPECT_LT((ofFixes.T_kf_live.translation() - truth.translation()).norm(), 0.05);
+	EXPECT_EQ(jointWith(JointPatchMatches::OfFixes, true, false).second, 55u) << "an accepted channel's patches stay";
+	EXPECT_EQ(jointWith(JointPatchMatches::None, true, true).second, 30u);
+	// A search without a patch pass (patch_from at its end, or beyond) is kept whole.
+	auto plain = searchOf(cal, truth, 12, 3, 30, 0.3, 5);
+	plain.patch_from = 99;
+	keepJointShare(plain, false, JointPatchMatches::None);
+	EXPECT_EQ(plain.corr.size(), 12u);
+}
+
 // The system's cross-check, as a rejection: a fix that disagrees with a
 // more certain one of the same frame is no fix, whatever the policy order;
 // fixes that agree are all kept.

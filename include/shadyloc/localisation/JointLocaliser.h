@@ -22,6 +22,22 @@
 
 namespace shadyloc::localisation
 {
+/** Which of a channel's patch-pass matches the joint localiser takes. The
+ * patch pass finds matches where the channel's own solve (or the
+ * prediction) puts them, so they confirm that pose whether it is right or
+ * not; the descriptor matches are found without it. */
+enum class JointPatchMatches
+{
+	All,	  //!< every channel's
+	OfFixes,  //!< a channel's only where its own solve was accepted
+	None	  //!< none: the descriptor matches alone
+};
+
+/** A channel's search cut to the share the joint localiser takes: its
+ * descriptor matches, and its patch-pass matches (corr[patch_from..]) as
+ * `take` says; `channelFix`: the channel's own solve was accepted. */
+void keepJointShare(TSearchedCorrespondences& s, bool channelFix, JointPatchMatches take);
+
 class JointLocaliser
 {
    public:

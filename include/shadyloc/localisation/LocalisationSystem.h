@@ -71,6 +71,11 @@ struct TSystemOptions
 	 * channel is weak or none holds, the joint solve adds fixes and
 	 * accuracy. */
 	bool joint_only_where_a_channel_fails = true;
+	/** Which of a channel's patch-pass matches the joint localiser takes
+	 * (keepJointShare): a rejected solve's patches confirm the pose they
+	 * were found at, right or not; under a wrong keyframe the union of such
+	 * matches walked the track off (docs/localisation.md, "Injected faults"). */
+	JointPatchMatches joint_patch_matches = JointPatchMatches::OfFixes;
 	std::string vo_channel = "mono";  //!< the channel of the live VO that predicts for all
 	/** A second live VO on this channel ("" = none) whose step replaces the
 	 * VO channel's where that one could not measure the step (too few

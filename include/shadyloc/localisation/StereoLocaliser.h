@@ -45,6 +45,7 @@
 #include <Eigen/Geometry>
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -370,6 +371,10 @@ struct TSearchedCorrespondences
 {
 	uint32_t kf = 0;
 	std::vector<geometry::TStereoCorrespondence> corr;
+	/** corr[patch_from..] are the patch pass's (none when past the end):
+	 * found where this channel's own solve (or the prediction) put them, so
+	 * they confirm that pose whether it is right or not. */
+	size_t patch_from = std::numeric_limits<size_t>::max();
 };
 
 /** A place found by the global search. */
