@@ -236,9 +236,6 @@ Eigen::Vector3d measurementVariances(const TPoseSolverOptions& o)
 
 namespace
 {
-/** One correspondence's robust normal-equation terms at T (the residual's
- * covariance: pixel noise plus the landmark's, seen through the projection;
- * Huber IRLS weight); false when it does not project. */
 /** The residual r and Jacobian J of a correspondence at T, and W, the
  * inverse of r's covariance (pixel noise plus the landmark's, seen through
  * the projection); false when it does not project. */
