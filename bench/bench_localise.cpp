@@ -188,52 +188,39 @@ void BM_CombinedFrame(benchmark::State& st, int threads, const char* extra = "")
 	}
 	st.counters["fix_share"] = ms.empty() ? 0.0 : static_cast<double>(fixes) / static_cast<double>(ms.size());
 }
-BENCHMARK_CAPTURE(BM_CombinedFrame, threads2, 2)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(600);
-BENCHMARK_CAPTURE(BM_CombinedFrame, threads1, 1)->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(600);
+/** Every CombinedFrame variant: one frame per iteration, timed by the
+ * frame itself, 600 frames (several runs of the live traversal). */
+void framesOfRuns(benchmark::internal::Benchmark* b)
+{
+	b->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(600);
+}
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads2, 2)->Apply(framesOfRuns);
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads1, 1)->Apply(framesOfRuns);
 // Without the fallback VO: its cost is the difference.
-BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_fallback_vo, 2, "[localise]\nvo_fallback_channel =\n")
-	->Unit(benchmark::kMillisecond)
-	->UseManualTime()
-	->Iterations(600);
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_fallback_vo, 2, "[localise]\nvo_fallback_channel =\n")->Apply(framesOfRuns);
 // With and without the joint localiser (JointLocaliser.h): its cost is the difference.
-BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_joint, 2, "[localise]\njoint = mono invariant\n")
-	->Unit(benchmark::kMillisecond)
-	->UseManualTime()
-	->Iterations(600);
-BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_joint, 2, "[localise]\njoint =\n")
-	->Unit(benchmark::kMillisecond)
-	->UseManualTime()
-	->Iterations(600);
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_joint, 2, "[localise]\njoint = mono invariant\n")->Apply(framesOfRuns);
+BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_joint, 2, "[localise]\njoint =\n")->Apply(framesOfRuns);
 // The joint solve on every frame, not only where one of its channels has no accepted fix.
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_joint_every_frame, 2, "[localise]\njoint_only_where_a_channel_fails = false\n")
-	->Unit(benchmark::kMillisecond)
-	->UseManualTime()
-	->Iterations(600);
+	->Apply(framesOfRuns);
 // The patch pass after every solve, as before the twenty-third session
 // (shipped: only where the descriptor solve keeps fewer than 60 inliers, 40
 // for the monochrome one; docs/localisation.md, "Where the patch pass runs").
 BENCHMARK_CAPTURE(
 	BM_CombinedFrame, threads2_patch_pass_always, 2,
 	"[localiser]\npatch_search_max_inliers = 0\n[localiser.mono]\npatch_search_max_inliers = 0\n")
-	->Unit(benchmark::kMillisecond)
-	->UseManualTime()
-	->Iterations(600);
-// Without the patch pass and the warped patches (docs/localisation.md,
-// "Patches that follow the viewpoint"): their cost is the difference.
+	->Apply(framesOfRuns);
 // The monochrome localiser's patch pass bounded as the invariant one's (60 inliers, the twenty-third session's).
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_mono_patch_bound_60, 2, "[localiser.mono]\npatch_search_max_inliers = 60\n")
-	->Unit(benchmark::kMillisecond)
-	->UseManualTime()
-	->Iterations(600);
+	->Apply(framesOfRuns);
 // The bootstrap's resamples by the chord method (solve's Jacobians kept): its cost is the difference.
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_bootstrap_chord, 2, "[localiser]\nbootstrap_relinearise = false\n")
-	->Unit(benchmark::kMillisecond)
-	->UseManualTime()
-	->Iterations(600);
+	->Apply(framesOfRuns);
+// Without the patch pass and the warped patches (docs/localisation.md,
+// "Patches that follow the viewpoint"): their cost is the difference.
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_patch_pass, 2, "[localiser]\npatch_search = false\nwarp_patches = false\n")
-	->Unit(benchmark::kMillisecond)
-	->UseManualTime()
-	->Iterations(600);
+	->Apply(framesOfRuns);
 
 /** The search of the whole map for the place of one live frame (a lost run:
  * LocalisationSystem searches so after global_search_after_frames without a
