@@ -6,7 +6,6 @@
 #include <Eigen/Eigenvalues>
 
 #include <cmath>
-#include <future>
 #include <limits>
 #include <optional>
 #include <random>
@@ -73,13 +72,13 @@ double varianceFactor(
 Matrix6d bootstrapCovariance(
 	const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
 	const std::vector<uint8_t>& inlier, const Eigen::Isometry3d& T_curr_ref, const TLocaliserOptions& o, uint32_t seed,
-	int threads)
+	const core::ItemLoop& forEach)
 {
 	std::vector<geometry::TStereoCorrespondence> in;
 	for (size_t i = 0; i < corr.size(); i++)
 		if (i >= inlier.size() || inlier[i]) in.push_back(corr[i]);
 	if (in.size() < 4 || o.bootstrap_samples < 2) return Matrix6d::Zero();
-	// The resamples are drawn in one sequence whatever the threads, so the
+	// The resamples are drawn in one sequence whatever thread solves them, so the
 	// covariance is the same to the bit with one thread or two.
 	const size_t samples = static_cast<size_t>(o.bootstrap_samples);
 	std::mt19937 rng(seed);
@@ -100,25 +99,13 @@ Matrix6d bootstrapCovariance(
 	else
 		frozen = geometry::frozenTermsAt(calib, in, T_curr_ref, so);
 	std::vector<std::optional<Vector6d>> xi(samples);
-	auto solveRange = [&](size_t b0, size_t b1) {
-		for (size_t b = b0; b < b1; b++)
-		{
-			const auto sol =
-				o.bootstrap_relinearise
-					? geometry::solveStereoPoseCounted(calib, in, counts[b], T_curr_ref, so, &atSolve)
-					: geometry::solveStereoPoseCountedChord(calib, in, counts[b], T_curr_ref, so, frozen);
-			if (sol.ok) xi[b] = geometry::localLeft(sol.T_curr_ref.inverse(), T_ref_curr);
-		}
-	};
-	if (threads >= 2)
-	{
-		auto half = std::async(std::launch::async, solveRange, samples / 2, samples);
-		solveRange(0, samples / 2);
-		half.get();
-	}
-	else
-		solveRange(0, samples);
-	// Summed in resample order: the same sum whatever the threads.
+	forEach(samples, [&](size_t b) {
+		const auto sol = o.bootstrap_relinearise
+							 ? geometry::solveStereoPoseCounted(calib, in, counts[b], T_curr_ref, so, &atSolve)
+							 : geometry::solveStereoPoseCountedChord(calib, in, counts[b], T_curr_ref, so, frozen);
+		if (sol.ok) xi[b] = geometry::localLeft(sol.T_curr_ref.inverse(), T_ref_curr);
+	});
+	// Summed in resample order: the same sum whoever solved which.
 	Matrix6d C = Matrix6d::Zero();
 	int solved = 0;
 	for (const auto& x : xi)
@@ -177,11 +164,11 @@ Matrix6d fixCovariance(const Matrix6d& solver, const Matrix6d& bootstrap, double
 Matrix6d solveCovariance(
 	const TLocaliserOptions& o, const geometry::TStereoCalib& calib,
 	const std::vector<geometry::TStereoCorrespondence>& corr, const vo::TRelativePoseOutput& po, uint32_t seed,
-	int threads)
+	const core::ItemLoop& forEach)
 {
 	return fixCovariance(
 		po.cov_T_ref_curr,
-		o.bootstrap_samples > 0 ? bootstrapCovariance(calib, corr, po.inlier, po.T_curr_ref, o, seed, threads)
+		o.bootstrap_samples > 0 ? bootstrapCovariance(calib, corr, po.inlier, po.T_curr_ref, o, seed, forEach)
 								: Matrix6d::Zero(),
 		o.cov_scale, o.bootstrap_samples);
 }
@@ -195,13 +182,13 @@ bool withinFixBounds(const TLocaliserOptions& o, const Matrix6d& cov)
 void describeSolve(
 	const TLocaliserOptions& o, const geometry::TStereoCalib& calib,
 	const std::vector<geometry::TStereoCorrespondence>& corr, const vo::TRelativePoseOutput& po, size_t frame,
-	TLocaliserResult& r, int threads)
+	TLocaliserResult& r, const core::ItemLoop& forEach)
 {
 	r.solved = true;
 	r.var_factor = varianceFactor(calib, corr, po.inlier, po.T_curr_ref, solverOptionsFor(o));
 	r.T_kf_live = po.T_curr_ref.inverse();
 	const uint32_t seed = static_cast<uint32_t>(frame * 2654435761u + 7) ^ 0x9e3779b9u;
-	r.cov = solveCovariance(o, calib, corr, po, seed, threads);
+	r.cov = solveCovariance(o, calib, corr, po, seed, forEach);
 	r.sigma_m = translationSigma(r.cov);
 	r.sigma_deg = rotationSigma(r.cov) / kDeg;
 }
