@@ -169,7 +169,7 @@ void BM_CombinedFrame(benchmark::State& st, int threads, const char* extra = "")
 		localiserMs["convert"].push_back(u.ms_convert);
 		localiserMs["relocalise"].push_back(u.ms_relocalise);
 		localiserMs["wait"].push_back(u.ms_wait);
-		helped += u.items_helped;
+		helped += u.bootstrap_items_helped;
 		fixes += u.localised();
 	}
 	setCounters(st, ms, "");
@@ -187,7 +187,7 @@ void BM_CombinedFrame(benchmark::State& st, int threads, const char* extra = "")
 		for (const auto& [stage, sum] : m)
 			st.counters[label + "_" + stage + "_mean_ms"] = sum / static_cast<double>(ms.size());
 	}
-	// Items a frame (landmarks searched, bootstrap resamples) the idle thread ran for the other.
+	// Bootstrap resamples a frame that the idle thread solved for the other.
 	st.counters["helped_mean"] = ms.empty() ? 0.0 : static_cast<double>(helped) / static_cast<double>(ms.size());
 	st.counters["fix_share"] = ms.empty() ? 0.0 : static_cast<double>(fixes) / static_cast<double>(ms.size());
 }
@@ -199,8 +199,6 @@ void framesOfRuns(benchmark::internal::Benchmark* b)
 }
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads2, 2)->Apply(framesOfRuns);
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads1, 1)->Apply(framesOfRuns);
-// Without lending the idle thread to the other's loops: the gain of core::WorkSharing.
-BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_sharing, 2, "[localise]\nshare_idle_thread = false\n")->Apply(framesOfRuns);
 // Without the fallback VO: its cost is the difference.
 BENCHMARK_CAPTURE(BM_CombinedFrame, threads2_no_fallback_vo, 2, "[localise]\nvo_fallback_channel =\n")->Apply(framesOfRuns);
 // With and without the joint localiser (JointLocaliser.h): its cost is the difference.

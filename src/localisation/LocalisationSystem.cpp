@@ -79,8 +79,6 @@ void TSystemOptions::keys(core::KeyVisitor& v)
 	  "a second live VO whose step is used where vo_channel's could not be measured (\"\" = none; runs only "
 	  "when the channel is a localiser)");
 	v("threads", threads, "", Range::atLeast(1), "");
-	v("share_idle_thread", share_idle_thread, "", Range::any(),
-	  "with two threads, the one done first takes part in the other's searches and bootstrap (the same results)");
 	v("vo_cov_scale", vo_cov_scale, "", Range::atLeast(1), "");
 	v("vo_lost_sigma_m", vo_lost_sigma_m, "m", Range::above(0), "");
 	v("vo_lost_sigma_deg", vo_lost_sigma_deg, "deg", Range::above(0), "");
@@ -506,9 +504,8 @@ TLocaliserInput LocalisationSystem::frontEndOverlappingLocalisers(
 	// needed only where the VO channel's was not measured, runs before the
 	// prediction then; else its standby is kept after thread 1's localiser.
 	// The same work as one thread does in order, so the same results. A
-	// thread done with its own work takes part in the other's loops (its
-	// searches' landmarks, its bootstrap's resamples: core::WorkSharing, the
-	// same results too).
+	// thread done with its own work helps with the other's bootstrap
+	// (core::WorkSharing: the same results too).
 	const size_t n = m_pipes.size();
 	std::vector<double> msConv(n, 0), frontEndEnd(2, 0), doneAt(2, 0);
 	const auto t0 = Clock::now();
@@ -537,7 +534,7 @@ TLocaliserInput LocalisationSystem::frontEndOverlappingLocalisers(
 				fallbackMotion(meas, calib, timestamp, measured, u);
 			}
 			in = predict(calib, timestamp, u);
-			if (m_opts.share_idle_thread) in.forEach = &sharedLoop;
+			in.forEach = &sharedLoop;
 			inputReady = true;
 			predicted.set_value();
 			if (m_pipes[0].localiser) localise(0, in);
@@ -583,7 +580,7 @@ TLocaliserInput LocalisationSystem::frontEndOverlappingLocalisers(
 	both(true, first, others);
 	in.forEach = nullptr;  // the shared loop ends with this frame's threads
 	u.ms_wait = std::abs(doneAt[0] - doneAt[1]);
-	u.items_helped = static_cast<int>(share.itemsHelped());
+	u.bootstrap_items_helped = static_cast<int>(share.itemsHelped());
 	for (const double c : msConv) u.ms_convert += c;
 	u.ms_front_end = std::max(frontEndEnd[0], frontEndEnd[1]);
 	return in;

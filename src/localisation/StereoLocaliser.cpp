@@ -284,7 +284,6 @@ void StereoLocaliser::searchLocalMapByPatches(
 		mi.calib = in.calib;
 		mi.T_curr_kf_pred = T_curr_ref * T_ref_k;
 		mi.brief = briefPattern();
-		mi.forEach = in.forEach;
 		vo::TKeyframeMatchOutput mo;
 		m_gateMatcher.searchPatches(mi, skip, occupied, mo);
 		for (size_t c = 0; c < mo.corr.size(); c++)
@@ -326,7 +325,6 @@ void StereoLocaliser::searchLocalMap(
 		mi.cov_T_curr_kf_pred = pinv.cov * (gateScale * gateScale);
 		mi.brief = briefPattern();
 		mi.taken = &taken;	// not refined again for a farther keyframe
-		mi.forEach = in.forEach;
 		vo::TKeyframeMatchOutput mo;
 		m_matcher.match(mi, mo);
 		if (k == ref) out.gate = mo.gate;  // the lost test reads the reference keyframe's gates

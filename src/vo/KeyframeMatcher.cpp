@@ -7,7 +7,6 @@
 #include <Eigen/LU>
 
 #include <algorithm>
-#include <functional>
 #include <optional>
 #include <cmath>
 #include <stdexcept>
@@ -49,15 +48,6 @@ void checkInput(const TKeyframeMatchInput& in)
 		throw std::invalid_argument("KeyframeMatcher: the frame's left image must be a non-empty CV_8UC1");
 	if (in.taken && in.taken->size() != in.frame->meas.size())
 		throw std::invalid_argument("KeyframeMatcher: the taken mask must have one entry per current measurement");
-}
-
-/** fn(0..n-1) through the input's loop, or on this thread. */
-void forEachLandmark(const TKeyframeMatchInput& in, size_t n, const std::function<void(size_t)>& fn)
-{
-	if (in.forEach)
-		(*in.forEach)(n, fn);
-	else
-		core::runSerially(n, fn);
 }
 
 /** Where is landmark lm's patch in img near (x0, y0): through the warp A
@@ -158,47 +148,38 @@ int KeyframeMatcher::searchDescriptors(
 						  .eigenvalues());
 	};
 	const double W = in.frame->left.cols, H = in.frame->left.rows;
-	// Each landmark's search on its own (any thread), then merged in
-	// landmark order: the gate statistics and one landmark per measurement.
-	struct TSearched
+	for (size_t j = 0; j < kfm.size(); j++)
 	{
-		bool inImage = false, overflow = false, tooUncertain = false;
-		double axis = 0;
-		int best = -1, d1 = 999, d2 = 999;
-	};
-	std::vector<TSearched> found(kfm.size());
-	forEachLandmark(in, kfm.size(), [&](size_t j) {
-		TSearched& f = found[j];
 		double u = 0, v = 0, hu = radius, hv = radius;
 		Eigen::Vector3d zp = Eigen::Vector3d::Zero();
 		Eigen::Matrix3d Ginv = Eigen::Matrix3d::Zero();
 		if (gate)
 		{
 			const auto pm = predict(calib, in.T_curr_kf_pred, in.cov_T_curr_kf_pred, kfm[j].P, kfm[j].cov, o.sigma_px);
-			if (!pm.ok) return;
+			if (!pm.ok) continue;
 			// One decomposition for the gate and its axis (the eigenvalues are
 			// the same whether the vectors are computed or not).
 			const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(0.5 * (pm.S + pm.S.transpose()));
 			if (pm.z.x() >= 0 && pm.z.x() < W && pm.z.y() >= 0 && pm.z.y() < H)
 			{
 				// The longest axis of the unclamped gate: sqrt(chi2 lambda_max).
-				f.inImage = true;
-				f.axis = axisOf(es.eigenvalues());
+				const double axis = axisOf(es.eigenvalues());
+				axes.push_back(axis);
 				// The ceiling on the prediction's part only (see gate_landmark_max_px).
 				const double predAxis = splitCeiling ? longestAxis(predict(
 														   calib, in.T_curr_kf_pred, in.cov_T_curr_kf_pred, kfm[j].P,
 														   Eigen::Matrix3d::Zero(), o.sigma_px)
 															   .S)
-													 : f.axis;
+													 : axis;
 				if (predAxis > o.gate_max_px)
 				{
-					f.overflow = true;
-					if (!o.gate_clamp) return;
+					overflow++;
+					if (!o.gate_clamp) continue;
 				}
-				else if (splitCeiling && f.axis > o.gate_landmark_max_px)
+				else if (splitCeiling && axis > o.gate_landmark_max_px)
 				{
-					f.tooUncertain = true;
-					if (!o.gate_clamp) return;
+					tooUncertain++;
+					if (!o.gate_clamp) continue;
 				}
 			}
 			const Eigen::Matrix3d G = gateMatrix(es);
@@ -213,7 +194,7 @@ int KeyframeMatcher::searchDescriptors(
 		else
 		{
 			const Eigen::Vector3d p = in.T_curr_kf_pred * kfm[j].P;
-			if (p.z() < 0.1) return;
+			if (p.z() < 0.1) continue;
 			u = calib.fx * p.x() / p.z() + calib.cx;
 			v = calib.fy * p.y() / p.z() + calib.cy;
 		}
@@ -267,17 +248,6 @@ int KeyframeMatcher::searchDescriptors(
 					else if (d < b2)
 						b2 = d;
 				}
-		f.best = bi;
-		f.d1 = b1;
-		f.d2 = b2;
-	});
-	for (size_t j = 0; j < kfm.size(); j++)
-	{
-		const TSearched& f = found[j];
-		if (f.inImage) axes.push_back(f.axis);
-		overflow += f.overflow;
-		tooUncertain += f.tooUncertain;
-		const int bi = f.best, b1 = f.d1, b2 = f.d2;
 		if (bi < 0 || b1 > o.max_hamming || (b2 < 999 && b1 >= o.match_ratio * b2)) continue;
 		// One keyframe landmark per current measurement: keep the closest descriptor.
 		if (b1 < bestD[bi])
@@ -313,49 +283,35 @@ void KeyframeMatcher::searchPatches(
 	if (fr.right.empty() || skip.size() != kfm.size() || occupied.size() != fr.left.size() || occupied.type() != CV_8UC1)
 		throw std::invalid_argument("KeyframeMatcher::searchPatches: no right image, or skip/occupied of the wrong size");
 	const int margin = features::kPatchSize + o.patch_search_radius_px + 8;
-	// Each landmark found on its own (any thread); then, in landmark order,
-	// a pixel an earlier landmark took is not taken again.
-	struct TFound
+	for (size_t j = 0; j < kfm.size(); j++)
 	{
-		bool ok = false, warped = false;
-		int xi = 0, yi = 0;
-		geometry::TStereoCorrespondence corr;
-	};
-	std::vector<TFound> found(kfm.size());
-	forEachLandmark(in, kfm.size(), [&](size_t j) {
-		if (skip[j]) return;
+		if (skip[j]) continue;
 		const Eigen::Vector3d p = in.T_curr_kf_pred * kfm[j].P;
-		if (p.z() < 0.5) return;
+		if (p.z() < 0.5) continue;
 		const Eigen::Vector3d z = in.calib.project(p);
 		const int x0 = static_cast<int>(std::lround(z.x())), y0 = static_cast<int>(std::lround(z.y()));
-		if (x0 < margin || y0 < margin || x0 >= fr.left.cols - margin || y0 >= fr.left.rows - margin) return;
-		TFound& f = found[j];
+		if (x0 < margin || y0 < margin || x0 >= fr.left.cols - margin || y0 >= fr.left.rows - margin) continue;
 		Eigen::Matrix2d A;
-		f.warped = warpOf(in, kfm[j], A);
+		const bool warped = warpOf(in, kfm[j], A);
 		float xs, ys;
 		if (!locateLandmark(
-				kfm[j], fr.left, x0, y0, f.warped ? &A : nullptr, o.patch_search_radius_px,
+				kfm[j], fr.left, x0, y0, warped ? &A : nullptr, o.patch_search_radius_px,
 				static_cast<float>(o.patch_min_zncc), o.refine_iterations, xs, ys))
-			return;
-		f.xi = static_cast<int>(std::lround(xs));
-		f.yi = static_cast<int>(std::lround(ys));
-		if (f.xi < 0 || f.yi < 0 || f.xi >= occupied.cols || f.yi >= occupied.rows) return;
+			continue;
+		const int xi = static_cast<int>(std::lround(xs)), yi = static_cast<int>(std::lround(ys));
+		if (xi < 0 || yi < 0 || xi >= occupied.cols || yi >= occupied.rows || occupied.at<uint8_t>(yi, xi)) continue;
 		// The column in the right image: the predicted disparity carried to
 		// the found pixel, refined along the row.
 		float uR;
 		if (!features::matchAlongRow(
-				fr.left, f.xi, f.yi, fr.right, static_cast<float>(f.xi - (z.x() - z.z())), o.patch_stereo_range_px, 3,
+				fr.left, xi, yi, fr.right, static_cast<float>(xi - (z.x() - z.z())), o.patch_stereo_range_px, 3,
 				static_cast<float>(o.patch_stereo_min_zncc), o.refine_iterations, uR))
-			return;
-		f.ok = correspondenceOf(kfm[j], in, Eigen::Vector3d(xs, ys, uR + (xs - f.xi)), f.corr);
-	});
-	for (size_t j = 0; j < kfm.size(); j++)
-	{
-		const TFound& f = found[j];
-		if (!f.ok || occupied.at<uint8_t>(f.yi, f.xi)) continue;
-		occupied.at<uint8_t>(f.yi, f.xi) = 1;
-		out.corr.push_back(f.corr);
-		out.warped += f.warped;
+			continue;
+		geometry::TStereoCorrespondence k;
+		if (!correspondenceOf(kfm[j], in, Eigen::Vector3d(xs, ys, uR + (xs - xi)), k)) continue;
+		occupied.at<uint8_t>(yi, xi) = 1;
+		out.corr.push_back(k);
+		out.warped += warped;
 		out.landmark.push_back(static_cast<int>(j));
 		out.measurement.push_back(-1);
 	}
@@ -385,35 +341,25 @@ void KeyframeMatcher::match(const TKeyframeMatchInput& in, TKeyframeMatchOutput&
 	out.descriptor_matches = nMatch;
 
 	// Sub-pixel refinement: where is the keyframe's patch in this image?
-	// Each match on its own (any thread), then kept in landmark order.
-	struct TRefined
-	{
-		bool ok = false, warped = false;
-		geometry::TStereoCorrespondence corr;
-	};
-	std::vector<TRefined> refined(kfm.size());
+	out.corr.reserve(nMatch);
 	const cv::Mat& img = fr.left;
-	forEachLandmark(in, kfm.size(), [&](size_t j) {
-		if (matchOf[j] < 0 || (in.taken && (*in.taken)[static_cast<size_t>(matchOf[j])])) return;
+	for (size_t j = 0; j < kfm.size(); j++)
+	{
+		if (matchOf[j] < 0 || (in.taken && (*in.taken)[static_cast<size_t>(matchOf[j])])) continue;
 		const auto& m = fr.meas[matchOf[j]];
 		float xs, ys;
 		Eigen::Matrix2d A;
-		TRefined& r = refined[j];
-		r.warped = warpOf(in, kfm[j], A);
+		const bool warped = warpOf(in, kfm[j], A);
 		const int x0 = static_cast<int>(m.uL), y0 = static_cast<int>(m.v);
 		if (!locateLandmark(
-				kfm[j], img, x0, y0, r.warped ? &A : nullptr, o.refine_radius, o.refine_min_zncc, o.refine_iterations,
-				xs, ys))
-			return;
+				kfm[j], img, x0, y0, warped ? &A : nullptr, o.refine_radius, o.refine_min_zncc, o.refine_iterations, xs,
+				ys))
+			continue;
 		// The disparity measured at the corner carries over to the refined position.
-		r.ok = correspondenceOf(kfm[j], in, Eigen::Vector3d(xs, ys, m.uR + static_cast<double>(xs - m.uL)), r.corr);
-	});
-	out.corr.reserve(nMatch);
-	for (size_t j = 0; j < kfm.size(); j++)
-	{
-		if (!refined[j].ok) continue;
-		out.corr.push_back(refined[j].corr);
-		out.warped += refined[j].warped;
+		geometry::TStereoCorrespondence k;
+		if (!correspondenceOf(kfm[j], in, Eigen::Vector3d(xs, ys, m.uR + static_cast<double>(xs - m.uL)), k)) continue;
+		out.corr.push_back(k);
+		out.warped += warped;
 		out.landmark.push_back(static_cast<int>(j));
 		out.measurement.push_back(matchOf[j]);
 	}

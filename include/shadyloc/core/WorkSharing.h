@@ -5,8 +5,7 @@
  * threads, and one waits for the other at the end of every frame (about
  * 1-2 ms of the frame, TLocalisationUpdate::ms_wait): which channel finishes
  * first changes from frame to frame. WorkSharing lends the idle thread to
- * the loops the other still runs (its searches' work per landmark, the
- * bootstrap's resamples), so the wait
+ * the loops the other still runs (the bootstrap's resamples), so the wait
  * shrinks without moving any work off its thread for good. An item writes
  * only its own result slot and the caller combines the slots in item order,
  * so the results are the same to the bit whoever ran which item.

@@ -85,10 +85,6 @@ struct TSystemOptions
 	 * paper's baseline alone. */
 	std::string vo_fallback_channel = "invariant";
 	int threads = 2;  //!< 1: everything on the calling thread; >= 2: channels in parallel
-	/** With two threads: the one done with its own work first takes part in
-	 * the other's loops (its searches' landmarks, its bootstrap's
-	 * resamples; the same results either way). */
-	bool share_idle_thread = true;
 	/** VO's covariance is scaled by this (the solver's is optimistic) [-]. */
 	double vo_cov_scale = 4.0;
 	/** A step VO could not measure (predicted by constant velocity) [m], [deg]. */
@@ -155,9 +151,9 @@ struct TLocalisationUpdate
 	/** With two threads: how long the thread that finished first waited for
 	 * the other (0 on one thread) [ms]. */
 	double ms_wait = 0;
-	/** With two threads: the items (landmarks searched, bootstrap
-	 * resamples) the thread done first ran for the other (core::WorkSharing). */
-	int items_helped = 0;
+	/** With two threads: the bootstrap resamples that the thread done first
+	 * solved for the other (core::WorkSharing). */
+	int bootstrap_items_helped = 0;
 
 	/** The localiser result of a channel, or nullptr. */
 	const TLocaliserResult* result(const std::string& channel) const;

@@ -285,10 +285,9 @@ struct TLocaliserInput
 	/** The track is a confirmed place: a consistent solve is a fix at once. */
 	bool track_confirmed = false;
 	TMotion motion;	 //!< VO's increment (for the frame-to-frame test)
-	/** Runs the localiser's loops of independent items (the searches' work
-	 * per landmark, the bootstrap's resamples), e.g. shared with an idle
-	 * thread (core::WorkSharing); null: on the calling thread. Any choice
-	 * gives the same result. */
+	/** Runs the localiser's loops of independent items (the bootstrap's
+	 * resamples), e.g. shared with an idle thread (core::WorkSharing); null:
+	 * on the calling thread. Any choice gives the same result. */
 	const core::ItemLoop* forEach = nullptr;
 };
 

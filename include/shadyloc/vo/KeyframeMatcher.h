@@ -21,7 +21,6 @@
  */
 #pragma once
 
-#include <shadyloc/core/WorkSharing.h>
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/geometry/PoseSolver.h>
 #include <shadyloc/geometry/StereoCamera.h>
@@ -135,11 +134,6 @@ struct TKeyframeMatchInput
 	 * itself still sees every measurement, so the other matches are the
 	 * ones it makes without the mask. Null = none taken. */
 	const std::vector<uint8_t>* taken = nullptr;
-	/** Runs the per-landmark work (prediction, gate, descriptor search,
-	 * refinement), e.g. shared with an idle thread (core::WorkSharing); its
-	 * results are merged in landmark order, so the output is the same
-	 * whatever runs it. Null: on the calling thread. */
-	const core::ItemLoop* forEach = nullptr;
 };
 
 /** A landmark's predicted stereo measurement and its covariance. */
