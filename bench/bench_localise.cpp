@@ -140,7 +140,7 @@ void BM_CombinedFrame(benchmark::State& st, int threads, const char* extra = "")
 	std::vector<double> ms, voMs;
 	std::map<std::string, std::vector<double>> localiserMs;	 // each stage's and localiser's own time, by label
 	std::map<std::string, std::map<std::string, double>> stageMs;  // inside each localiser: summed over the frames
-	size_t i = 0, fixes = 0, helped = 0;
+	size_t i = 0, fixes = 0;
 	for (auto _ : st)
 	{
 		if (i == d.frames.size())
@@ -169,7 +169,6 @@ void BM_CombinedFrame(benchmark::State& st, int threads, const char* extra = "")
 		localiserMs["convert"].push_back(u.ms_convert);
 		localiserMs["relocalise"].push_back(u.ms_relocalise);
 		localiserMs["wait"].push_back(u.ms_wait);
-		helped += u.bootstrap_items_helped;
 		fixes += u.localised();
 	}
 	setCounters(st, ms, "");
@@ -187,8 +186,6 @@ void BM_CombinedFrame(benchmark::State& st, int threads, const char* extra = "")
 		for (const auto& [stage, sum] : m)
 			st.counters[label + "_" + stage + "_mean_ms"] = sum / static_cast<double>(ms.size());
 	}
-	// Bootstrap resamples a frame that the idle thread solved for the other.
-	st.counters["helped_mean"] = ms.empty() ? 0.0 : static_cast<double>(helped) / static_cast<double>(ms.size());
 	st.counters["fix_share"] = ms.empty() ? 0.0 : static_cast<double>(fixes) / static_cast<double>(ms.size());
 }
 /** Every CombinedFrame variant: one frame per iteration, timed by the

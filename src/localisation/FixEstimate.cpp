@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <cmath>
+#include <future>
 #include <limits>
 #include <optional>
 #include <random>
@@ -72,13 +73,13 @@ double varianceFactor(
 Matrix6d bootstrapCovariance(
 	const geometry::TStereoCalib& calib, const std::vector<geometry::TStereoCorrespondence>& corr,
 	const std::vector<uint8_t>& inlier, const Eigen::Isometry3d& T_curr_ref, const TLocaliserOptions& o, uint32_t seed,
-	const core::ItemLoop& forEach)
+	int threads)
 {
 	std::vector<geometry::TStereoCorrespondence> in;
 	for (size_t i = 0; i < corr.size(); i++)
 		if (i >= inlier.size() || inlier[i]) in.push_back(corr[i]);
 	if (in.size() < 4 || o.bootstrap_samples < 2) return Matrix6d::Zero();
-	// The resamples are drawn in one sequence whatever thread solves them, so the
+	// The resamples are drawn in one sequence whatever the threads, so the
 	// covariance is the same to the bit with one thread or two.
 	const size_t samples = static_cast<size_t>(o.bootstrap_samples);
 	std::mt19937 rng(seed);
@@ -99,13 +100,25 @@ Matrix6d bootstrapCovariance(
 	else
 		frozen = geometry::frozenTermsAt(calib, in, T_curr_ref, so);
 	std::vector<std::optional<Vector6d>> xi(samples);
-	forEach(samples, [&](size_t b) {
-		const auto sol = o.bootstrap_relinearise
-							 ? geometry::solveStereoPoseCounted(calib, in, counts[b], T_curr_ref, so, &atSolve)
-							 : geometry::solveStereoPoseCountedChord(calib, in, counts[b], T_curr_ref, so, frozen);
-		if (sol.ok) xi[b] = geometry::localLeft(sol.T_curr_ref.inverse(), T_ref_curr);
-	});
-	// Summed in resample order: the same sum whoever solved which.
+	auto solveRange = [&](size_t b0, size_t b1) {
+		for (size_t b = b0; b < b1; b++)
+		{
+			const auto sol =
+				o.bootstrap_relinearise
+					? geometry::solveStereoPoseCounted(calib, in, counts[b], T_curr_ref, so, &atSolve)
+					: geometry::solveStereoPoseCountedChord(calib, in, counts[b], T_curr_ref, so, frozen);
+			if (sol.ok) xi[b] = geometry::localLeft(sol.T_curr_ref.inverse(), T_ref_curr);
+		}
+	};
+	if (threads >= 2)
+	{
+		auto half = std::async(std::launch::async, solveRange, samples / 2, samples);
+		solveRange(0, samples / 2);
+		half.get();
+	}
+	else
+		solveRange(0, samples);
+	// Summed in resample order: the same sum whatever the threads.
 	Matrix6d C = Matrix6d::Zero();
 	int solved = 0;
 	for (const auto& x : xi)
@@ -164,11 +177,11 @@ Matrix6d fixCovariance(const Matrix6d& solver, const Matrix6d& bootstrap, double
 Matrix6d solveCovariance(
 	const TLocaliserOptions& o, const geometry::TStereoCalib& calib,
 	const std::vector<geometry::TStereoCorrespondence>& corr, const vo::TRelativePoseOutput& po, uint32_t seed,
-	const core::ItemLoop& forEach)
+	int threads)
 {
 	return fixCovariance(
 		po.cov_T_ref_curr,
-		o.bootstrap_samples > 0 ? bootstrapCovariance(calib, corr, po.inlier, po.T_curr_ref, o, seed, forEach)
+		o.bootstrap_samples > 0 ? bootstrapCovariance(calib, corr, po.inlier, po.T_curr_ref, o, seed, threads)
 								: Matrix6d::Zero(),
 		o.cov_scale, o.bootstrap_samples);
 }
@@ -182,13 +195,13 @@ bool withinFixBounds(const TLocaliserOptions& o, const Matrix6d& cov)
 void describeSolve(
 	const TLocaliserOptions& o, const geometry::TStereoCalib& calib,
 	const std::vector<geometry::TStereoCorrespondence>& corr, const vo::TRelativePoseOutput& po, size_t frame,
-	TLocaliserResult& r, const core::ItemLoop& forEach)
+	TLocaliserResult& r, int threads)
 {
 	r.solved = true;
 	r.var_factor = varianceFactor(calib, corr, po.inlier, po.T_curr_ref, solverOptionsFor(o));
 	r.T_kf_live = po.T_curr_ref.inverse();
 	const uint32_t seed = static_cast<uint32_t>(frame * 2654435761u + 7) ^ 0x9e3779b9u;
-	r.cov = solveCovariance(o, calib, corr, po, seed, forEach);
+	r.cov = solveCovariance(o, calib, corr, po, seed, threads);
 	r.sigma_m = translationSigma(r.cov);
 	r.sigma_deg = rotationSigma(r.cov) / kDeg;
 }

@@ -102,7 +102,7 @@ TLocaliserResult JointLocaliser::localise(
 	if (po.status == vo::RelativePoseStatus::SolverFailed) return fail(LocaliserStatus::SolverFailed);
 	if (!po.ok() || r.inliers < m_opts.min_inliers) return fail(LocaliserStatus::FewInliers);
 
-	describeSolve(m_opts, in.calib, corr, po, in.frame, r, m_threads >= 2 ? core::runOnTwoThreads : core::runSerially);
+	describeSolve(m_opts, in.calib, corr, po, in.frame, r, m_threads);
 	acceptSolve(m_accept, m_opts, in, [this](uint32_t a, uint32_t b) { return between(a, b); }, r);
 	r.ms = core::msSince(t0);
 	return r;

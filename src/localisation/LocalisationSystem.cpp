@@ -503,22 +503,12 @@ TLocaliserInput LocalisationSystem::frontEndOverlappingLocalisers(
 	// prediction is made) their localisers. The fallback VO, whose step is
 	// needed only where the VO channel's was not measured, runs before the
 	// prediction then; else its standby is kept after thread 1's localiser.
-	// The same work as one thread does in order, so the same results. A
-	// thread done with its own work helps with the other's bootstrap
-	// (core::WorkSharing: the same results too).
+	// The same work as one thread does in order, so the same results.
 	const size_t n = m_pipes.size();
 	std::vector<double> msConv(n, 0), frontEndEnd(2, 0), doneAt(2, 0);
 	const auto t0 = Clock::now();
 	std::promise<void> othersExtracted, predicted;
 	std::future<void> othersReady = othersExtracted.get_future(), prediction = predicted.get_future();
-	core::WorkSharing share(2);
-	const core::ItemLoop sharedLoop = share.loop();
-	// Every way out of a thread (a failure too) ends its own work, else the
-	// other would wait for it.
-	const auto ownWorkDone = [&](size_t thread) {
-		doneAt[thread] = msSince(t0);
-		share.doneThenHelp();
-	};
 	TLocaliserInput in;
 	auto first = [&] {
 		bool inputReady = false;
@@ -534,7 +524,6 @@ TLocaliserInput LocalisationSystem::frontEndOverlappingLocalisers(
 				fallbackMotion(meas, calib, timestamp, measured, u);
 			}
 			in = predict(calib, timestamp, u);
-			in.forEach = &sharedLoop;
 			inputReady = true;
 			predicted.set_value();
 			if (m_pipes[0].localiser) localise(0, in);
@@ -543,44 +532,33 @@ TLocaliserInput LocalisationSystem::frontEndOverlappingLocalisers(
 				othersReady.get();
 				fallbackMotion(meas, calib, timestamp, measured, u);
 			}
+			doneAt[0] = msSince(t0);
 		}
 		catch (...)
 		{
 			if (!inputReady) predicted.set_exception(std::current_exception());
-			ownWorkDone(0);
 			throw;
 		}
-		ownWorkDone(0);
 	};
 	auto others = [&] {
 		try
 		{
-			try
-			{
-				for (size_t i = 1; i < n; i++) extractChannel(i, images, calib, u.frame, meas, msConv);
-				frontEndEnd[1] = msSince(t0);
-				othersExtracted.set_value();
-			}
-			catch (...)
-			{
-				othersExtracted.set_exception(std::current_exception());
-				throw;
-			}
-			prediction.get();  // rethrows the first thread's failure
-			for (size_t i = 1; i < n; i++)
-				if (m_pipes[i].localiser) localise(i, in);
+			for (size_t i = 1; i < n; i++) extractChannel(i, images, calib, u.frame, meas, msConv);
+			frontEndEnd[1] = msSince(t0);
+			othersExtracted.set_value();
 		}
 		catch (...)
 		{
-			ownWorkDone(1);
+			othersExtracted.set_exception(std::current_exception());
 			throw;
 		}
-		ownWorkDone(1);
+		prediction.get();  // rethrows the first thread's failure
+		for (size_t i = 1; i < n; i++)
+			if (m_pipes[i].localiser) localise(i, in);
+		doneAt[1] = msSince(t0);
 	};
 	both(true, first, others);
-	in.forEach = nullptr;  // the shared loop ends with this frame's threads
 	u.ms_wait = std::abs(doneAt[0] - doneAt[1]);
-	u.bootstrap_items_helped = static_cast<int>(share.itemsHelped());
 	for (const double c : msConv) u.ms_convert += c;
 	u.ms_front_end = std::max(frontEndEnd[0], frontEndEnd[1]);
 	return in;

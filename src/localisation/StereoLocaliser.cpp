@@ -412,7 +412,7 @@ TLocaliserResult StereoLocaliser::localise(const TLocaliserInput& in, TSearchedC
 		handOver();
 		return fail(searchStatus);
 	}
-	timed(r.ms_stage.covariance, [&] { describeSolve(o, in.calib, mo.corr, po, in.frame, r, in.forEach ? *in.forEach : core::runSerially); });
+	timed(r.ms_stage.covariance, [&] { describeSolve(o, in.calib, mo.corr, po, in.frame, r); });
 	handOver();
 
 	// ---- 4. acceptance (FixAcceptance.h) ---------------------------------------------------

@@ -7,7 +7,6 @@
  */
 #pragma once
 
-#include <shadyloc/core/WorkSharing.h>
 #include <shadyloc/localisation/StereoLocaliser.h>
 
 #include <cstddef>
@@ -23,23 +22,23 @@ geometry::TPoseSolverOptions solverOptionsFor(const TLocaliserOptions& o);
 
 /** A solve's covariance as a fix carries it: the scaled solver's, at least
  * the bootstrap's over its inliers (fixCovariance). `seed` fixes the
- * resamples; `forEach` runs their solves (on one thread, two, or shared
- * with an idle one: the same result). */
+ * resamples; with `threads` >= 2 they are solved on two threads, to the
+ * same result. */
 geometry::Matrix6d solveCovariance(
 	const TLocaliserOptions& o, const geometry::TStereoCalib& calib,
 	const std::vector<geometry::TStereoCorrespondence>& corr, const vo::TRelativePoseOutput& po, uint32_t seed,
-	const core::ItemLoop& forEach = core::runSerially);
+	int threads = 1);
 
 /** Within the fix bounds (max_sigma_m, max_sigma_deg; 0 = none). */
 bool withinFixBounds(const TLocaliserOptions& o, const geometry::Matrix6d& cov);
 
 /** Fills a solved result from its solve po over corr (in r.kf_id's frame):
  * solved, the pose, its covariance and sigmas, the variance factor
- * (`forEach` as solveCovariance). */
+ * (`threads` as solveCovariance). */
 void describeSolve(
 	const TLocaliserOptions& o, const geometry::TStereoCalib& calib,
 	const std::vector<geometry::TStereoCorrespondence>& corr, const vo::TRelativePoseOutput& po, size_t frame,
-	TLocaliserResult& r, const core::ItemLoop& forEach = core::runSerially);
+	TLocaliserResult& r, int threads = 1);
 
 /** The accept stage on a described solve: the fix bounds, then the tests of
  * `accept` against the input's prediction and motion; sets r.status, the

@@ -151,9 +151,6 @@ struct TLocalisationUpdate
 	/** With two threads: how long the thread that finished first waited for
 	 * the other (0 on one thread) [ms]. */
 	double ms_wait = 0;
-	/** With two threads: the bootstrap resamples that the thread done first
-	 * solved for the other (core::WorkSharing). */
-	int bootstrap_items_helped = 0;
 
 	/** The localiser result of a channel, or nullptr. */
 	const TLocaliserResult* result(const std::string& channel) const;

@@ -30,7 +30,6 @@
  */
 #pragma once
 
-#include <shadyloc/core/WorkSharing.h>
 #include <shadyloc/features/DescriptorGroups.h>
 #include <shadyloc/features/StereoFeatures.h>
 #include <shadyloc/localisation/FixAcceptance.h>
@@ -285,10 +284,6 @@ struct TLocaliserInput
 	/** The track is a confirmed place: a consistent solve is a fix at once. */
 	bool track_confirmed = false;
 	TMotion motion;	 //!< VO's increment (for the frame-to-frame test)
-	/** Runs the localiser's loops of independent items (the bootstrap's
-	 * resamples), e.g. shared with an idle thread (core::WorkSharing); null:
-	 * on the calling thread. Any choice gives the same result. */
-	const core::ItemLoop* forEach = nullptr;
 };
 
 enum class LocaliserStatus
